@@ -1,0 +1,1 @@
+#include "model/boundary/piston.h"

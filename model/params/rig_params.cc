@@ -1,0 +1,174 @@
+#include "model/params/rig_params.h"
+
+#include <charconv>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+namespace mpdrig {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Bounds are physical plausibility limits, not tuning ranges: they catch unit mistakes
+// (a wave speed in km/s, a radius in mm) without forbidding experiments.
+const ParamInfo kParams[] = {
+    {"pipe_length_m", "m", "copper pipe length L (Table 8.1.2)", &RigParams::pipe_length_m, 1.0,
+     1.0e5},
+    {"pipe_inner_radius_m", "m", "copper pipe inner radius r_p (Table 8.1.2)",
+     &RigParams::pipe_inner_radius_m, 1.0e-4, 1.0},
+    {"pipe_elevation_gain_m", "m", "height of the outlet above the inlet (coil height, Table 8.1.2)",
+     &RigParams::pipe_elevation_gain_m, -1.0e4, 1.0e4},
+    {"wave_speed_mps", "m/s", "speed of sound c (tuned 850, Table 9.4.1)",
+     &RigParams::wave_speed_mps, 10.0, 5000.0},
+    {"density_kgpm3", "kg/m^3", "water density rho_ref at p_ref (5.2.1)",
+     &RigParams::density_kgpm3, 100.0, 5000.0},
+    {"reference_pressure_pa", "Pa", "reference pressure p_ref of (5.2.1), absolute",
+     &RigParams::reference_pressure_pa, 0.0, 1.0e8},
+    {"friction_f1_per_s", "1/s", "linear pipe friction f1 in f(u) = f1 u + f2 u|u| (8.6.8, 9.4.1)",
+     &RigParams::friction_f1_per_s, 0.0, 1.0e3},
+    {"friction_f2_per_m", "1/m", "quadratic pipe friction f2 in f(u) = f1 u + f2 u|u| (8.6.8)",
+     &RigParams::friction_f2_per_m, 0.0, 1.0e4},
+    {"gravity_mps2", "m/s^2", "gravitational acceleration g", &RigParams::gravity_mps2, 0.0, 100.0},
+    {"choke_leak_m2", "m^2", "choke leak: floor of the characteristic G (Table 9.4.1)",
+     &RigParams::choke_leak_m2, 0.0, 1.0e-2},
+    {"choke_density_kgpm3", "kg/m^3", "fluid density at the choke rho_L (5.3.2)",
+     &RigParams::choke_density_kgpm3, 100.0, 5000.0},
+    {"choke_time_constant_s", "s", "choke actuator first-order time constant (5.3)",
+     &RigParams::choke_time_constant_s, 0.0, 100.0},
+    {"choke_rate_limit_frac_per_s", "1/s",
+     "choke actuator rate limit, fraction of full opening per second (8.4: 0-90 deg in ~1 s)",
+     &RigParams::choke_rate_limit_frac_per_s, 1.0e-3, 1.0e3},
+    {"upper_rod_diameter_m", "m", "drill string (upper rod) diameter, area A_d (Table 8.1.1)",
+     &RigParams::upper_rod_diameter_m, 0.0, 1.0},
+    {"lower_rod_diameter_m", "m", "lower rod diameter, area A_d2 (Table 8.1.1)",
+     &RigParams::lower_rod_diameter_m, 0.0, 1.0},
+    {"compartment_height_m", "m", "heave generator compartment height h (5.4.2, Table 8.1.1)",
+     &RigParams::compartment_height_m, 0.0, 100.0},
+    {"piston_friction_fd1_pa_s_per_m", "Pa s/m", "piston pressure drop, linear term f_d1 (8.2.1)",
+     &RigParams::piston_friction_fd1_pa_s_per_m, -1.0e9, 1.0e9},
+    {"piston_friction_fd2_pa_s2_per_m2", "Pa s^2/m^2",
+     "piston pressure drop, quadratic term f_d2 (8.2.1)",
+     &RigParams::piston_friction_fd2_pa_s2_per_m2, -1.0e10, 1.0e10},
+    {"atmospheric_pressure_pa", "Pa", "atmospheric pressure (gauge <-> absolute)",
+     &RigParams::atmospheric_pressure_pa, 1.0e4, 2.0e5},
+};
+
+std::string ValidKeys() {
+  std::string keys;
+  for (const ParamInfo& info : kParams) {
+    if (!keys.empty()) keys += ", ";
+    keys += info.key;
+  }
+  return keys;
+}
+
+}  // namespace
+
+std::vector<ChokePoint> RigParams::DefaultChokeCharacteristic() {
+  // Table 8.4.1: opening [deg] -> G [m^2]. The zero values at 0 and 15 deg are replaced by the
+  // leak at evaluation time (design.md convention), not here, so the table stays the thesis's.
+  const double deg[] = {0, 15, 20, 25, 28, 31, 40, 50, 60, 70, 80, 90};
+  const double g[] = {0,       0,       2.2e-7,  8e-7,    2.5e-6,  4.5e-6,
+                      1.19e-5, 2.3e-5,  3.69e-5, 5.76e-5, 8.66e-5, 1.03e-4};
+  std::vector<ChokePoint> points;
+  for (int i = 0; i < 12; ++i) points.push_back({deg[i] / 90.0, g[i]});
+  return points;
+}
+
+double RigParams::PipeAreaM2() const {
+  return std::numbers::pi * pipe_inner_radius_m * pipe_inner_radius_m;
+}
+
+double RigParams::PistonDisplacementAreaM2() const {
+  const double a_upper = std::numbers::pi * 0.25 * upper_rod_diameter_m * upper_rod_diameter_m;
+  const double a_lower = std::numbers::pi * 0.25 * lower_rod_diameter_m * lower_rod_diameter_m;
+  return a_upper - a_lower;
+}
+
+double RigParams::SinInclination() const { return pipe_elevation_gain_m / pipe_length_m; }
+
+double RigParams::QuasiLinearK() const {
+  return wave_speed_mps * wave_speed_mps * density_kgpm3 - reference_pressure_pa;
+}
+
+Status RigParams::Validate() const {
+  for (const ParamInfo& info : kParams) {
+    const double value = this->*info.member;
+    if (!std::isfinite(value)) {
+      return Status::Error(std::string(info.key) + " is not a finite number");
+    }
+    if (value < info.min_value || value > info.max_value) {
+      std::ostringstream out;
+      out << info.key << " = " << value << " " << info.unit << " is outside [" << info.min_value
+          << ", " << info.max_value << "]";
+      return Status::Error(out.str());
+    }
+  }
+  if (std::abs(pipe_elevation_gain_m) > pipe_length_m) {
+    return Status::Error("pipe_elevation_gain_m exceeds pipe_length_m: the pipe cannot rise more "
+                         "than its length");
+  }
+  if (choke_characteristic.size() < 2) {
+    return Status::Error("choke characteristic needs at least 2 points");
+  }
+  for (std::size_t i = 0; i < choke_characteristic.size(); ++i) {
+    const ChokePoint& point = choke_characteristic[i];
+    if (!std::isfinite(point.opening_frac) || !std::isfinite(point.g_m2) || point.g_m2 < 0.0 ||
+        point.opening_frac < 0.0 || point.opening_frac > 1.0) {
+      return Status::Error("choke characteristic point " + std::to_string(i) +
+                           ": opening must be in [0, 90] deg and G >= 0 m^2");
+    }
+    if (i > 0 && point.opening_frac <= choke_characteristic[i - 1].opening_frac) {
+      return Status::Error("choke characteristic point " + std::to_string(i) +
+                           ": openings must be strictly increasing");
+    }
+  }
+  return Status::Ok();
+}
+
+std::span<const ParamInfo> ParamTable() { return kParams; }
+
+const ParamInfo* FindParam(std::string_view key) {
+  for (const ParamInfo& info : kParams) {
+    if (info.key == key) return &info;
+  }
+  return nullptr;
+}
+
+Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
+  const ParamInfo* info = FindParam(key);
+  if (info == nullptr) {
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + ValidKeys());
+  }
+  double value = 0.0;
+  const char* first = value_text.data();
+  const char* last = value_text.data() + value_text.size();
+  const auto [end, error] = std::from_chars(first, last, value);
+  if (error != std::errc() || end != last || value_text.empty()) {
+    return Status::Error(std::string(key) + ": '" + std::string(value_text) +
+                         "' is not a number (units: " + std::string(info->unit) + ")");
+  }
+  if (!std::isfinite(value)) {
+    return Status::Error(std::string(key) + ": value must be finite, got '" +
+                         std::string(value_text) + "'");
+  }
+  if (value < info->min_value || value > info->max_value) {
+    std::ostringstream out;
+    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value
+        << ", " << info->max_value << "]";
+    return Status::Error(out.str());
+  }
+  params->*info->member = value;
+  return Status::Ok();
+}
+
+Status ApplyOverride(RigParams* params, std::string_view assignment) {
+  const std::size_t equals = assignment.find('=');
+  if (equals == std::string_view::npos) {
+    return Status::Error("--set expects key=value, got '" + std::string(assignment) + "'");
+  }
+  return SetParam(params, assignment.substr(0, equals), assignment.substr(equals + 1));
+}
+
+}  // namespace mpdrig

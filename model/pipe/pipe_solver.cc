@@ -1,0 +1,121 @@
+#include "model/pipe/pipe_solver.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "model/pipe/characteristics_solver.h"
+#include "model/pipe/mol_solver.h"
+
+namespace mpdrig {
+
+PipeConfig PipeConfig::FromParams(const RigParams& params, PipeModel model, int cells) {
+  PipeConfig config;
+  config.model = model;
+  config.cells = cells;
+  config.length_m = params.pipe_length_m;
+  config.area_m2 = params.PipeAreaM2();
+  config.wave_speed_mps = params.wave_speed_mps;
+  config.density_kgpm3 = params.density_kgpm3;
+  config.k_pa = params.QuasiLinearK();
+  config.friction_f1_per_s = params.friction_f1_per_s;
+  config.friction_f2_per_m = params.friction_f2_per_m;
+  config.gravity_slope_mps2 = params.gravity_mps2 * params.SinInclination();
+  config.choke_density_kgpm3 = params.choke_density_kgpm3;
+  return config;
+}
+
+PipeSolver::PipeSolver(const PipeConfig& config, double p_bar_pa)
+    : config_(config),
+      law_(config.model, config.wave_speed_mps, config.density_kgpm3, config.k_pa, p_bar_pa),
+      choke_(config.area_m2, config.choke_density_kgpm3),
+      alpha_(config.cells + 1, 0.0),
+      beta_(config.cells + 1, 0.0) {
+  MPDRIG_CHECK(config.cells >= 2);
+}
+
+void PipeSolver::SetRestState(double outlet_pressure_pa) {
+  const double c = config_.wave_speed_mps;
+  const double dx = config_.dx_m();
+  for (int i = 0; i <= config_.cells; ++i) {
+    const double depth_below_outlet_m = config_.length_m - i * dx;
+    double p;
+    if (config_.model == PipeModel::kQuasiLinear) {
+      // (6.5.3): p(x) = (k + p_l) exp(g sin(gamma) (L - x) / c^2) - k
+      p = (config_.k_pa + outlet_pressure_pa) *
+              std::exp(config_.gravity_slope_mps2 * depth_below_outlet_m / (c * c)) -
+          config_.k_pa;
+    } else {
+      p = outlet_pressure_pa + config_.density_kgpm3 * config_.gravity_slope_mps2 * depth_below_outlet_m;
+    }
+    alpha_[i] = law_.Alpha(p, 0.0);
+    beta_[i] = law_.Beta(p, 0.0);
+  }
+  OnStateReset();
+}
+
+void PipeSolver::Locate(double x_m, int* index, double* weight) const {
+  const double s = std::clamp(x_m / config_.dx_m(), 0.0, static_cast<double>(config_.cells));
+  int i = std::min(static_cast<int>(s), config_.cells - 1);
+  *index = i;
+  *weight = s - i;
+}
+
+double PipeSolver::PressureAt(double x_m) const {
+  int i;
+  double w;
+  Locate(x_m, &i, &w);
+  const double difference =
+      (1.0 - w) * (alpha_[i] - beta_[i]) + w * (alpha_[i + 1] - beta_[i + 1]);
+  return law_.PressureFromDifference(difference);
+}
+
+double PipeSolver::VelocityAt(double x_m) const {
+  int i;
+  double w;
+  Locate(x_m, &i, &w);
+  return law_.Velocity((1.0 - w) * alpha_[i] + w * alpha_[i + 1],
+                       (1.0 - w) * beta_[i] + w * beta_[i + 1]);
+}
+
+double PipeSolver::StoredVolumeM3() const {
+  // rho(p)/rho_ref - 1 = (p - p_ref)/(rho_ref c^2) (5.2.1); the constant p_ref drops out of changes.
+  const double scale = config_.area_m2 / (config_.density_kgpm3 * config_.wave_speed_mps *
+                                          config_.wave_speed_mps);
+  double sum = 0.0;
+  for (int i = 0; i <= config_.cells; ++i) {
+    const double weight = (i == 0 || i == config_.cells) ? 0.5 : 1.0;
+    sum += weight * law_.Pressure(alpha_[i], beta_[i]);
+  }
+  return scale * sum * config_.dx_m();
+}
+
+void PipeSolver::CheckRange(RangeViolation* violation) const {
+  if (violation == nullptr) return;
+  int worst = 0;
+  double smallest = alpha_[0] - beta_[0];
+  for (int i = 1; i <= config_.cells; ++i) {
+    const double difference = alpha_[i] - beta_[i];
+    if (difference < smallest) {
+      smallest = difference;
+      worst = i;
+    }
+  }
+  if (smallest <= law_.ZeroPressureDifference()) {
+    violation->occurred = true;
+    violation->min_pressure_pa = law_.PressureFromDifference(smallest);
+    violation->position_m = worst * config_.dx_m();
+  }
+}
+
+Result<std::unique_ptr<PipeSolver>> MakePipeSolver(PipeScheme scheme, const PipeConfig& config,
+                                                   double p_bar_pa) {
+  if (config.cells < 2) return Status::Error("the pipe needs at least 2 cells");
+  if (scheme == PipeScheme::kCharacteristics) {
+    return std::unique_ptr<PipeSolver>(new CharacteristicsSolver(config, p_bar_pa));
+  }
+  auto solver = MolSolver::Create(config, p_bar_pa);
+  if (!solver.ok()) return solver.status();
+  return std::unique_ptr<PipeSolver>(std::move(solver).value());
+}
+
+}  // namespace mpdrig

@@ -1,0 +1,212 @@
+#include "model/sim/rig_simulator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace mpdrig {
+
+Status SimulationOptions::Validate() const {
+  if (cells < 2 || cells > 200000) {
+    return Status::Error("cells must be in [2, 200000], got " + std::to_string(cells));
+  }
+  return Status::Ok();
+}
+
+std::string RangeEvent::Describe() const {
+  std::ostringstream out;
+  out.precision(4);
+  out << "absolute pressure fell to " << pressure_pa / 1e5 << " bar(a) at x = " << position_m
+      << " m, t = " << time_s << " s: below zero absolute pressure the model is not valid "
+      << "(thesis 11.5)";
+  return out.str();
+}
+
+RigSimulator::RigSimulator(const RigParams& params, const SimulationOptions& options,
+                           std::unique_ptr<PipeSolver> pipe)
+    : params_(params),
+      options_(options),
+      pipe_(std::move(pipe)),
+      characteristic_(params),
+      actuator_(params),
+      piston_(params) {}
+
+Result<RigSimulator> RigSimulator::Create(const RigParams& params, const SimulationOptions& options,
+                                          const RigInputs& initial_inputs,
+                                          double initial_piston_position_m, double start_time_s) {
+  MPDRIG_RETURN_IF_ERROR(params.Validate());
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  const RigInputs& in = initial_inputs;
+  if (!std::isfinite(in.choke_opening_frac) || !std::isfinite(in.pump_flow_m3ps) ||
+      !std::isfinite(in.outlet_pressure_pa) || !std::isfinite(initial_piston_position_m)) {
+    return Status::Error("initial inputs must be finite");
+  }
+  if (in.outlet_pressure_pa <= 0.0) {
+    return Status::Error("outlet pressure must be above zero absolute");
+  }
+
+  const ChokeCharacteristic characteristic(params);
+  const double opening = std::clamp(in.choke_opening_frac, 0.0, 1.0);
+  const double g = characteristic.FlowCoefficientM2(opening);
+  if (g <= 0.0 && in.pump_flow_m3ps != 0.0) {
+    return Status::Error("the choke is tight (G = 0, no leak) with pump flow: there is no steady "
+                         "initial state; open the choke or set choke_leak_m2 > 0");
+  }
+  // (5.3.2) at rest: all pump flow through the choke.
+  const double q = in.pump_flow_m3ps;
+  const double outlet_pressure =
+      in.outlet_pressure_pa + (g > 0.0 ? params.choke_density_kgpm3 * q * std::fabs(q) / (g * g) : 0.0);
+
+  const PipeConfig config = PipeConfig::FromParams(params, options.model, options.cells);
+  auto pipe = MakePipeSolver(options.scheme, config, outlet_pressure);
+  if (!pipe.ok()) return pipe.status();
+  (*pipe)->SetRestState(outlet_pressure);
+
+  RigSimulator simulator(params, options, std::move(pipe).value());
+  simulator.start_time_s_ = start_time_s;
+  simulator.choke_opening_frac_ = opening;
+  simulator.last_inputs_.piston_velocity_mps = 0.0;
+  simulator.last_inputs_.piston_position_m = initial_piston_position_m;
+  simulator.last_inputs_.rig = in;
+  simulator.boundary_.inlet_velocity_mps = 0.0;
+  simulator.boundary_.choke = {g, in.pump_flow_m3ps, in.outlet_pressure_pa};
+  return simulator;
+}
+
+Status RigSimulator::Step(const StepInputs& inputs) {
+  const RigInputs& in = inputs.rig;
+  if (!std::isfinite(inputs.piston_velocity_mps) || !std::isfinite(in.choke_opening_frac) ||
+      !std::isfinite(in.pump_flow_m3ps) || !std::isfinite(in.outlet_pressure_pa)) {
+    std::ostringstream out;
+    out << "non-finite input at t = " << time_s() << " s";
+    return Status::Error(out.str());
+  }
+  const double dt = pipe_->time_step_s();
+  const double reference = std::clamp(in.choke_opening_frac, 0.0, 1.0);
+  choke_opening_frac_ = options_.choke_input == ChokeInput::kReference
+                            ? actuator_.Advance(choke_opening_frac_, reference, dt)
+                            : reference;
+
+  PipeStepInputs step;
+  step.start = boundary_;
+  step.end.inlet_velocity_mps = piston_.InletVelocityMps(inputs.piston_velocity_mps);
+  step.end.choke.flow_coefficient_m2 = characteristic_.FlowCoefficientM2(choke_opening_frac_);
+  step.end.choke.pump_flow_m3ps = in.pump_flow_m3ps;
+  step.end.choke.outlet_pressure_pa = in.outlet_pressure_pa;
+
+  RangeViolation violation;
+  MPDRIG_RETURN_IF_ERROR(pipe_->Step(step, &violation));
+  ++steps_;
+  last_inputs_ = inputs;
+  boundary_ = step.end;
+  if (violation.occurred) {
+    RangeEvent event{time_s(), violation.position_m, violation.min_pressure_pa};
+    if (options_.stop_on_range_violation) return Status::Error(event.Describe());
+    if (!first_range_event_) first_range_event_ = event;
+  }
+  return Status::Ok();
+}
+
+RigSample RigSimulator::Sample() const {
+  RigSample sample;
+  sample.time_s = time_s();
+  auto& v = sample.values;
+  const double length = params_.pipe_length_m;
+  const double area = params_.PipeAreaM2();
+  const double v_d = last_inputs_.piston_velocity_mps;
+  const double p_inlet = pipe_->PressureAt(0.0);
+  const double u_outlet = pipe_->VelocityAt(length);
+  const double q_b = last_inputs_.rig.pump_flow_m3ps;
+
+  v[Index(Channel::kTime)] = sample.time_s;
+  v[Index(Channel::kPistonPosition)] = last_inputs_.piston_position_m;
+  v[Index(Channel::kChokePosition)] = choke_opening_frac_;
+  v[Index(Channel::kP2)] = p_inlet;
+  v[Index(Channel::kP1)] = piston_.BelowPistonPressurePa(p_inlet, v_d);
+  for (int k = 0; k < kPipeTransmitterCount; ++k) {
+    const double x = length * k / (kPipeTransmitterCount - 1);
+    v[Index(Channel::kPT1) + k] = pipe_->PressureAt(x);
+  }
+  v[Index(Channel::kC1)] = last_inputs_.rig.outlet_pressure_pa;
+  v[Index(Channel::kC2)] = pipe_->PressureAt(length);
+  v[Index(Channel::kFT1)] = area * u_outlet;
+  v[Index(Channel::kFT2)] = q_b;
+  v[Index(Channel::kFT3)] = q_b + area * u_outlet;
+  v[Index(Channel::kFT4)] = area * pipe_->VelocityAt(0.0);
+  return sample;
+}
+
+namespace {
+
+RigSample Interpolate(const RigSample& a, const RigSample& b, double t) {
+  RigSample out;
+  out.time_s = t;
+  const double w = b.time_s > a.time_s ? (t - a.time_s) / (b.time_s - a.time_s) : 0.0;
+  for (std::size_t i = 0; i < kChannelCount; ++i) {
+    out.values[i] = (1.0 - w) * a.values[i] + w * b.values[i];
+  }
+  return out;
+}
+
+}  // namespace
+
+Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& options,
+                           const InputSignals& inputs, const std::vector<double>& output_times,
+                           const std::function<void(double)>& progress) {
+  if (output_times.empty()) return Status::Error("no output times");
+  for (std::size_t i = 1; i < output_times.size(); ++i) {
+    if (!(output_times[i] > output_times[i - 1])) {
+      return Status::Error("output times must be strictly increasing");
+    }
+  }
+  const double t0 = output_times.front();
+  const double t_end = output_times.back();
+  auto simulator =
+      RigSimulator::Create(params, options, inputs.rig(t0), inputs.piston_position_m(t0), t0);
+  if (!simulator.ok()) return simulator.status();
+  RigSimulator& sim = *simulator;
+
+  RunResult result;
+  result.time_step_s = sim.time_step_s();
+  result.samples.reserve(output_times.size());
+  const double dt = sim.time_step_s();
+  RigSample previous = sim.Sample();
+  std::size_t next_output = 0;
+  long step_index = 0;
+  double next_progress = 0.1;
+  while (next_output < output_times.size()) {
+    // Outputs at or before the current grid time are interpolated between the last two samples.
+    const RigSample current = sim.Sample();
+    while (next_output < output_times.size() && output_times[next_output] <= current.time_s) {
+      result.samples.push_back(step_index == 0 ? current
+                                               : Interpolate(previous, current,
+                                                             output_times[next_output]));
+      ++next_output;
+    }
+    if (next_output == output_times.size()) break;
+
+    // Grid times are t0 + n dt (multiplied, not accumulated, so they do not drift).
+    const double t_b = t0 + (step_index + 1) * dt;
+    // Inputs at the end of the step. The piston velocity there is the centred difference of the
+    // position over [t_b - dt/2, t_b + dt/2]: second order, and the trapezoidal sum of these
+    // velocities displaces exactly the position's change.
+    StepInputs step;
+    step.piston_velocity_mps =
+        (inputs.piston_position_m(t_b + 0.5 * dt) - inputs.piston_position_m(t_b - 0.5 * dt)) / dt;
+    step.piston_position_m = inputs.piston_position_m(t_b);
+    step.rig = inputs.rig(t_b);
+    previous = current;
+    Status status = sim.Step(step);
+    if (!status.ok()) return status;
+    ++step_index;
+    if (progress && t_end > t0 && (t_b - t0) / (t_end - t0) >= next_progress) {
+      progress(std::min(1.0, (t_b - t0) / (t_end - t0)));
+      next_progress += 0.1;
+    }
+  }
+  result.steps = step_index;
+  result.first_range_event = sim.first_range_event();
+  return result;
+}
+
+}  // namespace mpdrig

@@ -1,0 +1,139 @@
+// The assembled rig: heave generator -> copper pipe -> choke with back-pressure pump (thesis 5).
+//
+// RigSimulator advances in the pipe solver's fixed step (dt = dx / c) with inputs held over each
+// step; it owns the choke actuator state and computes every lab channel. Simulate() drives it
+// from time functions of the inputs (profiles or a replayed log) and interpolates the channels to
+// the requested output times. Time is an argument: no wall clock here.
+//
+// Initial state (thesis 6.5, generalised): the steady state for the initial inputs, with the pipe
+// at rest, all pump flow through the choke, so p(L) = p_0 + rho_L q_b |q_b| / G(u_c)^2 (5.3.2),
+// and the hydrostatic profile below it (6.5.3).
+#pragma once
+
+#include <array>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "model/boundary/choke.h"
+#include "model/boundary/piston.h"
+#include "model/common/status.h"
+#include "model/common/units.h"
+#include "model/params/rig_params.h"
+#include "model/pipe/pipe_solver.h"
+#include "model/sim/rig_channels.h"
+
+namespace mpdrig {
+
+inline constexpr int kDefaultCells = 200;
+
+// How the choke opening input is used.
+enum class ChokeInput {
+  kReference,  // a command: goes through the actuator lag and rate limit (the service, profiles)
+  kMeasured,   // the measured position of a log: used as is (design.md, replaying a log)
+};
+
+struct SimulationOptions {
+  PipeModel model = PipeModel::kQuasiLinear;
+  PipeScheme scheme = PipeScheme::kCharacteristics;
+  int cells = kDefaultCells;
+  ChokeInput choke_input = ChokeInput::kReference;
+  // Absolute pressure at or below zero leaves the model's range (thesis 11.5). By default the run
+  // stops with an error naming the time and place; otherwise it goes on and reports it.
+  bool stop_on_range_violation = true;
+
+  Status Validate() const;
+};
+
+// The rig's inputs at one instant.
+struct RigInputs {
+  double choke_opening_frac = 0.0;  // u_c: reference or measured (SimulationOptions::choke_input)
+  double pump_flow_m3ps = 0.0;      // q_b (FT2)
+  double outlet_pressure_pa = units::kStandardAtmospherePa;  // p_0 (C1), absolute
+};
+
+// Inputs for one step: their values at the END of the step (the new time level). Between the
+// previous step's values and these, the pipe solver sees them as it needs (see PipeStepInputs).
+struct StepInputs {
+  double piston_velocity_mps = 0.0;  // v_d, positive up
+  double piston_position_m = 0.0;    // reported as a channel
+  RigInputs rig;
+};
+
+struct RigSample {
+  double time_s = 0.0;
+  std::array<double, kChannelCount> values{};  // SI, absolute pressure; indexed by Channel
+  // (values[kTime] == time_s)
+  double operator[](Channel channel) const { return values[Index(channel)]; }
+};
+
+// A departure from the model's range, with its time and place.
+struct RangeEvent {
+  double time_s = 0.0;
+  double position_m = 0.0;
+  double pressure_pa = 0.0;
+  std::string Describe() const;
+};
+
+class RigSimulator {
+ public:
+  static Result<RigSimulator> Create(const RigParams& params, const SimulationOptions& options,
+                                     const RigInputs& initial_inputs,
+                                     double initial_piston_position_m = 0.0,
+                                     double start_time_s = 0.0);
+
+  double time_s() const { return start_time_s_ + steps_ * pipe_->time_step_s(); }
+  double time_step_s() const { return pipe_->time_step_s(); }
+  const PipeSolver& pipe() const { return *pipe_; }
+  const RigParams& params() const { return params_; }
+  double choke_opening_frac() const { return choke_opening_frac_; }
+
+  // Advances one step. Fails on solver failure, or on a range violation when the options say so;
+  // otherwise the first violation is kept in first_range_event().
+  Status Step(const StepInputs& inputs);
+
+  // Every channel at the current time.
+  RigSample Sample() const;
+  double PressureAtPa(double x_m) const { return pipe_->PressureAt(x_m); }
+  const std::optional<RangeEvent>& first_range_event() const { return first_range_event_; }
+
+ private:
+  RigSimulator(const RigParams& params, const SimulationOptions& options,
+               std::unique_ptr<PipeSolver> pipe);
+
+  RigParams params_;
+  SimulationOptions options_;
+  std::unique_ptr<PipeSolver> pipe_;
+  ChokeCharacteristic characteristic_;
+  ChokeActuator actuator_;
+  PistonBoundary piston_;
+  double start_time_s_ = 0.0;
+  long steps_ = 0;  // time = start + steps * dt: no accumulated rounding over long runs
+  double choke_opening_frac_ = 0.0;
+  StepInputs last_inputs_{};
+  PipeBoundaryValues boundary_{};  // boundary inputs at the current time
+  std::optional<RangeEvent> first_range_event_;
+};
+
+// Time functions of the inputs for a batch run.
+struct InputSignals {
+  std::function<double(double)> piston_position_m;  // continuous in time
+  std::function<RigInputs(double)> rig;               // held values (choke, pump, outlet)
+};
+
+struct RunResult {
+  std::vector<RigSample> samples;  // one per output time
+  std::optional<RangeEvent> first_range_event;
+  long steps = 0;
+  double time_step_s = 0.0;
+};
+
+// Runs the rig over [output_times.front(), output_times.back()] and returns every channel at the
+// output times (strictly increasing). `progress`, if given, is called with the fraction done.
+Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& options,
+                           const InputSignals& inputs, const std::vector<double>& output_times,
+                           const std::function<void(double)>& progress = {});
+
+}  // namespace mpdrig

@@ -1,0 +1,14 @@
+// The subcommands of `mpdrig`. Each Add*Command registers its options on the app and a callback
+// that runs it; the exit code is left in *exit_code.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace mpdrig::cli {
+
+void AddSimulateCommand(CLI::App* app, int* exit_code);
+void AddFreqrespCommand(CLI::App* app, int* exit_code);
+void AddParamsCommand(CLI::App* app, int* exit_code);
+void AddDemoCommand(CLI::App* app, int* exit_code);
+
+}  // namespace mpdrig::cli

@@ -1,0 +1,71 @@
+#include "service/cli/model_options.h"
+
+#include <cstdio>
+#include <sstream>
+
+#include "model/params/rig_config.h"
+
+namespace mpdrig::cli {
+
+void ModelOptions::AddParamOptions(CLI::App* command) {
+  command->add_option("--config", config_path,
+                      "rig configuration, Protobuf text format (see `mpdrig params --format pbtxt`)")
+      ->check(CLI::ExistingFile);
+  command->add_option("--set", overrides,
+                      "override a parameter, e.g. --set wave_speed_mps=1100 (repeatable; "
+                      "`mpdrig params` lists keys and units)")
+      ->type_name("KEY=VALUE");
+}
+
+void ModelOptions::AddAll(CLI::App* command) {
+  AddParamOptions(command);
+  command->add_option("--model", model, "pipe model: quasilinear (thesis 6) or linear (thesis 7)")
+      ->check(CLI::IsMember({"quasilinear", "linear"}))
+      ->capture_default_str();
+  command->add_option("--cells", cells, "number of pipe cells N (time step = L / (N c))")
+      ->check(CLI::Range(2, 200000))
+      ->capture_default_str();
+  command->add_option("--scheme", scheme,
+                      "characteristics: method of characteristics (fast, exact transport); "
+                      "mol: the thesis's method of lines, integrated by SUNDIALS ARKODE")
+      ->check(CLI::IsMember({"characteristics", "mol"}))
+      ->capture_default_str();
+}
+
+Result<RigParams> ModelOptions::LoadParams() const {
+  RigParams params;
+  if (!config_path.empty()) {
+    auto loaded = LoadRigConfig(config_path);
+    if (!loaded.ok()) return loaded.status();
+    params = *loaded;
+  }
+  for (const std::string& assignment : overrides) {
+    MPDRIG_RETURN_IF_ERROR(ApplyOverride(&params, assignment).Within("--set"));
+  }
+  MPDRIG_RETURN_IF_ERROR(params.Validate());
+  return params;
+}
+
+Result<SimulationOptions> ModelOptions::LoadSimulationOptions() const {
+  SimulationOptions options;
+  options.model = model == "linear" ? PipeModel::kLinear : PipeModel::kQuasiLinear;
+  options.scheme = scheme == "mol" ? PipeScheme::kMethodOfLines : PipeScheme::kCharacteristics;
+  options.cells = cells;
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  return options;
+}
+
+std::string ModelOptions::Describe(const RigParams& params) const {
+  std::ostringstream out;
+  out.precision(3);
+  out << model << ", " << cells << " cells, " << scheme << " (dt "
+      << 1e3 * params.pipe_length_m / (cells * params.wave_speed_mps) << " ms)";
+  return out.str();
+}
+
+int Fail(const std::string& command, const Status& status) {
+  std::fprintf(stderr, "mpdrig %s: %s\n", command.c_str(), status.message().c_str());
+  return 1;
+}
+
+}  // namespace mpdrig::cli

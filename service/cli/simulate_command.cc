@@ -1,0 +1,227 @@
+// mpdrig simulate: drive the rig model with a log's inputs or with profiles; write a rig log.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "model/common/units.h"
+#include "model/riglog/rig_log.h"
+#include "model/signal/smoothing.h"
+#include "model/sim/profile.h"
+#include "service/cli/commands.h"
+#include "service/cli/model_options.h"
+#include "service/cli/rig_log_output.h"
+
+namespace mpdrig::cli {
+namespace {
+
+struct SimulateArgs {
+  ModelOptions model;
+  std::string inputs_path;
+  std::string piston_spec;
+  std::string choke_spec = "31";
+  double pump_lpm = 0.0;
+  double outlet_barg = 0.0;
+  double duration_s = 20.0;
+  double rate_hz = 100.0;
+  double piston_smoothing_s = 0.05;
+  bool allow_negative_pressure = false;
+  std::string out_path;
+};
+
+// A log column that must be finite on every row, converted to a time function.
+Result<std::vector<double>> RequireFinite(const riglog::RigLog& log, std::string_view channel,
+                                          const std::string& path) {
+  const std::vector<double>* values = log.Find(channel);
+  if (values == nullptr) {
+    return Status::Error(path + ": required input column '" + std::string(channel) +
+                         "_<unit>' is missing");
+  }
+  for (std::size_t row = 0; row < values->size(); ++row) {
+    if (!std::isfinite((*values)[row])) {
+      std::ostringstream out;
+      out << path << ": input " << channel << " is not measured (empty or nan) at data row "
+          << row + 1 << " (time_s = " << log.time_s[row]
+          << "); the model needs every input sample";
+      return Status::Error(out.str());
+    }
+  }
+  return *values;
+}
+
+Result<InputSignals> SignalsFromLog(const riglog::RigLog& log, const std::string& path,
+                                    double smoothing_s) {
+  if (log.num_rows() < 2) return Status::Error(path + ": needs at least 2 samples");
+  auto piston = RequireFinite(log, "piston_position", path);
+  if (!piston.ok()) return piston.status();
+  auto choke = RequireFinite(log, "choke_position", path);
+  if (!choke.ok()) return choke.status();
+  const std::size_t n = log.num_rows();
+  // Optional inputs: absent means the documented default; present means measured everywhere.
+  std::vector<double> pump(n, 0.0);
+  std::vector<double> outlet(n, log.atmospheric_pressure_pa);
+  if (log.Find("FT2") != nullptr) {
+    auto values = RequireFinite(log, "FT2", path);
+    if (!values.ok()) return values.status();
+    pump = *values;
+  }
+  if (log.Find("C1") != nullptr) {
+    auto values = RequireFinite(log, "C1", path);
+    if (!values.ok()) return values.status();
+    outlet = *values;
+  }
+  auto position = std::make_shared<PiecewiseLinear>(
+      log.time_s, SmoothLocalQuadratic(log.time_s, *piston, smoothing_s));
+  auto choke_f = std::make_shared<PiecewiseLinear>(log.time_s, *choke);
+  auto pump_f = std::make_shared<PiecewiseLinear>(log.time_s, pump);
+  auto outlet_f = std::make_shared<PiecewiseLinear>(log.time_s, outlet);
+  InputSignals signals;
+  signals.piston_position_m = [position](double t) { return (*position)(t); };
+  signals.rig = [choke_f, pump_f, outlet_f](double t) {
+    RigInputs in;
+    in.choke_opening_frac = (*choke_f)(t);
+    in.pump_flow_m3ps = (*pump_f)(t);
+    in.outlet_pressure_pa = (*outlet_f)(t);
+    return in;
+  };
+  return signals;
+}
+
+int RunSimulate(const SimulateArgs& args) {
+  const std::string name = "simulate";
+  auto params = args.model.LoadParams();
+  if (!params.ok()) return Fail(name, params.status());
+  auto options = args.model.LoadSimulationOptions();
+  if (!options.ok()) return Fail(name, options.status());
+  options->stop_on_range_violation = !args.allow_negative_pressure;
+
+  InputSignals signals;
+  std::vector<double> output_times;
+  double atmosphere = params->atmospheric_pressure_pa;
+  std::string drive;
+  if (!args.inputs_path.empty()) {
+    auto log = riglog::ReadRigLog(args.inputs_path);
+    if (!log.ok()) return Fail(name, log.status());
+    auto from_log = SignalsFromLog(*log, args.inputs_path, args.piston_smoothing_s);
+    if (!from_log.ok()) return Fail(name, from_log.status());
+    signals = *from_log;
+    output_times = log->time_s;
+    atmosphere = log->atmospheric_pressure_pa;
+    options->choke_input = ChokeInput::kMeasured;
+    drive = "inputs of " + args.inputs_path;
+  } else {
+    if (!(args.duration_s > 0.0) || !(args.rate_hz > 0.0)) {
+      return Fail(name, Status::Error("--duration and --rate-hz must be > 0"));
+    }
+    auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
+    if (!piston.ok()) return Fail(name, piston.status().Within("--piston"));
+    auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);
+    if (!choke.ok()) return Fail(name, choke.status().Within("--choke-deg"));
+    std::shared_ptr<Profile> piston_profile = std::move(piston).value();
+    std::shared_ptr<Profile> choke_profile = std::move(choke).value();
+    const double pump = units::LpmToM3ps(args.pump_lpm);
+    const double outlet = units::BargToPaAbs(args.outlet_barg, params->atmospheric_pressure_pa);
+    signals.piston_position_m = [piston_profile](double t) { return piston_profile->ValueAt(t); };
+    signals.rig = [choke_profile, pump, outlet](double t) {
+      RigInputs in;
+      in.choke_opening_frac = units::ChokeDegToFrac(choke_profile->ValueAt(t));
+      in.pump_flow_m3ps = pump;
+      in.outlet_pressure_pa = outlet;
+      return in;
+    };
+    const long count = std::lround(args.duration_s * args.rate_hz);
+    for (long i = 0; i <= count; ++i) output_times.push_back(i / args.rate_hz);
+    options->choke_input = ChokeInput::kReference;
+    drive = "piston " + piston_profile->Describe() + " m, choke " + choke_profile->Describe() +
+            " deg (through the actuator)";
+  }
+
+  const double span_s = output_times.back() - output_times.front();
+  const bool show_progress = span_s > 600.0;
+  const auto started = std::chrono::steady_clock::now();
+  auto run = Simulate(*params, *options, signals, output_times, [&](double fraction) {
+    if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
+  });
+  if (!run.ok()) {
+    return Fail(name, Status::Error(run.status().message() +
+                                    "\n  (raise the outlet pressure, reduce the piston amplitude, "
+                                    "or pass --allow-negative-pressure to continue anyway)"));
+  }
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  riglog::Metadata metadata = {
+      {"source", "mpdrig simulate"},
+      {"model", args.model.Describe(*params)},
+      {"drive", drive},
+  };
+  if (!args.model.config_path.empty()) metadata.emplace_back("config", args.model.config_path);
+  for (const std::string& assignment : args.model.overrides) metadata.emplace_back("set", assignment);
+  if (run->first_range_event) {
+    metadata.emplace_back("warning", run->first_range_event->Describe());
+    std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
+                 run->first_range_event->Describe().c_str());
+  }
+  Status written = WriteSamples(args.out_path, metadata, atmosphere, run->samples);
+  if (!written.ok()) return Fail(name, written);
+  if (args.out_path != "-") {
+    std::printf("simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
+                "channels written to %s\n",
+                span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps,
+                run->samples.size(), SimulatedColumns().size() + 1, args.out_path.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void AddSimulateCommand(CLI::App* app, int* exit_code) {
+  auto args = std::make_shared<SimulateArgs>();
+  CLI::App* command = app->add_subcommand(
+      "simulate",
+      "Run the rig model and write every lab channel as a rig log (rig-log-format.md).\n"
+      "Drive it with the inputs of a measured log (--inputs), or with profiles:\n"
+      "  mpdrig simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 \\\n"
+      "                  --outlet-barg 0 --duration 60 --out sim.csv\n"
+      "  mpdrig simulate --inputs lab.csv --out replay.csv --set wave_speed_mps=900\n"
+      "Profiles: sine:amp_U=..,freq_hz=..[,mean_U=..][,phase_deg=..]\n"
+      "          sweep:amp_U=..,f0_hz=..,f1_hz=..[,duration_s=..][,mean_U=..]\n"
+      "          step:amp_U=..,t_s=..[,rise_s=..][,mean_U=..]   or a plain number\n"
+      "with U = m for the piston and deg for the choke.");
+  args->model.AddAll(command);
+  auto* inputs = command->add_option("--inputs", args->inputs_path,
+                                     "rig log whose piston_position, choke_position (and FT2, C1 "
+                                     "if present) drive the model; outputs at its time stamps")
+                     ->check(CLI::ExistingFile);
+  auto* piston =
+      command->add_option("--piston", args->piston_spec, "piston (BHA) position profile [m]");
+  inputs->excludes(piston);
+  command->add_option("--choke-deg", args->choke_spec,
+                      "choke opening reference profile [deg], 0 closed .. 90 open")
+      ->capture_default_str();
+  command->add_option("--pump-lpm", args->pump_lpm, "back-pressure pump flow FT2 [L/min]")
+      ->capture_default_str();
+  command->add_option("--outlet-barg", args->outlet_barg, "choke outlet pressure C1 [bar gauge]")
+      ->capture_default_str();
+  command->add_option("--duration", args->duration_s, "simulated time [s] (profiles)")
+      ->capture_default_str();
+  command->add_option("--rate-hz", args->rate_hz, "output sample rate [Hz] (profiles)")
+      ->capture_default_str();
+  command->add_option("--piston-smoothing-s", args->piston_smoothing_s,
+                      "window of the local quadratic fit that smooths a measured piston position "
+                      "before it is differentiated (0: none)")
+      ->capture_default_str();
+  command->add_flag("--allow-negative-pressure", args->allow_negative_pressure,
+                    "keep going when the absolute pressure falls to zero (reported as a warning)");
+  command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
+  command->callback([args, exit_code, inputs, piston]() {
+    if (inputs->count() == 0 && piston->count() == 0) {
+      *exit_code = Fail("simulate", Status::Error("give --inputs LOG.csv or --piston PROFILE"));
+      return;
+    }
+    *exit_code = RunSimulate(*args);
+  });
+}
+
+}  // namespace mpdrig::cli
