@@ -41,9 +41,12 @@ Complex FourierCoefficient(const std::vector<double>& values, const std::vector<
 
 std::string ChokeSetting::Describe() const {
   switch (kind) {
-    case Kind::kClosed: return "closed";
-    case Kind::kOpen: return "open";
-    case Kind::kOpening: return std::to_string(opening_frac * 90.0) + " deg";
+    case Kind::kClosed:
+      return "closed";
+    case Kind::kOpen:
+      return "open";
+    case Kind::kOpening:
+      return std::to_string(opening_frac * 90.0) + " deg";
   }
   return "?";
 }
@@ -51,9 +54,12 @@ std::string ChokeSetting::Describe() const {
 double LinearizedOutletImpedance(const RigParams& params, const ChokeSetting& choke,
                                  double pump_flow_m3ps) {
   switch (choke.kind) {
-    case ChokeSetting::Kind::kClosed: return std::numeric_limits<double>::infinity();
-    case ChokeSetting::Kind::kOpen: return 0.0;
-    case ChokeSetting::Kind::kOpening: break;
+    case ChokeSetting::Kind::kClosed:
+      return std::numeric_limits<double>::infinity();
+    case ChokeSetting::Kind::kOpen:
+      return 0.0;
+    case ChokeSetting::Kind::kOpening:
+      break;
   }
   const double g = ChokeCharacteristic(params).FlowCoefficientM2(choke.opening_frac);
   if (g <= 0.0) return std::numeric_limits<double>::infinity();

@@ -55,8 +55,8 @@ std::vector<FrequencyPoint> AnalyticFrequencyResponse(const RigParams& params,
                                                       const std::vector<double>& freqs_hz);
 
 struct SimulatedResponseOptions {
-  double amplitude_m = 0.001;       // small: the analytic model is linear
-  double settle_decay = 7.0;        // run e^{settle_decay} transient decays (rate f1/2) first
+  double amplitude_m = 0.001;  // small: the analytic model is linear
+  double settle_decay = 7.0;   // run e^{settle_decay} transient decays (rate f1/2) first
   int min_settle_periods = 3;
   int measure_periods = 4;
   int samples_per_period = 64;

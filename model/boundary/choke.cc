@@ -11,9 +11,11 @@ ChokeCharacteristic::ChokeCharacteristic(const RigParams& params)
 }
 
 double ChokeCharacteristic::FlowCoefficientM2(double opening_frac) const {
-  const double u = std::clamp(opening_frac, table_.front().opening_frac, table_.back().opening_frac);
-  auto upper = std::upper_bound(table_.begin(), table_.end(), u,
-                                [](double value, const ChokePoint& p) { return value < p.opening_frac; });
+  const double u =
+      std::clamp(opening_frac, table_.front().opening_frac, table_.back().opening_frac);
+  auto upper =
+      std::upper_bound(table_.begin(), table_.end(), u,
+                       [](double value, const ChokePoint& p) { return value < p.opening_frac; });
   if (upper == table_.end()) upper = table_.end() - 1;
   if (upper == table_.begin()) upper = table_.begin() + 1;
   const ChokePoint& a = *(upper - 1);

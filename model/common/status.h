@@ -18,7 +18,8 @@ class [[nodiscard]] Status {
   bool ok() const { return !failed_; }
   const std::string& message() const { return message_; }
 
-  // Prefixes context, e.g. Status::Error("bad value").Within("config.pbtxt") -> "config.pbtxt: bad value".
+  // Prefixes context, e.g. Status::Error("bad value").Within("config.pbtxt") -> "config.pbtxt: bad
+  // value".
   Status Within(const std::string& context) const {
     return ok() ? *this : Error(context + ": " + message_);
   }
@@ -34,7 +35,7 @@ class [[nodiscard]] Status {
 template <typename T>
 class [[nodiscard]] Result {
  public:
-  Result(T value) : data_(std::move(value)) {}  // NOLINT(google-explicit-constructor)
+  Result(T value) : data_(std::move(value)) {}        // NOLINT(google-explicit-constructor)
   Result(Status status) : data_(std::move(status)) {  // NOLINT(google-explicit-constructor)
     if (std::get<Status>(data_).ok()) {
       std::fprintf(stderr, "mpdrig: Result constructed from an OK Status\n");
@@ -60,16 +61,16 @@ class [[nodiscard]] Result {
 
 // Invariant check, always armed (also in Release): a violated invariant is a bug in mpdrig, not
 // bad input, so it stops the program with the place it failed.
-#define MPDRIG_CHECK(condition)                                                          \
-  do {                                                                                   \
-    if (!(condition)) {                                                                  \
+#define MPDRIG_CHECK(condition)                                                              \
+  do {                                                                                       \
+    if (!(condition)) {                                                                      \
       std::fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__, __LINE__, #condition); \
-      std::abort();                                                                      \
-    }                                                                                    \
+      std::abort();                                                                          \
+    }                                                                                        \
   } while (0)
 
-#define MPDRIG_RETURN_IF_ERROR(expr)        \
-  do {                                      \
-    ::mpdrig::Status status_ = (expr);      \
-    if (!status_.ok()) return status_;      \
+#define MPDRIG_RETURN_IF_ERROR(expr)   \
+  do {                                 \
+    ::mpdrig::Status status_ = (expr); \
+    if (!status_.ok()) return status_; \
   } while (0)

@@ -17,12 +17,13 @@ const ParamInfo kParams[] = {
      1.0e5},
     {"pipe_inner_radius_m", "m", "copper pipe inner radius r_p (Table 8.1.2)",
      &RigParams::pipe_inner_radius_m, 1.0e-4, 1.0},
-    {"pipe_elevation_gain_m", "m", "height of the outlet above the inlet (coil height, Table 8.1.2)",
+    {"pipe_elevation_gain_m", "m",
+     "height of the outlet above the inlet (coil height, Table 8.1.2)",
      &RigParams::pipe_elevation_gain_m, -1.0e4, 1.0e4},
     {"wave_speed_mps", "m/s", "speed of sound c (tuned 850, Table 9.4.1)",
      &RigParams::wave_speed_mps, 10.0, 5000.0},
-    {"density_kgpm3", "kg/m^3", "water density rho_ref at p_ref (5.2.1)",
-     &RigParams::density_kgpm3, 100.0, 5000.0},
+    {"density_kgpm3", "kg/m^3", "water density rho_ref at p_ref (5.2.1)", &RigParams::density_kgpm3,
+     100.0, 5000.0},
     {"reference_pressure_pa", "Pa", "reference pressure p_ref of (5.2.1), absolute",
      &RigParams::reference_pressure_pa, 0.0, 1.0e8},
     {"friction_f1_per_s", "1/s", "linear pipe friction f1 in f(u) = f1 u + f2 u|u| (8.6.8, 9.4.1)",
@@ -69,8 +70,8 @@ std::vector<ChokePoint> RigParams::DefaultChokeCharacteristic() {
   // Table 8.4.1: opening [deg] -> G [m^2]. The zero values at 0 and 15 deg are replaced by the
   // leak at evaluation time (design.md convention), not here, so the table stays the thesis's.
   const double deg[] = {0, 15, 20, 25, 28, 31, 40, 50, 60, 70, 80, 90};
-  const double g[] = {0,       0,       2.2e-7,  8e-7,    2.5e-6,  4.5e-6,
-                      1.19e-5, 2.3e-5,  3.69e-5, 5.76e-5, 8.66e-5, 1.03e-4};
+  const double g[] = {0,       0,      2.2e-7,  8e-7,    2.5e-6,  4.5e-6,
+                      1.19e-5, 2.3e-5, 3.69e-5, 5.76e-5, 8.66e-5, 1.03e-4};
   std::vector<ChokePoint> points;
   for (int i = 0; i < 12; ++i) points.push_back({deg[i] / 90.0, g[i]});
   return points;
@@ -106,8 +107,9 @@ Status RigParams::Validate() const {
     }
   }
   if (std::abs(pipe_elevation_gain_m) > pipe_length_m) {
-    return Status::Error("pipe_elevation_gain_m exceeds pipe_length_m: the pipe cannot rise more "
-                         "than its length");
+    return Status::Error(
+        "pipe_elevation_gain_m exceeds pipe_length_m: the pipe cannot rise more "
+        "than its length");
   }
   if (choke_characteristic.size() < 2) {
     return Status::Error("choke characteristic needs at least 2 points");
@@ -139,7 +141,8 @@ const ParamInfo* FindParam(std::string_view key) {
 Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
   const ParamInfo* info = FindParam(key);
   if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + ValidKeys());
+    return Status::Error("unknown parameter '" + std::string(key) +
+                         "'; valid keys: " + ValidKeys());
   }
   double value = 0.0;
   const char* first = value_text.data();
@@ -155,8 +158,8 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
   }
   if (value < info->min_value || value > info->max_value) {
     std::ostringstream out;
-    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value
-        << ", " << info->max_value << "]";
+    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
+        << info->max_value << "]";
     return Status::Error(out.str());
   }
   params->*info->member = value;

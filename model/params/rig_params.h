@@ -26,15 +26,15 @@ struct ChokePoint {
 
 struct RigParams {
   // --- Copper pipe, Table 8.1.2 and Table 9.4.1 -------------------------------------------------
-  double pipe_length_m = 900.0;          // L
-  double pipe_inner_radius_m = 0.008;    // r_p (16 mm bore)
-  double pipe_elevation_gain_m = 2.3;    // coil height h_c: outlet is 2.3 m above inlet
-  double wave_speed_mps = 850.0;         // c, tuned (9.4.1); 1173 measured (8.3.2)
-  double density_kgpm3 = 998.0;          // rho_ref at p_ref, (5.2.1)
+  double pipe_length_m = 900.0;             // L
+  double pipe_inner_radius_m = 0.008;       // r_p (16 mm bore)
+  double pipe_elevation_gain_m = 2.3;       // coil height h_c: outlet is 2.3 m above inlet
+  double wave_speed_mps = 850.0;            // c, tuned (9.4.1); 1173 measured (8.3.2)
+  double density_kgpm3 = 998.0;             // rho_ref at p_ref, (5.2.1)
   double reference_pressure_pa = 101325.0;  // p_ref, (5.2.1)
-  double friction_f1_per_s = 0.15;       // linear pipe friction f1: f(u) = f1 u + f2 u|u| (8.6.8)
-  double friction_f2_per_m = 0.63;       // quadratic pipe friction f2
-  double gravity_mps2 = 9.81;            // g
+  double friction_f1_per_s = 0.15;  // linear pipe friction f1: f(u) = f1 u + f2 u|u| (8.6.8)
+  double friction_f2_per_m = 0.63;  // quadratic pipe friction f2
+  double gravity_mps2 = 9.81;       // g
 
   // --- Choke, section 8.4, Table 8.4.1, Table 9.4.1 ----------------------------------------------
   double choke_leak_m2 = 6.0e-7;             // floor of G: G = max(G_table(u_c), leak) (9.4)
@@ -44,9 +44,9 @@ struct RigParams {
   std::vector<ChokePoint> choke_characteristic = DefaultChokeCharacteristic();
 
   // --- Heave generator (piston / BHA), Table 8.1.1 and section 8.2 -------------------------------
-  double upper_rod_diameter_m = 0.025;     // drill string above the BHA, area A_d
-  double lower_rod_diameter_m = 0.022;     // rod below the BHA, area A_d2
-  double compartment_height_m = 1.7;       // h in (5.4.2)
+  double upper_rod_diameter_m = 0.025;                  // drill string above the BHA, area A_d
+  double lower_rod_diameter_m = 0.022;                  // rod below the BHA, area A_d2
+  double compartment_height_m = 1.7;                    // h in (5.4.2)
   double piston_friction_fd1_pa_s_per_m = -43840.0;     // f_d1 (8.2.1)
   double piston_friction_fd2_pa_s2_per_m2 = -410400.0;  // f_d2 (8.2.1)
 
@@ -54,9 +54,9 @@ struct RigParams {
   double atmospheric_pressure_pa = 101325.0;  // converts the lab's gauge pressures
 
   // Derived quantities (thesis symbols).
-  double PipeAreaM2() const;           // A = pi r_p^2
+  double PipeAreaM2() const;                // A = pi r_p^2
   double PistonDisplacementAreaM2() const;  // A_d - A_d2 (5.4.1, 8.6.1)
-  double SinInclination() const;       // sin(gamma) = elevation gain / L
+  double SinInclination() const;            // sin(gamma) = elevation gain / L
   // k = c^2 rho_ref - p_ref in (5.2.3); k + p = c^2 rho(p).
   double QuasiLinearK() const;
 

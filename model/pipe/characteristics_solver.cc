@@ -59,8 +59,8 @@ void CharacteristicsSolver::StepInteriorLinear() {
     const double f_a = f1 * u_a + f2 * u_a * std::fabs(u_a);
     const double f_b = f1 * u_b + f2 * u_b * std::fabs(u_b);
     const double lambda = f1 + f2 * std::fabs(u_old);
-    const double u_p = (a[i - 1] + b[i + 1] - 0.5 * h * (f_a + f_b) - 2.0 * h * gs) /
-                       (2.0 + h * lambda);
+    const double u_p =
+        (a[i - 1] + b[i + 1] - 0.5 * h * (f_a + f_b) - 2.0 * h * gs) / (2.0 + h * lambda);
     a_next[i] = a[i - 1] - 0.5 * h * (f_a + lambda * u_p) - h * gs;
     b_next[i] = b[i + 1] - 0.5 * h * (f_b + lambda * u_p) - h * gs;
   }
@@ -99,8 +99,8 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
   {
     const Foot fb = BetaFoot(0);
     const double u0 = inputs.end.inlet_velocity_mps;
-    beta_next_[0] = fb.invariant - 0.5 * h * (config_.Friction(fb.velocity) + config_.Friction(u0)) -
-                    h * gs;
+    beta_next_[0] =
+        fb.invariant - 0.5 * h * (config_.Friction(fb.velocity) + config_.Friction(u0)) - h * gs;
     alpha_next_[0] = 2.0 * u0 - beta_next_[0];
   }
 

@@ -1,7 +1,7 @@
 #include "model/pipe/mol_solver.h"
 
-#include <cstdio>  // arkode_butcher.h uses FILE without including it
 #include <arkode/arkode_erkstep.h>
+#include <cstdio>  // arkode_butcher.h uses FILE without including it
 
 #include <algorithm>
 #include <cmath>
@@ -16,8 +16,8 @@ constexpr double kAbsoluteTolerance = 1e-10;  // m/s, invariants are O(1) m/s
 
 Status ArkodeError(const char* call, int flag) {
   char* name = ERKStepGetReturnFlagName(flag);
-  std::string message = std::string("SUNDIALS ") + call + " failed: " + (name ? name : "?") +
-                        " (" + std::to_string(flag) + ")";
+  std::string message = std::string("SUNDIALS ") + call + " failed: " + (name ? name : "?") + " (" +
+                        std::to_string(flag) + ")";
   std::free(name);
   return Status::Error(message);
 }

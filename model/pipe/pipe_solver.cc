@@ -45,7 +45,8 @@ void PipeSolver::SetRestState(double outlet_pressure_pa) {
               std::exp(config_.gravity_slope_mps2 * depth_below_outlet_m / (c * c)) -
           config_.k_pa;
     } else {
-      p = outlet_pressure_pa + config_.density_kgpm3 * config_.gravity_slope_mps2 * depth_below_outlet_m;
+      p = outlet_pressure_pa +
+          config_.density_kgpm3 * config_.gravity_slope_mps2 * depth_below_outlet_m;
     }
     alpha_[i] = law_.Alpha(p, 0.0);
     beta_[i] = law_.Beta(p, 0.0);
@@ -64,8 +65,7 @@ double PipeSolver::PressureAt(double x_m) const {
   int i;
   double w;
   Locate(x_m, &i, &w);
-  const double difference =
-      (1.0 - w) * (alpha_[i] - beta_[i]) + w * (alpha_[i + 1] - beta_[i + 1]);
+  const double difference = (1.0 - w) * (alpha_[i] - beta_[i]) + w * (alpha_[i + 1] - beta_[i + 1]);
   return law_.PressureFromDifference(difference);
 }
 
@@ -78,9 +78,10 @@ double PipeSolver::VelocityAt(double x_m) const {
 }
 
 double PipeSolver::StoredVolumeM3() const {
-  // rho(p)/rho_ref - 1 = (p - p_ref)/(rho_ref c^2) (5.2.1); the constant p_ref drops out of changes.
-  const double scale = config_.area_m2 / (config_.density_kgpm3 * config_.wave_speed_mps *
-                                          config_.wave_speed_mps);
+  // rho(p)/rho_ref - 1 = (p - p_ref)/(rho_ref c^2) (5.2.1); the constant p_ref drops out of
+  // changes.
+  const double scale =
+      config_.area_m2 / (config_.density_kgpm3 * config_.wave_speed_mps * config_.wave_speed_mps);
   double sum = 0.0;
   for (int i = 0; i <= config_.cells; ++i) {
     const double weight = (i == 0 || i == config_.cells) ? 0.5 : 1.0;

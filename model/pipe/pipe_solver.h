@@ -47,7 +47,7 @@ struct PipeConfig {
   double area_m2 = 0.0;
   double wave_speed_mps = 0.0;
   double density_kgpm3 = 0.0;
-  double k_pa = 0.0;              // quasi-linear k = c^2 rho_ref - p_ref
+  double k_pa = 0.0;  // quasi-linear k = c^2 rho_ref - p_ref
   double friction_f1_per_s = 0.0;
   double friction_f2_per_m = 0.0;
   double gravity_slope_mps2 = 0.0;  // g sin(gamma)
@@ -100,7 +100,8 @@ class PipeSolver {
   virtual void OnStateReset() {}
   // Index and weight of the interval holding x.
   void Locate(double x_m, int* index, double* weight) const;
-  // Smallest alpha - beta over the nodes, turned into a RangeViolation if at or below zero pressure.
+  // Smallest alpha - beta over the nodes, turned into a RangeViolation if at or below zero
+  // pressure.
   void CheckRange(RangeViolation* violation) const;
 
   PipeConfig config_;

@@ -97,8 +97,10 @@ Result<std::map<std::string, double>> ParseKeys(std::string_view body, std::stri
                                                 const std::vector<std::string>& optional) {
   std::map<std::string, double> values;
   auto allowed = [&](const std::string& key) {
-    for (const auto& k : required) if (k == key) return true;
-    for (const auto& k : optional) if (k == key) return true;
+    for (const auto& k : required)
+      if (k == key) return true;
+    for (const auto& k : optional)
+      if (k == key) return true;
     return false;
   };
   auto usage = [&]() {
@@ -162,7 +164,8 @@ Result<std::unique_ptr<Profile>> ParseProfile(std::string_view spec, std::string
     auto& k = *keys;
     const double duration = k.count("duration_s") ? k["duration_s"] : default_duration_s;
     if (!(duration > 0.0)) return Status::Error("sweep: duration_s must be > 0");
-    if (k["f0_hz"] < 0.0 || k["f1_hz"] < 0.0) return Status::Error("sweep: frequencies must be >= 0");
+    if (k["f0_hz"] < 0.0 || k["f1_hz"] < 0.0)
+      return Status::Error("sweep: frequencies must be >= 0");
     return std::unique_ptr<Profile>(
         new SweepProfile(k[mean], k[amp], k["f0_hz"], k["f1_hz"], duration));
   }
@@ -173,7 +176,8 @@ Result<std::unique_ptr<Profile>> ParseProfile(std::string_view spec, std::string
     if (k["rise_s"] < 0.0) return Status::Error("step: rise_s must be >= 0");
     return std::unique_ptr<Profile>(new StepProfile(k[mean], k[amp], k["t_s"], k["rise_s"]));
   }
-  return Status::Error("unknown profile '" + std::string(kind) + "'; valid: sine, sweep, step, or a number");
+  return Status::Error("unknown profile '" + std::string(kind) +
+                       "'; valid: sine, sweep, step, or a number");
 }
 
 }  // namespace mpdrig

@@ -3,7 +3,8 @@
 //   <number>                                   constant
 //   sine:amp_U=A,freq_hz=F[,mean_U=M][,phase_deg=P]      M + A sin(2 pi F t + P)
 //   sweep:amp_U=A,f0_hz=F0,f1_hz=F1[,duration_s=T][,mean_U=M]
-//                                              linear chirp M + A sin(2 pi (F0 t + (F1-F0) t^2/(2T)))
+//                                              linear chirp M + A sin(2 pi (F0 t + (F1-F0)
+//                                              t^2/(2T)))
 //   step:amp_U=A,t_s=T0[,rise_s=R][,mean_U=M]   M until T0, then a ramp of R seconds to M + A
 //
 // U is the profile's unit: "m" for the piston position, "deg" for the choke opening. Values are

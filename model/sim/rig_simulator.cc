@@ -49,13 +49,15 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
   const double opening = std::clamp(in.choke_opening_frac, 0.0, 1.0);
   const double g = characteristic.FlowCoefficientM2(opening);
   if (g <= 0.0 && in.pump_flow_m3ps != 0.0) {
-    return Status::Error("the choke is tight (G = 0, no leak) with pump flow: there is no steady "
-                         "initial state; open the choke or set choke_leak_m2 > 0");
+    return Status::Error(
+        "the choke is tight (G = 0, no leak) with pump flow: there is no steady "
+        "initial state; open the choke or set choke_leak_m2 > 0");
   }
   // (5.3.2) at rest: all pump flow through the choke.
   const double q = in.pump_flow_m3ps;
   const double outlet_pressure =
-      in.outlet_pressure_pa + (g > 0.0 ? params.choke_density_kgpm3 * q * std::fabs(q) / (g * g) : 0.0);
+      in.outlet_pressure_pa +
+      (g > 0.0 ? params.choke_density_kgpm3 * q * std::fabs(q) / (g * g) : 0.0);
 
   const PipeConfig config = PipeConfig::FromParams(params, options.model, options.cells);
   auto pipe = MakePipeSolver(options.scheme, config, outlet_pressure);
@@ -178,9 +180,8 @@ Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& opt
     // Outputs at or before the current grid time are interpolated between the last two samples.
     const RigSample current = sim.Sample();
     while (next_output < output_times.size() && output_times[next_output] <= current.time_s) {
-      result.samples.push_back(step_index == 0 ? current
-                                               : Interpolate(previous, current,
-                                                             output_times[next_output]));
+      result.samples.push_back(
+          step_index == 0 ? current : Interpolate(previous, current, output_times[next_output]));
       ++next_output;
     }
     if (next_output == output_times.size()) break;

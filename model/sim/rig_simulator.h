@@ -120,7 +120,7 @@ class RigSimulator {
 // Time functions of the inputs for a batch run.
 struct InputSignals {
   std::function<double(double)> piston_position_m;  // continuous in time
-  std::function<RigInputs(double)> rig;               // held values (choke, pump, outlet)
+  std::function<RigInputs(double)> rig;             // held values (choke, pump, outlet)
 };
 
 struct RunResult {

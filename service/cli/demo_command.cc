@@ -47,11 +47,12 @@ int RunDemo(const DemoArgs& args) {
 
   auto run = Simulate(*params, *options, signals, times);
   if (!run.ok()) return Fail("demo", run.status());
-  Status written = WriteSamples(args.out_path,
-                                {{"source", "mpdrig demo"},
-                                 {"drive", "piston sine 0.1 m at 0.2 Hz, choke 31 deg, pump 5 L/min"},
-                                 {"model", args.model.Describe(*params)}},
-                                atmosphere, run->samples);
+  Status written =
+      WriteSamples(args.out_path,
+                   {{"source", "mpdrig demo"},
+                    {"drive", "piston sine 0.1 m at 0.2 Hz, choke 31 deg, pump 5 L/min"},
+                    {"model", args.model.Describe(*params)}},
+                   atmosphere, run->samples);
   if (!written.ok()) return Fail("demo", written);
 
   // Summary over the last 5 periods (after the start-up transient).

@@ -67,7 +67,8 @@ int RunFreqresp(const FreqrespArgs& args) {
     if (!options.ok()) return Fail(name, options.status());
     SimulatedResponseOptions response;
     response.amplitude_m = args.amplitude_m;
-    response.outlet_pressure_pa = units::BargToPaAbs(args.outlet_barg, params->atmospheric_pressure_pa);
+    response.outlet_pressure_pa =
+        units::BargToPaAbs(args.outlet_barg, params->atmospheric_pressure_pa);
     auto simulated = SimulatedFrequencyResponse(
         *params, *options, *choke, pump, freqs, response, [](int done, int total) {
           std::fprintf(stderr, "\rmpdrig freqresp: %d/%d frequencies", done, total);
@@ -93,11 +94,12 @@ int RunFreqresp(const FreqrespArgs& args) {
   }
   if (!*out) return Fail(name, Status::Error(args.out_path + ": write failed"));
   if (args.out_path != "-") {
-    std::printf("%s response, choke %s, pump %g L/min: %zu frequencies %g..%g Hz written to %s; "
-                "largest |p(0)/x| = %.4g bar/m at %.4g Hz\n",
-                args.analytic ? "analytic (9.2.13)" : "simulated", choke->Describe().c_str(),
-                args.pump_lpm, points.size(), args.fmin_hz, args.fmax_hz, args.out_path.c_str(),
-                peak->magnitude_pa_per_m / 1e5, peak->freq_hz);
+    std::printf(
+        "%s response, choke %s, pump %g L/min: %zu frequencies %g..%g Hz written to %s; "
+        "largest |p(0)/x| = %.4g bar/m at %.4g Hz\n",
+        args.analytic ? "analytic (9.2.13)" : "simulated", choke->Describe().c_str(), args.pump_lpm,
+        points.size(), args.fmin_hz, args.fmax_hz, args.out_path.c_str(),
+        peak->magnitude_pa_per_m / 1e5, peak->freq_hz);
   }
   return 0;
 }
@@ -110,7 +112,8 @@ void AddFreqrespCommand(CLI::App* app, int* exit_code) {
       "freqresp",
       "Frequency response from piston position to bottom-hole pressure p(0) (thesis 9.2):\n"
       "columns freq_hz, magnitude_pa_per_m, phase_deg.\n"
-      "  --analytic   the closed form (9.2.13): linear model, linear friction f1, choke linearised\n"
+      "  --analytic   the closed form (9.2.13): linear model, linear friction f1, choke "
+      "linearised\n"
       "  --simulated  the simulator driven by a small piston sine at each frequency\n"
       "Resonances without friction: open choke (2n+1) c/(4L), closed choke n c/(2L).\n"
       "  mpdrig freqresp --analytic --choke closed --fmin 0.02 --fmax 0.6 --out fr.csv");
@@ -120,8 +123,9 @@ void AddFreqrespCommand(CLI::App* app, int* exit_code) {
   analytic->excludes(simulated);
   command->add_option("--choke", args->choke, "closed, open, or an opening in degrees")
       ->capture_default_str();
-  command->add_option("--pump-lpm", args->pump_lpm,
-                      "back-pressure pump flow [L/min]; sets the linearised choke k = 2 rho A q_b/G^2")
+  command
+      ->add_option("--pump-lpm", args->pump_lpm,
+                   "back-pressure pump flow [L/min]; sets the linearised choke k = 2 rho A q_b/G^2")
       ->capture_default_str();
   command->add_option("--fmin", args->fmin_hz, "lowest frequency [Hz]")->capture_default_str();
   command->add_option("--fmax", args->fmax_hz, "highest frequency [Hz]")->capture_default_str();
@@ -129,8 +133,9 @@ void AddFreqrespCommand(CLI::App* app, int* exit_code) {
   command->add_flag("--log", args->logarithmic, "space the frequencies geometrically");
   command->add_option("--amplitude-m", args->amplitude_m, "piston amplitude for --simulated [m]")
       ->capture_default_str();
-  command->add_option("--outlet-barg", args->outlet_barg,
-                      "choke outlet pressure for --simulated [bar gauge]")
+  command
+      ->add_option("--outlet-barg", args->outlet_barg,
+                   "choke outlet pressure for --simulated [bar gauge]")
       ->capture_default_str();
   command->add_option("--out", args->out_path, "output CSV ('-' for stdout)")->required();
   command->callback([args, exit_code]() {

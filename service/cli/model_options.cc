@@ -8,12 +8,14 @@
 namespace mpdrig::cli {
 
 void ModelOptions::AddParamOptions(CLI::App* command) {
-  command->add_option("--config", config_path,
-                      "rig configuration, Protobuf text format (see `mpdrig params --format pbtxt`)")
+  command
+      ->add_option("--config", config_path,
+                   "rig configuration, Protobuf text format (see `mpdrig params --format pbtxt`)")
       ->check(CLI::ExistingFile);
-  command->add_option("--set", overrides,
-                      "override a parameter, e.g. --set wave_speed_mps=1100 (repeatable; "
-                      "`mpdrig params` lists keys and units)")
+  command
+      ->add_option("--set", overrides,
+                   "override a parameter, e.g. --set wave_speed_mps=1100 (repeatable; "
+                   "`mpdrig params` lists keys and units)")
       ->type_name("KEY=VALUE");
 }
 
@@ -25,9 +27,10 @@ void ModelOptions::AddAll(CLI::App* command) {
   command->add_option("--cells", cells, "number of pipe cells N (time step = L / (N c))")
       ->check(CLI::Range(2, 200000))
       ->capture_default_str();
-  command->add_option("--scheme", scheme,
-                      "characteristics: method of characteristics (fast, exact transport); "
-                      "mol: the thesis's method of lines, integrated by SUNDIALS ARKODE")
+  command
+      ->add_option("--scheme", scheme,
+                   "characteristics: method of characteristics (fast, exact transport); "
+                   "mol: the thesis's method of lines, integrated by SUNDIALS ARKODE")
       ->check(CLI::IsMember({"characteristics", "mol"}))
       ->capture_default_str();
 }

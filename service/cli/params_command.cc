@@ -29,15 +29,17 @@ int RunParams(const ParamsArgs& args) {
                 info.unit.data(), static_cast<int>(info.description.size()),
                 info.description.data());
   }
-  std::printf("\nchoke characteristic G(opening), linear between points, floored at "
-              "choke_leak_m2 (Table 8.4.1):\n  opening_deg  g_m2\n");
+  std::printf(
+      "\nchoke characteristic G(opening), linear between points, floored at "
+      "choke_leak_m2 (Table 8.4.1):\n  opening_deg  g_m2\n");
   for (const ChokePoint& point : params->choke_characteristic) {
     std::printf("  %11.4g  %.4g\n", units::ChokeFracToDeg(point.opening_frac), point.g_m2);
   }
-  std::printf("\nderived: pipe area A = %.6g m^2, piston displacement area A_d - A_d2 = %.6g m^2, "
-              "sin(gamma) = %.6g, k = c^2 rho - p_ref = %.6g Pa\n",
-              params->PipeAreaM2(), params->PistonDisplacementAreaM2(), params->SinInclination(),
-              params->QuasiLinearK());
+  std::printf(
+      "\nderived: pipe area A = %.6g m^2, piston displacement area A_d - A_d2 = %.6g m^2, "
+      "sin(gamma) = %.6g, k = c^2 rho - p_ref = %.6g Pa\n",
+      params->PipeAreaM2(), params->PistonDisplacementAreaM2(), params->SinInclination(),
+      params->QuasiLinearK());
   return 0;
 }
 

@@ -6,12 +6,26 @@ namespace mpdrig::cli {
 
 namespace {
 // Inputs first (what drove the rig), then the measurements from the bottom up.
-constexpr Channel kOutputOrder[] = {
-    Channel::kPistonPosition, Channel::kChokePosition, Channel::kFT2,  Channel::kC1,
-    Channel::kP1,             Channel::kP2,            Channel::kPT1,  Channel::kPT2,
-    Channel::kPT3,            Channel::kPT4,           Channel::kPT5,  Channel::kPT6,
-    Channel::kPT7,            Channel::kPT8,           Channel::kPT9,  Channel::kPT10,
-    Channel::kC2,             Channel::kFT1,           Channel::kFT3,  Channel::kFT4};
+constexpr Channel kOutputOrder[] = {Channel::kPistonPosition,
+                                    Channel::kChokePosition,
+                                    Channel::kFT2,
+                                    Channel::kC1,
+                                    Channel::kP1,
+                                    Channel::kP2,
+                                    Channel::kPT1,
+                                    Channel::kPT2,
+                                    Channel::kPT3,
+                                    Channel::kPT4,
+                                    Channel::kPT5,
+                                    Channel::kPT6,
+                                    Channel::kPT7,
+                                    Channel::kPT8,
+                                    Channel::kPT9,
+                                    Channel::kPT10,
+                                    Channel::kC2,
+                                    Channel::kFT1,
+                                    Channel::kFT3,
+                                    Channel::kFT4};
 }  // namespace
 
 std::vector<riglog::ColumnSpec> SimulatedColumns() {
@@ -23,7 +37,8 @@ std::vector<riglog::ColumnSpec> SimulatedColumns() {
 Status WriteSamples(const std::string& path, riglog::Metadata metadata,
                     double atmospheric_pressure_pa, const std::vector<RigSample>& samples) {
   bool has_atmosphere = false;
-  for (const auto& [key, value] : metadata) has_atmosphere |= key == riglog::kAtmosphericPressureKey;
+  for (const auto& [key, value] : metadata)
+    has_atmosphere |= key == riglog::kAtmosphericPressureKey;
   if (!has_atmosphere) {
     metadata.emplace_back(std::string(riglog::kAtmosphericPressureKey),
                           riglog::FormatNumber(atmospheric_pressure_pa));

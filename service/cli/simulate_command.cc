@@ -42,8 +42,7 @@ Result<std::vector<double>> RequireFinite(const riglog::RigLog& log, std::string
     if (!std::isfinite((*values)[row])) {
       std::ostringstream out;
       out << path << ": input " << channel << " is not measured (empty or nan) at data row "
-          << row + 1 << " (time_s = " << log.time_s[row]
-          << "); the model needs every input sample";
+          << row + 1 << " (time_s = " << log.time_s[row] << "); the model needs every input sample";
       return Status::Error(out.str());
     }
   }
@@ -157,7 +156,8 @@ int RunSimulate(const SimulateArgs& args) {
       {"drive", drive},
   };
   if (!args.model.config_path.empty()) metadata.emplace_back("config", args.model.config_path);
-  for (const std::string& assignment : args.model.overrides) metadata.emplace_back("set", assignment);
+  for (const std::string& assignment : args.model.overrides)
+    metadata.emplace_back("set", assignment);
   if (run->first_range_event) {
     metadata.emplace_back("warning", run->first_range_event->Describe());
     std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
@@ -166,10 +166,11 @@ int RunSimulate(const SimulateArgs& args) {
   Status written = WriteSamples(args.out_path, metadata, atmosphere, run->samples);
   if (!written.ok()) return Fail(name, written);
   if (args.out_path != "-") {
-    std::printf("simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
-                "channels written to %s\n",
-                span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps,
-                run->samples.size(), SimulatedColumns().size() + 1, args.out_path.c_str());
+    std::printf(
+        "simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
+        "channels written to %s\n",
+        span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, run->samples.size(),
+        SimulatedColumns().size() + 1, args.out_path.c_str());
   }
   return 0;
 }
@@ -190,15 +191,17 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
       "          step:amp_U=..,t_s=..[,rise_s=..][,mean_U=..]   or a plain number\n"
       "with U = m for the piston and deg for the choke.");
   args->model.AddAll(command);
-  auto* inputs = command->add_option("--inputs", args->inputs_path,
-                                     "rig log whose piston_position, choke_position (and FT2, C1 "
-                                     "if present) drive the model; outputs at its time stamps")
+  auto* inputs = command
+                     ->add_option("--inputs", args->inputs_path,
+                                  "rig log whose piston_position, choke_position (and FT2, C1 "
+                                  "if present) drive the model; outputs at its time stamps")
                      ->check(CLI::ExistingFile);
   auto* piston =
       command->add_option("--piston", args->piston_spec, "piston (BHA) position profile [m]");
   inputs->excludes(piston);
-  command->add_option("--choke-deg", args->choke_spec,
-                      "choke opening reference profile [deg], 0 closed .. 90 open")
+  command
+      ->add_option("--choke-deg", args->choke_spec,
+                   "choke opening reference profile [deg], 0 closed .. 90 open")
       ->capture_default_str();
   command->add_option("--pump-lpm", args->pump_lpm, "back-pressure pump flow FT2 [L/min]")
       ->capture_default_str();
@@ -208,9 +211,10 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--rate-hz", args->rate_hz, "output sample rate [Hz] (profiles)")
       ->capture_default_str();
-  command->add_option("--piston-smoothing-s", args->piston_smoothing_s,
-                      "window of the local quadratic fit that smooths a measured piston position "
-                      "before it is differentiated (0: none)")
+  command
+      ->add_option("--piston-smoothing-s", args->piston_smoothing_s,
+                   "window of the local quadratic fit that smooths a measured piston position "
+                   "before it is differentiated (0: none)")
       ->capture_default_str();
   command->add_flag("--allow-negative-pressure", args->allow_negative_pressure,
                     "keep going when the absolute pressure falls to zero (reported as a warning)");
