@@ -4,6 +4,8 @@
 #include <google/protobuf/io/tokenizer.h>
 #include <google/protobuf/text_format.h>
 
+#include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -20,12 +22,22 @@ namespace pb = google::protobuf;
 class FirstErrorCollector final : public pb::io::ErrorCollector {
  public:
   void AddError(int line, pb::io::ColumnNumber column, const std::string& message) override {
-    if (!has_error_) {
-      has_error_ = true;
-      std::ostringstream out;
-      out << line + 1 << ":" << column + 1 << ": " << message;
-      error_ = out.str();
+    if (has_error_) return;
+    has_error_ = true;
+    // Protobuf places an unknown field's error after its name; point at the name's start, as
+    // every other error here does.
+    const std::string marker = "no field named \"";
+    const std::size_t at = message.find(marker);
+    if (at != std::string::npos) {
+      const std::size_t name_end = message.find('"', at + marker.size());
+      if (name_end != std::string::npos) {
+        column = std::max<pb::io::ColumnNumber>(
+            0, column - static_cast<pb::io::ColumnNumber>(name_end - at - marker.size()));
+      }
     }
+    std::ostringstream out;
+    out << line + 1 << ":" << column + 1 << ": " << message;
+    error_ = out.str();
   }
   bool has_error() const { return has_error_; }
   const std::string& error() const { return error_; }
@@ -35,6 +47,13 @@ class FirstErrorCollector final : public pb::io::ErrorCollector {
   std::string error_;
 };
 
+// The shortest text that reads back as exactly `value`.
+std::string ShortestText(double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
 }  // namespace
 
 Result<RigParams> ParseRigConfig(const std::string& text, const std::string& source_name,
@@ -43,6 +62,8 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
   pb::TextFormat::Parser parser;
   FirstErrorCollector errors;
   parser.RecordErrorsTo(&errors);
+  pb::TextFormat::ParseInfoTree locations;  // where each field was written, for value errors
+  parser.WriteLocationsTo(&locations);
   if (!parser.ParseFromString(text, &message)) {
     return Status::Error(source_name + ":" +
                          (errors.has_error() ? errors.error() : std::string("parse error")));
@@ -57,13 +78,12 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
     const ParamInfo* info = FindParam(field->name());
     MPDRIG_CHECK(info != nullptr);  // rig_params_test keeps the proto and the table in sync
     const double value = reflection->GetDouble(message, field);
-    std::ostringstream text_value;
-    text_value.precision(17);
-    text_value << value;
-    if (std::isnan(value)) {
-      return Status::Error(source_name + ": " + field->name() + " is NaN");
-    }
-    MPDRIG_RETURN_IF_ERROR(SetParam(&params, field->name(), text_value.str()).Within(source_name));
+    const pb::TextFormat::ParseLocation where = locations.GetLocation(field, -1);
+    const std::string position =
+        source_name + ":" + std::to_string(where.line + 1) + ":" + std::to_string(where.column + 1);
+    Status status = std::isnan(value) ? Status::Error(field->name() + " is NaN")
+                                      : SetParam(&params, field->name(), ShortestText(value));
+    MPDRIG_RETURN_IF_ERROR(status.Within(position));
   }
   if (message.choke_point_size() > 0) {
     params.choke_characteristic.clear();
@@ -91,13 +111,13 @@ std::string FormatRigConfig(const RigParams& params) {
       << "# Defaults are the thesis's tuned values. SI units, absolute pressures.\n";
   for (const ParamInfo& info : ParamTable()) {
     out << "\n# " << info.description << " [" << info.unit << "]\n"
-        << info.key << ": " << params.*info.member << "\n";
+        << info.key << ": " << ShortestText(params.*info.member) << "\n";
   }
   out << "\n# Choke characteristic G(opening) [m^2], linear between points (Table 8.4.1),\n"
       << "# floored at choke_leak_m2. Listing points replaces the whole default table.\n";
   for (const ChokePoint& point : params.choke_characteristic) {
-    out << "choke_point { opening_deg: " << units::ChokeFracToDeg(point.opening_frac)
-        << " g_m2: " << point.g_m2 << " }\n";
+    out << "choke_point { opening_deg: " << ShortestText(units::ChokeFracToDeg(point.opening_frac))
+        << " g_m2: " << ShortestText(point.g_m2) << " }\n";
   }
   return out.str();
 }

@@ -145,6 +145,10 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
                          "'; valid keys: " + ValidKeys());
   }
   double value = 0.0;
+  // from_chars takes no leading '+'; a user may well write one.
+  if (value_text.size() > 1 && value_text.front() == '+' && value_text[1] != '-') {
+    value_text.remove_prefix(1);
+  }
   const char* first = value_text.data();
   const char* last = value_text.data() + value_text.size();
   const auto [end, error] = std::from_chars(first, last, value);

@@ -109,10 +109,12 @@ Result<std::map<std::string, double>> ParseKeys(std::string_view body, std::stri
     for (const auto& k : optional) text += ",[" + k + "=..]";
     return text;
   };
-  while (!body.empty()) {
+  bool more = !body.empty();
+  while (more) {
     const std::size_t comma = body.find(',');
     const std::string_view item = body.substr(0, comma);
-    body = comma == std::string_view::npos ? std::string_view() : body.substr(comma + 1);
+    more = comma != std::string_view::npos;  // a trailing comma leaves an empty item: an error
+    body = more ? body.substr(comma + 1) : std::string_view();
     const std::size_t equals = item.find('=');
     if (equals == std::string_view::npos) {
       return Status::Error("'" + std::string(item) + "' is not key=value; " + usage());

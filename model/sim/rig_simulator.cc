@@ -191,9 +191,17 @@ Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& opt
     // Inputs at the end of the step. The piston velocity there is the centred difference of the
     // position over [t_b - dt/2, t_b + dt/2]: second order, and the trapezoidal sum of these
     // velocities displaces exactly the position's change.
+    // Near the ends of the run the window slides inside [t0, t_end] (a one-sided difference):
+    // a replayed log's inputs are not known beyond its ends.
     StepInputs step;
+    double t_lo = t_b - 0.5 * dt;
+    double t_hi = t_b + 0.5 * dt;
+    if (t_hi > t_end) t_lo -= t_hi - t_end, t_hi = t_end;
+    if (t_lo < t0) t_hi = std::min(t_end, t_hi + (t0 - t_lo)), t_lo = t0;
     step.piston_velocity_mps =
-        (inputs.piston_position_m(t_b + 0.5 * dt) - inputs.piston_position_m(t_b - 0.5 * dt)) / dt;
+        t_hi > t_lo
+            ? (inputs.piston_position_m(t_hi) - inputs.piston_position_m(t_lo)) / (t_hi - t_lo)
+            : 0.0;
     step.piston_position_m = inputs.piston_position_m(t_b);
     step.rig = inputs.rig(t_b);
     previous = current;

@@ -1,0 +1,161 @@
+// model/ is pure numerics (style.md, design.md): no DDS, no threads, no wall clock, no sockets,
+// and no dependency on the layers above it (idl/, service/, clients/). Time is an argument.
+// This test scans every source and build file under model/ and names each offending line.
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace mpdrig {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Rule {
+  const char* what;
+  std::regex pattern;
+};
+
+// Rules for C++ sources and .proto files. Matched against each line with its `//` comment
+// removed, so a header may still say "no wall clock here".
+const std::vector<Rule>& SourceRules() {
+  static const std::vector<Rule> rules = {
+      {"DDS header",
+       std::regex(R"(^\s*#\s*include\s*[<"](dds|ddsc|ddscxx|org/eclipse/cyclonedds)/)")},
+      {"DDS header", std::regex(R"(^\s*#\s*include\s*[<"]dds\.h[>"])")},
+      {"generated DDS type (idl/)", std::regex(R"(^\s*#\s*include\s*"idl/)")},
+      {"upper layer (service/ or clients/)",
+       std::regex(R"(^\s*#\s*include\s*"(service|clients)/)")},
+      {"threads", std::regex(R"(^\s*#\s*include\s*<(thread|future|stop_token|pthread\.h)>)")},
+      {"threads", std::regex(R"(std::(thread|jthread|async|this_thread)\b)")},
+      {"wall clock", std::regex(R"(\b(system_clock|steady_clock|high_resolution_clock)\b)")},
+      {"wall clock", std::regex(R"(\b(gettimeofday|clock_gettime|timespec_get)\s*\()")},
+      {"sockets",
+       std::regex(
+           R"(^\s*#\s*include\s*<(sys/socket\.h|netinet/[^>]*|arpa/inet\.h|netdb\.h|winsock2?\.h|asio\.hpp|boost/asio[^>]*)>)")},
+  };
+  return rules;
+}
+
+// Rules for CMake files: model/ must not link DDS or a threads library.
+const std::vector<Rule>& CMakeRules() {
+  static const std::vector<Rule> rules = {
+      {"links DDS", std::regex(R"(\b(CycloneDDS|CycloneDDS-CXX|ddsc|ddscxx)\b)")},
+      {"links threads", std::regex(R"(Threads::Threads|\bpthread\b)")},
+      {"links an upper layer", std::regex(R"(\bmpdrig_(idl|service|clients?)\w*)")},
+  };
+  return rules;
+}
+
+bool IsCMake(const fs::path& path) {
+  return path.filename() == "CMakeLists.txt" || path.extension() == ".cmake";
+}
+
+bool IsSource(const fs::path& path) {
+  static const std::vector<std::string> extensions = {".h",   ".hh", ".hpp", ".cc",   ".cpp",
+                                                      ".cxx", ".c",  ".inc", ".proto"};
+  return std::find(extensions.begin(), extensions.end(), path.extension().string()) !=
+         extensions.end();
+}
+
+// "name:line: what: text" for every offending line of `text`.
+std::vector<std::string> FindViolations(const std::string& name, const std::string& text,
+                                        bool cmake) {
+  std::vector<std::string> violations;
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::string code = line;
+    const std::size_t comment = code.find(cmake ? "#" : "//");
+    if (comment != std::string::npos) code.erase(comment);
+    for (const Rule& rule : cmake ? CMakeRules() : SourceRules()) {
+      if (std::regex_search(code, rule.pattern)) {
+        violations.push_back(name + ":" + std::to_string(number) + ": " + rule.what + ": " + line);
+      }
+    }
+  }
+  return violations;
+}
+
+// The scanner itself: each rule fires on what it is for, and not on comments or look-alikes.
+TEST(ModelPurity, ScannerCatchesEachForbiddenDependency) {
+  const char* forbidden[] = {
+      "#include <dds/dds.h>",
+      "#include \"dds/ddsrt/time.h\"",
+      "  #  include <ddsc/dds.h>",
+      "#include <dds/dds.hpp>",
+      "#include \"idl/rig_types.h\"",
+      "#include \"service/cli/commands.h\"",
+      "#include <thread>",
+      "#include <future>",
+      "std::thread worker([] {});",
+      "std::this_thread::sleep_for(d);",
+      "const auto now = std::chrono::steady_clock::now();",
+      "auto t = std::chrono::system_clock::now(); // wall clock",
+      "using Clock = std::chrono::high_resolution_clock;",
+      "clock_gettime(CLOCK_MONOTONIC, &ts);",
+      "#include <sys/socket.h>",
+      "#include <netinet/in.h>",
+      "#include <boost/asio.hpp>",
+  };
+  for (const char* line : forbidden) {
+    EXPECT_EQ(FindViolations("x.cc", line, false).size(), 1u) << line;
+  }
+  const char* allowed[] = {
+      "// Time is an argument: no wall clock here, no steady_clock, no <thread>.",
+      "#include <chrono>  // durations as arguments are fine",
+      "#include \"model/sim/rig_simulator.h\"",
+      "#include <cmath>",
+      "double time_s = 0.0;",
+      "int threads_per_block = 1;",
+      "double steady_state_clock_pa = 0.0;",
+  };
+  for (const char* line : allowed) {
+    EXPECT_TRUE(FindViolations("x.cc", line, false).empty()) << line;
+  }
+  EXPECT_EQ(
+      FindViolations("CMakeLists.txt", "target_link_libraries(m PUBLIC CycloneDDS::ddsc)", true)
+          .size(),
+      1u);
+  EXPECT_EQ(
+      FindViolations("CMakeLists.txt", "target_link_libraries(m Threads::Threads)", true).size(),
+      1u);
+  EXPECT_TRUE(
+      FindViolations("CMakeLists.txt", "# model/ never links CycloneDDS or Threads", true).empty());
+}
+
+TEST(ModelPurity, ModelHasNoDdsThreadsWallClockOrSockets) {
+  const fs::path model = fs::path(MPDRIG_SOURCE_DIR) / "model";
+  ASSERT_TRUE(fs::is_directory(model)) << model;
+  std::vector<std::string> violations;
+  int scanned = 0;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(model)) {
+    if (!entry.is_regular_file()) continue;
+    const fs::path& path = entry.path();
+    const bool cmake = IsCMake(path);
+    if (!cmake && !IsSource(path)) continue;
+    std::ifstream file(path, std::ios::binary);
+    ASSERT_TRUE(file) << path;
+    std::ostringstream text;
+    text << file.rdbuf();
+    const std::string name = fs::relative(path, MPDRIG_SOURCE_DIR).string();
+    for (std::string& v : FindViolations(name, text.str(), cmake)) violations.push_back(v);
+    ++scanned;
+  }
+  EXPECT_GT(scanned, 10) << "model/ looks empty: is MPDRIG_SOURCE_DIR right?";
+  std::string report;
+  for (const std::string& v : violations) report += "  " + v + "\n";
+  EXPECT_TRUE(violations.empty())
+      << "model/ is pure numerics (style.md): time is an argument, transport lives in service/.\n"
+      << report;
+}
+
+}  // namespace
+}  // namespace mpdrig

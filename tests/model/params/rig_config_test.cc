@@ -1,0 +1,189 @@
+#include "model/params/rig_config.h"
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "model/params/rig_params.h"
+
+namespace mpdrig {
+namespace {
+
+const std::string kSource = "rig.pbtxt";
+
+// Expects every scalar of `actual` to equal `expected` exactly (each key is parsed, not computed).
+void ExpectScalarsEqual(const RigParams& actual, const RigParams& expected) {
+  for (const ParamInfo& info : ParamTable()) {
+    EXPECT_EQ(actual.*info.member, expected.*info.member) << info.key;
+  }
+}
+
+void ExpectChokeTablesEqual(const std::vector<ChokePoint>& actual,
+                            const std::vector<ChokePoint>& expected) {
+  ASSERT_EQ(actual.size(), expected.size());
+  for (std::size_t i = 0; i < actual.size(); ++i) {
+    EXPECT_EQ(actual[i].opening_frac, expected[i].opening_frac) << "point " << i;
+    EXPECT_EQ(actual[i].g_m2, expected[i].g_m2) << "point " << i;
+  }
+}
+
+std::string ErrorOf(const std::string& text) {
+  Result<RigParams> parsed = ParseRigConfig(text, kSource);
+  EXPECT_FALSE(parsed.ok()) << "accepted:\n" << text;
+  return parsed.ok() ? std::string() : parsed.status().message();
+}
+
+TEST(RigConfig, SetsGivenValuesAndKeepsDefaults) {
+  const std::string text =
+      "# tuned by hand\n"
+      "wave_speed_mps: 1100\n"
+      "friction_f1_per_s: 0.24   # after 9.4\n"
+      "piston_friction_fd1_pa_s_per_m: -5e4\n";
+  Result<RigParams> parsed = ParseRigConfig(text, kSource);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().message();
+  RigParams expected;
+  expected.wave_speed_mps = 1100.0;
+  expected.friction_f1_per_s = 0.24;
+  expected.piston_friction_fd1_pa_s_per_m = -5e4;
+  ExpectScalarsEqual(*parsed, expected);
+  ExpectChokeTablesEqual(parsed->choke_characteristic, RigParams().choke_characteristic);
+}
+
+TEST(RigConfig, EmptyTextGivesTheDefaults) {
+  Result<RigParams> parsed = ParseRigConfig("", kSource);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().message();
+  ExpectScalarsEqual(*parsed, RigParams());
+}
+
+TEST(RigConfig, AppliesOnTopOfTheGivenDefaults) {
+  RigParams base;
+  base.gravity_mps2 = 9.82;
+  Result<RigParams> parsed = ParseRigConfig("wave_speed_mps: 900", kSource, base);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().message();
+  EXPECT_EQ(parsed->gravity_mps2, 9.82);
+  EXPECT_EQ(parsed->wave_speed_mps, 900.0);
+}
+
+TEST(RigConfig, ChokePointsReplaceTheTableInDegrees) {
+  const std::string text =
+      "choke_point { opening_deg: 0  g_m2: 0 }\n"
+      "choke_point { opening_deg: 45 g_m2: 5e-5 }\n"
+      "choke_point { opening_deg: 90 g_m2: 1.03e-4 }\n";
+  Result<RigParams> parsed = ParseRigConfig(text, kSource);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().message();
+  ExpectChokeTablesEqual(parsed->choke_characteristic, {{0.0, 0.0}, {0.5, 5e-5}, {1.0, 1.03e-4}});
+  ExpectScalarsEqual(*parsed, RigParams());
+}
+
+TEST(RigConfig, UnknownFieldNamesSourceLineAndColumn) {
+  // Line 2; the unknown name starts at column 3 (1-based). Columns point at the start of the
+  // offending token, as in the rig-log reader and in the syntax-error case below.
+  const std::string message = ErrorOf("wave_speed_mps: 1100\n  wave_speed: 3\n");
+  EXPECT_EQ(message.rfind(kSource + ":2:3: ", 0), 0u) << message;
+  EXPECT_NE(message.find("wave_speed"), std::string::npos) << message;
+}
+
+TEST(RigConfig, SyntaxErrorNamesSourceLineAndColumn) {
+  // Missing ':' on line 3; the offending token `1100` starts at column 16.
+  const std::string message = ErrorOf("# comment\nfriction_f1_per_s: 0.2\nwave_speed_mps 1100\n");
+  EXPECT_EQ(message.rfind(kSource + ":3:16: ", 0), 0u) << message;
+}
+
+TEST(RigConfig, NonNumberNamesSourceLineAndColumn) {
+  const std::string message = ErrorOf("wave_speed_mps: fast\n");
+  EXPECT_EQ(message.rfind(kSource + ":1:17: ", 0), 0u) << message;
+}
+
+TEST(RigConfig, RepeatedScalarIsAnError) {
+  const std::string message = ErrorOf("wave_speed_mps: 1100\nwave_speed_mps: 1200\n");
+  EXPECT_EQ(message.rfind(kSource + ":2:", 0), 0u) << message;
+  EXPECT_NE(message.find("wave_speed_mps"), std::string::npos) << message;
+}
+
+TEST(RigConfig, OutOfBoundsValueNamesTheKeyAndItsPosition) {
+  const std::string message =
+      ErrorOf("wave_speed_mps: 1100\n  pipe_inner_radius_m: 8\n");  // mm, not m
+  EXPECT_EQ(message.rfind(kSource + ":2:3: ", 0), 0u) << message;
+  EXPECT_NE(message.find("pipe_inner_radius_m"), std::string::npos) << message;
+  EXPECT_NE(message.find("outside"), std::string::npos) << message;
+}
+
+TEST(RigConfig, NonFiniteValuesAreErrors) {
+  for (const char* value : {"nan", "inf", "-inf"}) {
+    const std::string message = ErrorOf(std::string("wave_speed_mps: ") + value + "\n");
+    EXPECT_NE(message.find("wave_speed_mps"), std::string::npos) << value << ": " << message;
+  }
+}
+
+TEST(RigConfig, BadChokeTableIsAnError) {
+  const std::string message = ErrorOf(
+      "choke_point { opening_deg: 40 g_m2: 1e-5 }\n"
+      "choke_point { opening_deg: 30 g_m2: 2e-5 }\n");
+  EXPECT_EQ(message.rfind(kSource + ": ", 0), 0u) << message;
+  EXPECT_NE(message.find("increasing"), std::string::npos) << message;
+  EXPECT_FALSE(ParseRigConfig("choke_point { opening_deg: 91 g_m2: 1e-5 }\n"
+                              "choke_point { opening_deg: 0 g_m2: 0 }\n",
+                              kSource)
+                   .ok());
+}
+
+TEST(RigConfig, FormattedDefaultsParseBackIdentically) {
+  const RigParams defaults;
+  const std::string text = FormatRigConfig(defaults);
+  for (const ParamInfo& info : ParamTable()) {
+    std::string line_start = "\n";  // (built stepwise: GCC 12 warns falsely on "\n" + string)
+    line_start.append(info.key).append(": ");
+    EXPECT_NE(text.find(line_start), std::string::npos) << info.key << " missing from\n" << text;
+  }
+  // Parse on top of different defaults, so a key the text lost cannot pass unnoticed.
+  RigParams other;
+  for (const ParamInfo& info : ParamTable()) other.*info.member = info.max_value;
+  other.pipe_elevation_gain_m = 0.0;
+  other.choke_characteristic = {{0.0, 1e-6}, {1.0, 2e-6}};
+  Result<RigParams> parsed = ParseRigConfig(text, kSource, other);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().message() << "\n" << text;
+  ExpectScalarsEqual(*parsed, defaults);
+  ExpectChokeTablesEqual(parsed->choke_characteristic, defaults.choke_characteristic);
+}
+
+TEST(RigConfig, FormattedChangedParamsParseBack) {
+  RigParams params;
+  params.wave_speed_mps = 1173.0;
+  params.friction_f1_per_s = 0.24;
+  params.choke_leak_m2 = 2.5e-7;
+  params.choke_characteristic = {{0.0, 0.0}, {0.25, 1e-6}, {1.0, 1.1e-4}};
+  Result<RigParams> parsed = ParseRigConfig(FormatRigConfig(params), kSource);
+  ASSERT_TRUE(parsed.ok()) << parsed.status().message();
+  ExpectScalarsEqual(*parsed, params);
+  ExpectChokeTablesEqual(parsed->choke_characteristic, params.choke_characteristic);
+}
+
+TEST(RigConfig, LoadFromFile) {
+  const std::string path = ::testing::TempDir() + "rig_config_test_load.pbtxt";
+  {
+    std::ofstream out(path, std::ios::trunc);
+    out << "wave_speed_mps: 1000\nbad_key: 1\n";
+  }
+  Result<RigParams> loaded = LoadRigConfig(path);
+  ASSERT_FALSE(loaded.ok());
+  // The exact column is UnknownFieldNamesSourceLineAndColumn's business.
+  EXPECT_EQ(loaded.status().message().rfind(path + ":2:", 0), 0u) << loaded.status().message();
+  EXPECT_NE(loaded.status().message().find("bad_key"), std::string::npos);
+  {
+    std::ofstream out(path, std::ios::trunc);
+    out << "wave_speed_mps: 1000\n";
+  }
+  loaded = LoadRigConfig(path);
+  ASSERT_TRUE(loaded.ok()) << loaded.status().message();
+  EXPECT_EQ(loaded->wave_speed_mps, 1000.0);
+  std::filesystem::remove(path);
+
+  Result<RigParams> missing = LoadRigConfig(path + ".does-not-exist");
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find(path + ".does-not-exist"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace mpdrig

@@ -1,0 +1,463 @@
+// The mpdrig command line, run as a user runs it: the real binary, real files, exit codes and
+// messages. Every run here simulates a few seconds at most (milliseconds of CPU).
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "model/common/units.h"
+#include "model/params/rig_config.h"
+#include "model/params/rig_params.h"
+#include "model/riglog/rig_log.h"
+
+namespace mpdrig {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;  // standard output
+  std::string err;  // standard error
+};
+
+std::string Quote(const std::string& text) { return "'" + text + "'"; }
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+void WriteFile(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << text;
+  ASSERT_TRUE(out.good()) << path;
+}
+
+bool Contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+// Each test runs in its own fresh directory under the build tree, removed when the test passes.
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::path(MPDRIG_BINARY_DIR) / "tests" / "service" /
+           ("cli_test." + std::to_string(::getpid()) + "." + info->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // Runs `mpdrig <args>` (a shell command line) from the test directory.
+  RunResult Run(const std::string& args) const {
+    const std::string err_path = Path("stderr.txt");
+    const std::string command = "cd " + Quote(dir_.string()) + " && " + Quote(MPDRIG_EXE) + " " +
+                                args + " 2>" + Quote(err_path);
+    RunResult result;
+    FILE* pipe = ::popen(command.c_str(), "r");
+    if (pipe == nullptr) return result;
+    char buffer[4096];
+    std::size_t read = 0;
+    while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) result.out.append(buffer, read);
+    const int status = ::pclose(pipe);
+    result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    result.err = ReadFile(err_path);
+    return result;
+  }
+
+  // The run of the brief: 0.2 Hz heave, choke 31 deg, 5 L/min, outlet at atmosphere, 5 s.
+  std::string SimulateSine(const std::string& name) const {
+    const std::string path = Path(name);
+    const RunResult run =
+        Run("simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 "
+            "--outlet-barg 0 --duration 5 --out " +
+            Quote(path));
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    return path;
+  }
+
+  fs::path dir_;
+};
+
+riglog::RigLog ReadLog(const std::string& path) {
+  Result<riglog::RigLog> log = riglog::ReadRigLog(path);
+  EXPECT_TRUE(log.ok()) << log.status().message();
+  return log.ok() ? std::move(log).value() : riglog::RigLog{};
+}
+
+const std::vector<double>& Column(const riglog::RigLog& log, const std::string& channel) {
+  static const std::vector<double> kEmpty;
+  const std::vector<double>* values = log.Find(channel);
+  EXPECT_NE(values, nullptr) << "no column " << channel;
+  return values != nullptr ? *values : kEmpty;
+}
+
+// --- help ----------------------------------------------------------------------------------
+
+TEST_F(CliTest, TopLevelHelpListsTheCommands) {
+  const RunResult run = Run("--help");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  for (const char* command : {"demo", "simulate", "freqresp", "params"}) {
+    EXPECT_TRUE(Contains(run.out, command)) << command << " not in\n" << run.out;
+  }
+}
+
+TEST_F(CliTest, EachCommandHelpShowsItsKeyOptions) {
+  const std::vector<std::pair<std::string, std::vector<std::string>>> expected = {
+      {"demo", {"--out", "--config", "--set"}},
+      {"simulate",
+       {"--inputs", "--piston", "--choke-deg", "--pump-lpm", "--outlet-barg", "--duration",
+        "--rate-hz", "--out", "--allow-negative-pressure", "--model", "--cells", "--config",
+        "--set", "sine:", "sweep:", "step:"}},
+      {"freqresp",
+       {"--analytic", "--simulated", "--choke", "--fmin", "--fmax", "--points", "--out"}},
+      {"params", {"--format", "pbtxt", "--config", "--set"}},
+  };
+  for (const auto& [command, options] : expected) {
+    const RunResult run = Run(command + " --help");
+    EXPECT_EQ(run.exit_code, 0) << command << ": " << run.err;
+    for (const std::string& option : options) {
+      EXPECT_TRUE(Contains(run.out, option)) << command << " --help lacks " << option;
+    }
+  }
+}
+
+TEST_F(CliTest, NoOrUnknownCommandFails) {
+  EXPECT_NE(Run("").exit_code, 0);
+  EXPECT_NE(Run("bogus").exit_code, 0);
+}
+
+// --- params --------------------------------------------------------------------------------
+
+TEST_F(CliTest, ParamsListsEveryKeyWithItsUnit) {
+  const RunResult run = Run("params");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::vector<std::string> lines;
+  std::istringstream in(run.out);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  for (const ParamInfo& info : ParamTable()) {
+    // One line per key: "<key> <value> <unit> <meaning>", columns separated by spaces.
+    const std::string key(info.key);
+    const auto line = std::find_if(lines.begin(), lines.end(), [&](const std::string& l) {
+      return l.rfind(key + " ", 0) == 0;
+    });
+    ASSERT_NE(line, lines.end()) << key << " not listed in\n" << run.out;
+    std::istringstream fields(line->substr(key.size()));
+    std::string value, rest;
+    fields >> value;
+    std::getline(fields, rest);
+    rest.erase(0, rest.find_first_not_of(' '));
+    EXPECT_EQ(rest.rfind(std::string(info.unit) + " ", 0), 0u)
+        << key << " lacks its unit [" << info.unit << "]: " << *line;
+  }
+}
+
+TEST_F(CliTest, ParamsPbtxtRoundTrip) {
+  const RunResult pbtxt = Run("params --format pbtxt");
+  ASSERT_EQ(pbtxt.exit_code, 0) << pbtxt.err;
+  const std::string config = Path("rig.pbtxt");
+  WriteFile(config, pbtxt.out);
+
+  const RunResult table = Run("params");
+  const RunResult loaded = Run("params --config " + Quote(config));
+  ASSERT_EQ(loaded.exit_code, 0) << loaded.err;
+  EXPECT_EQ(loaded.out, table.out);
+  const RunResult again = Run("params --format pbtxt --config " + Quote(config));
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(again.out, pbtxt.out);
+
+  Result<RigParams> params = LoadRigConfig(config);
+  ASSERT_TRUE(params.ok()) << params.status().message();
+  const RigParams defaults;
+  for (const ParamInfo& info : ParamTable()) {
+    EXPECT_EQ((*params).*info.member, defaults.*info.member) << info.key;
+  }
+}
+
+TEST_F(CliTest, ParamsSetOverridesAndRejectsBadValues) {
+  const RunResult set = Run("params --set wave_speed_mps=1100");
+  ASSERT_EQ(set.exit_code, 0) << set.err;
+  EXPECT_TRUE(std::regex_search(set.out, std::regex(R"((^|\n)wave_speed_mps +1100 )")));
+
+  const RunResult bad = Run("params --set wave_speed_mps=abc");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_TRUE(Contains(bad.err, "wave_speed_mps")) << bad.err;
+  EXPECT_TRUE(Contains(bad.err, "abc")) << bad.err;
+
+  const RunResult unknown = Run("params --set wave_speed=1100");
+  EXPECT_NE(unknown.exit_code, 0);
+  EXPECT_TRUE(Contains(unknown.err, "wave_speed_mps")) << "valid keys listed: " << unknown.err;
+}
+
+// --- simulate ------------------------------------------------------------------------------
+
+TEST_F(CliTest, SimulateWritesARigLogWithEveryChannel) {
+  const riglog::RigLog log = ReadLog(SimulateSine("X.csv"));
+  ASSERT_EQ(log.num_rows(), 501u);
+  for (std::size_t i = 0; i < log.num_rows(); ++i) {
+    ASSERT_NEAR(log.time_s[i], i / 100.0, 1e-9) << "row " << i;
+  }
+  std::vector<std::string> channels = {
+      "P1", "P2", "C1", "C2", "FT1", "FT2", "FT3", "FT4", "piston_position", "choke_position"};
+  for (int k = 1; k <= 10; ++k) channels.push_back("PT" + std::to_string(k));
+  for (const std::string& channel : channels) {
+    const std::vector<double>& values = Column(log, channel);
+    ASSERT_EQ(values.size(), log.num_rows()) << channel;
+    for (double v : values) ASSERT_TRUE(std::isfinite(v)) << channel;
+  }
+  // Inputs as commanded. Channels are interpolated linearly between solver steps (dt = 5.3 ms),
+  // which bends the sine by up to A w^2 dt^2 / 8 = 5.5e-7 m.
+  const std::vector<double>& piston = Column(log, "piston_position");
+  EXPECT_NEAR(piston[125], 0.1, 1e-6);  // t = 1.25 s, the crest of the 0.2 Hz sine
+  EXPECT_NEAR(Column(log, "choke_position")[0], 31.0 / 90.0, 1e-12);
+  EXPECT_NEAR(Column(log, "FT2")[0], units::LpmToM3ps(5.0), 1e-12);
+  EXPECT_NEAR(Column(log, "C1")[0], log.atmospheric_pressure_pa, 1e-6);
+}
+
+// Before the first pressure wave from the piston reaches the choke (L/c = 900/850 = 1.06 s), the
+// choke sees the initial steady state: all pump flow through the orifice, thesis (5.3.2):
+// C2 - C1 = rho_L (q/G)^2 with q = 5 L/min, G(31 deg) = 4.5e-6 m^2, rho_L = 998 kg/m^3.
+TEST_F(CliTest, SimulateSteadyChokePressureIsTheOrificeLaw) {
+  const riglog::RigLog log = ReadLog(SimulateSine("X.csv"));
+  ASSERT_EQ(log.num_rows(), 501u);
+  const double q = 5.0e-3 / 60.0;
+  const double expected = 998.0 * (q / 4.5e-6) * (q / 4.5e-6);  // 3.42 bar
+  const std::vector<double>& c1 = Column(log, "C1");
+  const std::vector<double>& c2 = Column(log, "C2");
+  int checked = 0;
+  for (std::size_t i = 0; i < log.num_rows() && log.time_s[i] <= 1.0; ++i) {
+    EXPECT_NEAR(c2[i] - c1[i], expected, 0.005 * expected) << "t = " << log.time_s[i];
+    ++checked;
+  }
+  EXPECT_EQ(checked, 101);
+}
+
+// Replaying a log drives the model with the logged positions. What differs from the profile run:
+// the piston velocity comes from the 100 Hz samples (smoothed, linearly interpolated) instead of
+// the exact sine. Interpolation changes the velocity by up to A w^2 dt / 2 = 0.1 (2 pi 0.2)^2
+// 0.01 / 2 = 8e-4 m/s, 0.6% of the peak 0.126 m/s; Joukowsky turns that into at most 0.4% of the
+// pressure swing. The choke is constant, so using it as measured (no actuator) changes nothing.
+// Tolerance: 0.5% of each channel's swing.
+void ExpectReplayMatches(const riglog::RigLog& original, const riglog::RigLog& replay,
+                         const std::string& channel, std::size_t first_row, std::size_t end_row) {
+  const std::vector<double>& x = Column(original, channel);
+  const std::vector<double>& y = Column(replay, channel);
+  ASSERT_EQ(x.size(), y.size());
+  const auto [lo, hi] = std::minmax_element(x.begin(), x.end());
+  const double swing = *hi - *lo;
+  ASSERT_GT(swing, 0.5e5) << channel << " hardly moves: the comparison would say nothing";
+  for (std::size_t i = first_row; i < end_row; ++i) {
+    EXPECT_NEAR(y[i], x[i], 0.005 * swing) << channel << " at t = " << original.time_s[i]
+                                           << " s (row " << i << " of " << x.size() << ")";
+  }
+}
+
+TEST_F(CliTest, ReplayReproducesTheRun) {
+  const std::string original_path = SimulateSine("X.csv");
+  const std::string replay_path = Path("Y.csv");
+  const RunResult run =
+      Run("simulate --inputs " + Quote(original_path) + " --out " + Quote(replay_path));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const riglog::RigLog original = ReadLog(original_path);
+  const riglog::RigLog replay = ReadLog(replay_path);
+  ASSERT_EQ(replay.num_rows(), original.num_rows());
+  EXPECT_EQ(replay.time_s, original.time_s);
+  // Every row but the last (see ReplayLastSampleUsesOnlyLoggedInputs).
+  const std::size_t n = original.num_rows();
+  ExpectReplayMatches(original, replay, "PT1", 0, n - 1);
+  ExpectReplayMatches(original, replay, "C2", 0, n - 1);
+}
+
+// The last sample of a replay must come from the logged inputs, like every other. Simulate()
+// takes the piston velocity at the end of a step as the centred difference of the position over
+// [t_b - dt/2, t_b + dt/2], and the last step ends after the log's last time stamp, where the
+// replayed position is held constant: the velocity drops to zero there, and PT1 jumps by a
+// Joukowsky step (about 0.28 bar here, a quarter of the swing) in the last row.
+TEST_F(CliTest, ReplayLastSampleUsesOnlyLoggedInputs) {
+  const std::string original_path = SimulateSine("X.csv");
+  const std::string replay_path = Path("Y.csv");
+  const RunResult run =
+      Run("simulate --inputs " + Quote(original_path) + " --out " + Quote(replay_path));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const riglog::RigLog original = ReadLog(original_path);
+  const riglog::RigLog replay = ReadLog(replay_path);
+  ASSERT_EQ(replay.num_rows(), original.num_rows());
+  const std::size_t n = original.num_rows();
+  ExpectReplayMatches(original, replay, "PT1", n - 1, n);
+  ExpectReplayMatches(original, replay, "C2", n - 1, n);
+}
+
+TEST_F(CliTest, SimulateRequiresOut) {
+  const RunResult run = Run("simulate --piston sine:amp_m=0.1,freq_hz=0.2 --duration 1");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, "--out")) << run.err;
+}
+
+TEST_F(CliTest, SimulateRequiresADrive) {
+  const RunResult run = Run("simulate --duration 1 --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, "--inputs") && Contains(run.err, "--piston")) << run.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+TEST_F(CliTest, SimulateRefusesBothInputsAndPiston) {
+  const std::string original_path = SimulateSine("X.csv");
+  const RunResult run = Run("simulate --inputs " + Quote(original_path) +
+                            " --piston sine:amp_m=0.1,freq_hz=0.2 --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, "--inputs") && Contains(run.err, "--piston")) << run.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+TEST_F(CliTest, SimulateNamesAMissingInputColumn) {
+  const std::string inputs = Path("no_piston.csv");
+  WriteFile(inputs,
+            "# rig-log: 1\n"
+            "time_s,choke_position_deg,PT1_barg\n"
+            "0,31,3.6\n"
+            "0.01,31,3.6\n"
+            "0.02,31,3.6\n");
+  const RunResult run =
+      Run("simulate --inputs " + Quote(inputs) + " --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, inputs)) << run.err;
+  EXPECT_TRUE(Contains(run.err, "piston_position")) << run.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+TEST_F(CliTest, SimulateNamesFileLineAndColumnOfABadLog) {
+  const std::string inputs = Path("bad_time.csv");
+  WriteFile(inputs,
+            "# rig-log: 1\n"
+            "time_s,piston_position_m,choke_position_deg\n"
+            "0,0,31\n"
+            "0.01,0,31\n"
+            "0.01,0,31\n");  // line 5: time does not increase
+  const RunResult run =
+      Run("simulate --inputs " + Quote(inputs) + " --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, inputs + ":5:1:")) << run.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+TEST_F(CliTest, SimulateRejectsAnUnknownProfileKind) {
+  const RunResult run =
+      Run("simulate --piston wobble:amp_m=0.1,freq_hz=0.2 --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, "--piston")) << run.err;
+  EXPECT_TRUE(Contains(run.err, "wobble")) << run.err;
+  EXPECT_TRUE(Contains(run.err, "sine")) << "valid kinds listed: " << run.err;
+  const RunResult choke =
+      Run("simulate --piston 0 --choke-deg sine:amp_m=1,freq_hz=1 --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(choke.exit_code, 0);
+  EXPECT_TRUE(Contains(choke.err, "--choke-deg") && Contains(choke.err, "amp_deg")) << choke.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+TEST_F(CliTest, SimulateRejectsBadModelOptions) {
+  const RunResult model =
+      Run("simulate --piston 0 --duration 1 --model foo --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(model.exit_code, 0);
+  EXPECT_TRUE(Contains(model.err, "--model") && Contains(model.err, "foo")) << model.err;
+  const RunResult cells =
+      Run("simulate --piston 0 --duration 1 --cells 1 --out " + Quote(Path("Z.csv")));
+  EXPECT_NE(cells.exit_code, 0);
+  EXPECT_TRUE(Contains(cells.err, "--cells")) << cells.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+// 0.2 m at 0.5 Hz moves the piston at up to 0.63 m/s: the Joukowsky drop
+// rho c v (A_d - A_d2)/A = 2.9 bar at the inlet, with no pump and the outlet at atmosphere, takes
+// the absolute pressure below zero at once.
+const char kCavitatingRun[] =
+    "simulate --piston sine:amp_m=0.2,freq_hz=0.5 --choke-deg 31 --pump-lpm 0 --outlet-barg 0 "
+    "--duration 2 --out ";
+
+TEST_F(CliTest, SimulateStopsBelowZeroAbsolutePressure) {
+  const RunResult run = Run(kCavitatingRun + Quote(Path("Z.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, "absolute pressure")) << run.err;
+  EXPECT_TRUE(std::regex_search(run.err, std::regex(R"(t = [0-9.eE+-]+ s)"))) << run.err;
+  EXPECT_TRUE(std::regex_search(run.err, std::regex(R"(x = [0-9.eE+-]+ m)"))) << run.err;
+  EXPECT_TRUE(Contains(run.err, "--allow-negative-pressure")) << run.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv"))) << "no numbers from outside the model's range";
+}
+
+TEST_F(CliTest, SimulateAllowsNegativePressureWithAWarning) {
+  const RunResult run = Run(kCavitatingRun + Quote(Path("Z.csv")) + " --allow-negative-pressure");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(Contains(run.err, "warning")) << run.err;
+  EXPECT_TRUE(Contains(run.err, "absolute pressure")) << run.err;
+  const riglog::RigLog log = ReadLog(Path("Z.csv"));
+  EXPECT_EQ(log.num_rows(), 201u);
+  bool warned_in_log = false;
+  for (const auto& [key, value] : log.metadata) warned_in_log |= key == "warning";
+  EXPECT_TRUE(warned_in_log) << "the log itself records that it left the model's range";
+}
+
+// --- freqresp and demo -----------------------------------------------------------------------
+
+TEST_F(CliTest, FreqrespAnalyticWritesTheDefaultGrid) {
+  const std::string out = Path("F.csv");
+  const RunResult run = Run("freqresp --analytic --choke closed --out " + Quote(out));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::istringstream in(ReadFile(out));
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line, "freq_hz,magnitude_pa_per_m,phase_deg");
+  std::vector<double> freqs;
+  while (std::getline(in, line)) {
+    double f = 0.0, magnitude = 0.0, phase = 0.0;
+    char c1 = 0, c2 = 0;
+    std::istringstream fields(line);
+    ASSERT_TRUE(fields >> f >> c1 >> magnitude >> c2 >> phase) << line;
+    EXPECT_EQ(c1, ',');
+    EXPECT_EQ(c2, ',');
+    EXPECT_TRUE(std::isfinite(magnitude) && magnitude > 0.0) << line;
+    EXPECT_TRUE(std::isfinite(phase)) << line;
+    freqs.push_back(f);
+  }
+  ASSERT_EQ(freqs.size(), 59u);
+  EXPECT_NEAR(freqs.front(), 0.02, 1e-12);
+  EXPECT_NEAR(freqs.back(), 0.6, 1e-12);
+  EXPECT_TRUE(std::is_sorted(freqs.begin(), freqs.end()));
+  EXPECT_TRUE(Contains(run.out, out)) << run.out;
+}
+
+TEST_F(CliTest, FreqrespNeedsAMethod) {
+  const RunResult run = Run("freqresp --out " + Quote(Path("F.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err, "--analytic")) << run.err;
+}
+
+TEST_F(CliTest, DemoWritesALogAndSummarises) {
+  const std::string out = Path("D.csv");
+  const RunResult run = Run("demo --out " + Quote(out));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(Contains(run.out, out)) << run.out;
+  EXPECT_TRUE(Contains(run.out, "PT1")) << run.out;
+  const riglog::RigLog log = ReadLog(out);
+  EXPECT_EQ(log.num_rows(), 6001u);  // 60 s at 100 Hz
+  EXPECT_NE(log.Find("PT1"), nullptr);
+}
+
+}  // namespace
+}  // namespace mpdrig
