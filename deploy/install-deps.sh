@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages mpdrig needs, if any are missing. Non-interactive and
+# idempotent: a second run installs nothing and does not touch the network.
+set -euo pipefail
+
+packages=(
+  g++ cmake ninja-build
+  libeigen3-dev          # linear algebra
+  libsundials-dev        # ARKODE for the method-of-lines scheme (pulls MPI/PETSc: ~700 MB)
+  libprotobuf-dev protobuf-compiler  # rig configuration files
+  libcli11-dev           # command line
+  libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
+)
+
+missing=()
+for package in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$package")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "deploy/install-deps.sh: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "need root or sudo to install: ${missing[*]}" >&2; exit 1; }
+  sudo="sudo"
+fi
+echo "deploy/install-deps.sh: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq "${missing[@]}" >/dev/null
+echo "deploy/install-deps.sh: done"
