@@ -8,7 +8,7 @@
 // resonance peaks come out too low. Second-order one-sided upwind differences
 // (3 y_i - 4 y_{i-1} + y_{i-2}) / (2 dx) are used instead, first order next to the boundaries.
 // Time integration: SUNDIALS ARKODE ERKStep (explicit adaptive Runge-Kutta, default 4th-order
-// table), relative tolerance 1e-7, absolute 1e-10 m/s, stopping exactly at each outer step.
+// table), relative tolerance 1e-5, absolute 1e-8 m/s, stopping exactly at each outer step.
 // Initial values: whatever SetRestState or the previous step left. Interval: one step at a time.
 #pragma once
 
