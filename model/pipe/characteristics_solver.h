@@ -39,6 +39,7 @@ class CharacteristicsSolver final : public PipeSolver {
   double dt_s_;
   std::vector<double> alpha_next_;
   std::vector<double> beta_next_;
+  std::vector<double> velocity_;  // scratch: u at the nodes, old time level
 };
 
 }  // namespace mpdrig

@@ -92,20 +92,27 @@ double PipeSolver::StoredVolumeM3() const {
 
 void PipeSolver::CheckRange(RangeViolation* violation) const {
   if (violation == nullptr) return;
+  // Every step: a plain minimum (vectorises). Only when the range is left, find where.
+  const double* a = alpha_.data();
+  const double* b = beta_.data();
+  // Four independent running minima: an element-wise min vectorises, a scalar reduction would
+  // not (floating-point reductions are not reassociated without fast-math).
+  const int count = config_.cells + 1;
+  double lanes[4] = {a[0] - b[0], a[0] - b[0], a[0] - b[0], a[0] - b[0]};
+  int i = 0;
+  for (; i + 4 <= count; i += 4) {
+    for (int k = 0; k < 4; ++k) lanes[k] = std::min(lanes[k], a[i + k] - b[i + k]);
+  }
+  for (; i < count; ++i) lanes[0] = std::min(lanes[0], a[i] - b[i]);
+  const double smallest = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
+  if (smallest > law_.ZeroPressureDifference()) return;
   int worst = 0;
-  double smallest = alpha_[0] - beta_[0];
   for (int i = 1; i <= config_.cells; ++i) {
-    const double difference = alpha_[i] - beta_[i];
-    if (difference < smallest) {
-      smallest = difference;
-      worst = i;
-    }
+    if (a[i] - b[i] < a[worst] - b[worst]) worst = i;
   }
-  if (smallest <= law_.ZeroPressureDifference()) {
-    violation->occurred = true;
-    violation->min_pressure_pa = law_.PressureFromDifference(smallest);
-    violation->position_m = worst * config_.dx_m();
-  }
+  violation->occurred = true;
+  violation->min_pressure_pa = law_.PressureFromDifference(smallest);
+  violation->position_m = worst * config_.dx_m();
 }
 
 Result<std::unique_ptr<PipeSolver>> MakePipeSolver(PipeScheme scheme, const PipeConfig& config,
