@@ -12,22 +12,32 @@ namespace mpdrig {
 
 class [[nodiscard]] Status {
  public:
-  static Status Ok() { return Status(); }
-  static Status Error(std::string message) { return Status(std::move(message)); }
+  // What kind of failure, for callers that react differently (the message is for people).
+  enum class Code {
+    kOk,
+    kError,       // bad input, I/O, solver failure
+    kModelRange,  // the simulation left the model's range (e.g. absolute pressure <= 0)
+  };
 
-  bool ok() const { return !failed_; }
+  static Status Ok() { return Status(); }
+  static Status Error(std::string message) { return Status(Code::kError, std::move(message)); }
+  static Status ModelRangeError(std::string message) {
+    return Status(Code::kModelRange, std::move(message));
+  }
+
+  bool ok() const { return code_ == Code::kOk; }
+  Code code() const { return code_; }
   const std::string& message() const { return message_; }
 
-  // Prefixes context, e.g. Status::Error("bad value").Within("config.pbtxt") -> "config.pbtxt: bad
-  // value".
+  // Prefixes context: Status::Error("bad value").Within("rig.pbtxt") -> "rig.pbtxt: bad value".
   Status Within(const std::string& context) const {
-    return ok() ? *this : Error(context + ": " + message_);
+    return ok() ? *this : Status(code_, context + ": " + message_);
   }
 
  private:
   Status() = default;
-  explicit Status(std::string message) : failed_(true), message_(std::move(message)) {}
-  bool failed_ = false;
+  Status(Code code, std::string message) : code_(code), message_(std::move(message)) {}
+  Code code_ = Code::kOk;
   std::string message_;
 };
 

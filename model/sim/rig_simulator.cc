@@ -36,6 +36,14 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
                                           double initial_piston_position_m, double start_time_s) {
   MPDRIG_RETURN_IF_ERROR(params.Validate());
   MPDRIG_RETURN_IF_ERROR(options.Validate());
+  for (double x : options.pressure_positions_m) {
+    if (!(x >= 0.0 && x <= params.pipe_length_m)) {
+      std::ostringstream out;
+      out << "pressure position " << x << " m is outside the pipe [0, " << params.pipe_length_m
+          << "] m";
+      return Status::Error(out.str());
+    }
+  }
   const RigInputs& in = initial_inputs;
   if (!std::isfinite(in.choke_opening_frac) || !std::isfinite(in.pump_flow_m3ps) ||
       !std::isfinite(in.outlet_pressure_pa) || !std::isfinite(initial_piston_position_m)) {
@@ -103,7 +111,7 @@ Status RigSimulator::Step(const StepInputs& inputs) {
   boundary_ = step.end;
   if (violation.occurred) {
     RangeEvent event{time_s(), violation.position_m, violation.min_pressure_pa};
-    if (options_.stop_on_range_violation) return Status::Error(event.Describe());
+    if (options_.stop_on_range_violation) return Status::ModelRangeError(event.Describe());
     if (!first_range_event_) first_range_event_ = event;
   }
   return Status::Ok();
@@ -135,6 +143,9 @@ RigSample RigSimulator::Sample() const {
   v[Index(Channel::kFT2)] = q_b;
   v[Index(Channel::kFT3)] = q_b + area * u_outlet;
   v[Index(Channel::kFT4)] = area * pipe_->VelocityAt(0.0);
+  for (double x : options_.pressure_positions_m) {
+    sample.pressure_at_positions_pa.push_back(pipe_->PressureAt(x));
+  }
   return sample;
 }
 
@@ -146,6 +157,10 @@ RigSample Interpolate(const RigSample& a, const RigSample& b, double t) {
   const double w = b.time_s > a.time_s ? (t - a.time_s) / (b.time_s - a.time_s) : 0.0;
   for (std::size_t i = 0; i < kChannelCount; ++i) {
     out.values[i] = (1.0 - w) * a.values[i] + w * b.values[i];
+  }
+  for (std::size_t i = 0; i < a.pressure_at_positions_pa.size(); ++i) {
+    out.pressure_at_positions_pa.push_back((1.0 - w) * a.pressure_at_positions_pa[i] +
+                                           w * b.pressure_at_positions_pa[i]);
   }
   return out;
 }

@@ -43,6 +43,8 @@ struct SimulationOptions {
   // Absolute pressure at or below zero leaves the model's range (thesis 11.5). By default the run
   // stops with an error naming the time and place; otherwise it goes on and reports it.
   bool stop_on_range_violation = true;
+  // Extra pressure outputs along the pipe [m from the inlet], beside PT1..PT10 (thesis 6.8).
+  std::vector<double> pressure_positions_m;
 
   Status Validate() const;
 };
@@ -66,6 +68,8 @@ struct RigSample {
   double time_s = 0.0;
   std::array<double, kChannelCount> values{};  // SI, absolute pressure; indexed by Channel
   // (values[kTime] == time_s)
+  // Pressure [Pa abs] at SimulationOptions::pressure_positions_m, in that order (thesis 6.8).
+  std::vector<double> pressure_at_positions_pa;
   double operator[](Channel channel) const { return values[Index(channel)]; }
 };
 

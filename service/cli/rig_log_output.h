@@ -10,11 +10,14 @@
 
 namespace mpdrig::cli {
 
-// Every channel of the rig in its lab unit (m, deg, lpm, barg), inputs first.
-std::vector<riglog::ColumnSpec> SimulatedColumns();
+// Every channel of the rig in its lab unit (m, deg, lpm, barg), inputs first, then a column
+// `p_<x>m_barg` for each extra pressure position.
+Result<std::vector<riglog::ColumnSpec>> SimulatedColumns(
+    const std::vector<double>& pressure_positions_m = {});
 
 // Writes the samples to `path` ("-" for stdout); gauge pressures use `atmospheric_pressure_pa`.
 Status WriteSamples(const std::string& path, riglog::Metadata metadata,
-                    double atmospheric_pressure_pa, const std::vector<RigSample>& samples);
+                    double atmospheric_pressure_pa, const std::vector<RigSample>& samples,
+                    const std::vector<double>& pressure_positions_m = {});
 
 }  // namespace mpdrig::cli

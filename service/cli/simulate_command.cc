@@ -27,6 +27,7 @@ struct SimulateArgs {
   double rate_hz = 100.0;
   double piston_smoothing_s = 0.05;
   bool allow_negative_pressure = false;
+  std::vector<double> pressure_at_m;
   std::string out_path;
 };
 
@@ -94,6 +95,7 @@ int RunSimulate(const SimulateArgs& args) {
   auto options = args.model.LoadSimulationOptions();
   if (!options.ok()) return Fail(name, options.status());
   options->stop_on_range_violation = !args.allow_negative_pressure;
+  options->pressure_positions_m = args.pressure_at_m;
 
   InputSignals signals;
   std::vector<double> output_times;
@@ -143,6 +145,7 @@ int RunSimulate(const SimulateArgs& args) {
     if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
   });
   if (!run.ok()) {
+    if (run.status().code() != Status::Code::kModelRange) return Fail(name, run.status());
     return Fail(name, Status::Error(run.status().message() +
                                     "\n  (raise the outlet pressure, reduce the piston amplitude, "
                                     "or pass --allow-negative-pressure to continue anyway)"));
@@ -163,14 +166,15 @@ int RunSimulate(const SimulateArgs& args) {
     std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
                  run->first_range_event->Describe().c_str());
   }
-  Status written = WriteSamples(args.out_path, metadata, atmosphere, run->samples);
+  Status written =
+      WriteSamples(args.out_path, metadata, atmosphere, run->samples, args.pressure_at_m);
   if (!written.ok()) return Fail(name, written);
   if (args.out_path != "-") {
     std::printf(
         "simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
         "channels written to %s\n",
         span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, run->samples.size(),
-        SimulatedColumns().size() + 1, args.out_path.c_str());
+        SimulatedColumns(args.pressure_at_m)->size() + 1, args.out_path.c_str());
   }
   return 0;
 }
@@ -216,6 +220,11 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
                    "window of the local quadratic fit that smooths a measured piston position "
                    "before it is differentiated (0: none)")
       ->capture_default_str();
+  command
+      ->add_option("--pressure-at", args->pressure_at_m,
+                   "extra pressure outputs along the pipe, metres from the inlet, e.g. "
+                   "--pressure-at 50,450,850 (columns p_50m_barg, ...; thesis 6.8)")
+      ->delimiter(',');
   command->add_flag("--allow-negative-pressure", args->allow_negative_pressure,
                     "keep going when the absolute pressure falls to zero (reported as a warning)");
   command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
