@@ -36,36 +36,32 @@ double ChokeActuator::Advance(double opening_frac, double reference_frac, double
 }
 
 double ChokeBoundary::SolveOutletVelocity(const PipeLaw& law, double alpha_l,
-                                          const ChokeBoundaryInputs& in) const {
+                                          const ChokeBoundaryInputs& in,
+                                          double velocity_guess_mps) const {
   const double q_b = in.pump_flow_m3ps;
   const double g = in.flow_coefficient_m2;
   if (g <= 0.0) return -q_b / area_m2_;  // tight choke: all pump flow goes down the pipe
 
-  // Work in the choke flow s = q_c = q_b + A u. Orifice term: a s|s| with a = rho_L / G^2.
+  // Work in the choke flow s = q_c = q_b + A u; the orifice term is a s|s| with a = rho_L / G^2.
+  // Around the current iterate s_k the pipe side is p(s) ~ p_k - b (s - s_k), b = -(dp/du)/A > 0,
+  // so F(s) ~ D - b s - a s|s| with D = p_k - p_0 + b s_k, whose root has the closed form below
+  // (stable for either sign of D). For the linear model p is exactly linear in u: one solve is
+  // the answer. The quasi-linear one converges quadratically, in one or two iterations from the
+  // previous step's u(L).
   const double a = rho_l_ / (g * g);
-  // Linear part of the pipe side at the current point: p(alpha, u) ~ p(alpha, u*) + Z (u - u*)
-  // with Z = dp/du < 0. For the linear model this is exact, so one solve of the piecewise
-  // quadratic is the answer; the quasi-linear model needs a few Newton corrections.
-  auto residual = [&](double s) {
-    const double u = (s - q_b) / area_m2_;
-    return law.PressureFromAlpha(alpha_l, u) - in.outlet_pressure_pa - a * s * std::fabs(s);
-  };
-  // Closed form of  D - b (s - s0) - a s|s| = 0  with b = -Z/A > 0 (stable for either sign).
   auto solve_piecewise_quadratic = [a](double d, double b) {
     const double magnitude = 2.0 * std::fabs(d) / (b + std::sqrt(b * b + 4.0 * a * std::fabs(d)));
     return std::copysign(magnitude, d);
   };
 
-  double s = q_b;  // start: the pipe at rest, u = 0
+  double s = q_b + area_m2_ * velocity_guess_mps;
   for (int iteration = 0; iteration < 20; ++iteration) {
-    const double u = (s - q_b) / area_m2_;
-    const double b = -law.DPressureDVelocityAtAlpha(alpha_l, u) / area_m2_;
-    // Residual at s, rewritten around s: F(s + ds) ~ F(s) - b ds - a[(s+ds)|s+ds| - s|s|].
-    const double d = residual(s) + a * s * std::fabs(s) + b * s;  // D - b*0 form around origin
-    const double s_next = solve_piecewise_quadratic(d, b);
+    const double p = law.PressureFromAlpha(alpha_l, (s - q_b) / area_m2_);
+    const double b = -law.DPressureDVelocityAtPressure(p) / area_m2_;
+    const double s_next = solve_piecewise_quadratic(p - in.outlet_pressure_pa + b * s, b);
     const double change = std::fabs(s_next - s);
     s = s_next;
-    if (law.model() == PipeModel::kLinear || change <= 1e-14 * (std::fabs(s) + 1e-12)) break;
+    if (law.model() == PipeModel::kLinear || change <= 1e-13 * (std::fabs(s) + 1e-12)) break;
   }
   return (s - q_b) / area_m2_;
 }

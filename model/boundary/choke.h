@@ -56,9 +56,10 @@ class ChokeBoundary {
  public:
   ChokeBoundary(double pipe_area_m2, double choke_density_kgpm3)
       : area_m2_(pipe_area_m2), rho_l_(choke_density_kgpm3) {}
-  // Returns u(L) [m/s].
-  double SolveOutletVelocity(const PipeLaw& law, double alpha_l,
-                             const ChokeBoundaryInputs& in) const;
+  // Returns u(L) [m/s]. `velocity_guess_mps` (e.g. the previous step's u(L)) only speeds up
+  // the quasi-linear iteration; the answer does not depend on it.
+  double SolveOutletVelocity(const PipeLaw& law, double alpha_l, const ChokeBoundaryInputs& in,
+                             double velocity_guess_mps = 0.0) const;
 
  private:
   double area_m2_;

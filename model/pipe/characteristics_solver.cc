@@ -23,9 +23,7 @@ CharacteristicsSolver::Foot CharacteristicsSolver::AlphaFoot(int i) const {
   // theta < 0: between i-1 and i.
   const int j = theta >= 0.0 ? std::max(i - 2, 0) : std::min(i, n);
   const double w = std::fabs(theta);
-  const double a = (1.0 - w) * a1 + w * alpha_[j];
-  const double b = (1.0 - w) * b1 + w * beta_[j];
-  return {a, 0.5 * (a + b)};
+  return {(1.0 - w) * a1 + w * alpha_[j], 0.5 * (a1 + b1)};
 }
 
 CharacteristicsSolver::Foot CharacteristicsSolver::BetaFoot(int i) const {
@@ -37,9 +35,7 @@ CharacteristicsSolver::Foot CharacteristicsSolver::BetaFoot(int i) const {
   const double theta = 0.5 * (a1 + b1) / config_.wave_speed_mps;
   const int j = theta >= 0.0 ? std::max(i, 0) : std::min(i + 2, n);
   const double w = std::fabs(theta);
-  const double a = (1.0 - w) * a1 + w * alpha_[j];
-  const double b = (1.0 - w) * b1 + w * beta_[j];
-  return {b, 0.5 * (a + b)};
+  return {(1.0 - w) * b1 + w * beta_[j], 0.5 * (a1 + b1)};
 }
 
 namespace {
@@ -107,8 +103,10 @@ MPDRIG_HOT_LOOP void CharacteristicsSolver::StepInteriorQuasiLinear() {
   if (n - 1 > 1) at_boundary(n - 1);
   // Interior: the interpolation of AlphaFoot/BetaFoot without branches, so it vectorises. The
   // far neighbour's weight is max(theta, 0) = (theta + |theta|)/2 on one side and
-  // max(-theta, 0) = (|theta| - theta)/2 on the other, theta = u/c. The velocity at the foot is
-  // interpolated like the invariant, from the node velocities computed once.
+  // max(-theta, 0) = (|theta| - theta)/2 on the other, theta = u/c. The friction at the foot
+  // uses the neighbouring node's velocity: the foot is |u|/c ~ 3e-4 of a cell from that node, so
+  // f(u) differs by f'(u) du 3e-4, far below the scheme's O(dt^2) error, and it saves two
+  // interpolations per node (a fifth of the run time).
   double* __restrict u = velocity_.data();
   for (int i = 0; i <= n; ++i) u[i] = 0.5 * (a[i] + b[i]);
   for (int i = 2; i <= n - 2; ++i) {
@@ -117,14 +115,12 @@ MPDRIG_HOT_LOOP void CharacteristicsSolver::StepInteriorQuasiLinear() {
     const double wa_right = 0.5 * (std::fabs(theta_a) - theta_a);
     const double wa = 1.0 - std::fabs(theta_a);
     const double alpha_a = wa * a[i - 1] + wa_left * a[i - 2] + wa_right * a[i];
-    const double u_a = wa * u[i - 1] + wa_left * u[i - 2] + wa_right * u[i];
     const double theta_b = u[i + 1] * inv_c;
     const double wb_near = 0.5 * (theta_b + std::fabs(theta_b));
     const double wb_far = 0.5 * (std::fabs(theta_b) - theta_b);
     const double wb = 1.0 - std::fabs(theta_b);
     const double beta_b = wb * b[i + 1] + wb_near * b[i] + wb_far * b[i + 2];
-    const double u_b = wb * u[i + 1] + wb_near * u[i] + wb_far * u[i + 2];
-    update(alpha_a, u_a, beta_b, u_b, u[i], &a_next[i], &b_next[i]);
+    update(alpha_a, u[i - 1], beta_b, u[i + 1], u[i], &a_next[i], &b_next[i]);
   }
 }
 
@@ -157,7 +153,7 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
     double alpha_l = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
       alpha_l = fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs;
-      u_l = choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke);
+      u_l = choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
     }
     alpha_next_[n] = alpha_l;
     beta_next_[n] = 2.0 * u_l - alpha_l;

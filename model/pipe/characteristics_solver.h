@@ -26,7 +26,8 @@ class CharacteristicsSolver final : public PipeSolver {
   Status Step(const PipeStepInputs& inputs, RangeViolation* violation) override;
 
  private:
-  // Values at the foot of the characteristics that arrive at node i.
+  // Values at the foot of the characteristics that arrive at node i (the velocity is the
+  // neighbouring node's, see StepInteriorQuasiLinear).
   struct Foot {
     double invariant;
     double velocity;

@@ -80,6 +80,9 @@ void MolSolver::ExpandState(const double* y, const PipeBoundaryValues& boundary)
   for (int i = 0; i < n; ++i) beta_[i] = y[n + i];
   // Boundary invariants (6.7.1) and (6.6.1).
   alpha_[0] = 2.0 * boundary.inlet_velocity_mps - beta_[0];
+  // No warm start from an earlier evaluation: the right-hand side must be a function of (t, y)
+  // alone, or ARKODE's error estimate sees the iteration's history (it did: 2 mPa of drift on a
+  // rest state in 10 s).
   const double u_l = choke_.SolveOutletVelocity(law_, alpha_[n], boundary.choke);
   beta_[n] = 2.0 * u_l - alpha_[n];
 }

@@ -58,11 +58,11 @@ class PipeLaw {
   double PressureFromAlpha(double alpha, double velocity_mps) const {
     return PressureFromDifference(2.0 * (alpha - velocity_mps));
   }
-  // d p / d u at fixed alpha (always negative): the pipe's outlet impedance seen by the choke.
-  double DPressureDVelocityAtAlpha(double alpha, double velocity_mps) const {
+  // d p / d u at fixed alpha (always negative), given the pressure there: the pipe's outlet
+  // impedance seen by the choke. Linear: -rho c; quasi-linear: -(k + p)/c.
+  double DPressureDVelocityAtPressure(double pressure_pa) const {
     if (model_ == PipeModel::kLinear) return -rho_c_;
-    const double p_plus_k = PressureFromAlpha(alpha, velocity_mps) + k_;
-    return -p_plus_k / c_;
+    return -(pressure_pa + k_) / c_;
   }
 
   // alpha - beta at which the absolute pressure reaches zero: the model's range ends there
