@@ -1,0 +1,178 @@
+// Simulator speed, after thesis Table 7.4.1: 20 s of rig time with N = 10, 100 and 1000 pipe
+// elements, quasi-linear and linear pipe models (the thesis: MATLAB ode45, C-MEX right-hand side).
+//
+// Scenario (the same for every row): piston sine x_d(t) = 0.1 m sin(2 pi 0.2 Hz t), choke held at
+// 31 deg (u_c = 0.3444), pump q_b = 5 L/min, outlet p_0 = 101325 Pa abs, thesis parameters
+// (Tables 8.1.x, 9.4.1), output every 10 ms (the fixed step the thesis recommends, 0.01 s). The
+// pipe solver's own step is dx / c, 1.06 ms at N = 1000.
+//
+//   BM_Simulate20s/<model>/<scheme>/N:<cells>  one Simulate() call over [0, 20] s, wall time.
+//     counters: steps (pipe solver steps), cells, rtf (real-time factor = 20 s / wall time).
+//   BM_Step/<model>/<scheme>/N:<cells>          RigSimulator::Step alone, no sampling.
+//     counters: cells, ns_per_cell_step (wall time / (steps * cells)).
+//
+// Frequency-response accuracy is reported by bench/accuracy_report.cc (bench/README.md).
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "model/common/units.h"
+#include "model/params/rig_params.h"
+#include "model/sim/rig_simulator.h"
+
+namespace mpdrig {
+namespace {
+
+constexpr double kSimulatedTimeS = 20.0;
+constexpr double kOutputIntervalS = 0.01;
+constexpr double kPistonAmplitudeM = 0.1;
+constexpr double kPistonFrequencyHz = 0.2;
+constexpr double kChokeOpeningDeg = 31.0;
+constexpr double kPumpFlowLpm = 5.0;
+constexpr double kOutletPressurePa = units::kStandardAtmospherePa;
+
+constexpr double kPistonOmega = 2.0 * std::numbers::pi * kPistonFrequencyHz;
+
+double PistonPositionM(double t) { return kPistonAmplitudeM * std::sin(kPistonOmega * t); }
+double PistonVelocityMps(double t) {
+  return kPistonAmplitudeM * kPistonOmega * std::cos(kPistonOmega * t);
+}
+
+RigInputs HeldInputs() {
+  RigInputs in;
+  in.choke_opening_frac = units::ChokeDegToFrac(kChokeOpeningDeg);
+  in.pump_flow_m3ps = units::LpmToM3ps(kPumpFlowLpm);
+  in.outlet_pressure_pa = kOutletPressurePa;
+  return in;
+}
+
+std::vector<double> OutputTimes() {
+  const int count = static_cast<int>(std::lround(kSimulatedTimeS / kOutputIntervalS));
+  std::vector<double> times;
+  times.reserve(count + 1);
+  for (int i = 0; i <= count; ++i) times.push_back(i * kOutputIntervalS);
+  return times;
+}
+
+// Wall time of a whole benchmark loop (the counters below are per wall second, like the thesis's
+// table, and are printed as plain numbers rather than as the library's rate counters).
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Case {
+  PipeModel model;
+  PipeScheme scheme;
+  int cells;
+};
+
+SimulationOptions OptionsFor(const Case& c) {
+  SimulationOptions options;
+  options.model = c.model;
+  options.scheme = c.scheme;
+  options.cells = c.cells;
+  return options;
+}
+
+std::string CaseName(const Case& c) {
+  return std::string(c.model == PipeModel::kQuasiLinear ? "quasilinear" : "linear") + "/" +
+         (c.scheme == PipeScheme::kCharacteristics ? "characteristics" : "mol") +
+         "/N:" + std::to_string(c.cells);
+}
+
+void BM_Simulate20s(benchmark::State& state, Case c) {
+  const RigParams params;
+  const SimulationOptions options = OptionsFor(c);
+  InputSignals inputs;
+  inputs.piston_position_m = PistonPositionM;
+  const RigInputs held = HeldInputs();
+  inputs.rig = [held](double) { return held; };
+  const std::vector<double> times = OutputTimes();
+
+  long steps = 0;
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    auto run = Simulate(params, options, inputs, times);
+    if (!run.ok()) {
+      state.SkipWithError(run.status().message().c_str());
+      return;
+    }
+    steps = run->steps;
+    benchmark::DoNotOptimize(run->samples.back().values.data());
+  }
+  const double wall_s = SecondsSince(start);
+  state.counters["steps"] = static_cast<double>(steps);
+  state.counters["cells"] = c.cells;
+  state.counters["rtf"] = kSimulatedTimeS * static_cast<double>(state.iterations()) / wall_s;
+}
+
+void BM_Step(benchmark::State& state, Case c) {
+  const RigParams params;
+  auto created = RigSimulator::Create(params, OptionsFor(c), HeldInputs());
+  if (!created.ok()) {
+    state.SkipWithError(created.status().message().c_str());
+    return;
+  }
+  RigSimulator& sim = *created;
+  StepInputs step;
+  step.rig = HeldInputs();
+  const auto start = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    // Inputs at the end of the step, as Simulate() gives them (the sine keeps the state bounded
+    // however many iterations the library runs).
+    const double t = sim.time_s() + sim.time_step_s();
+    step.piston_velocity_mps = PistonVelocityMps(t);
+    step.piston_position_m = PistonPositionM(t);
+    const Status status = sim.Step(step);
+    if (!status.ok()) {
+      state.SkipWithError(status.message().c_str());
+      return;
+    }
+  }
+  const double wall_s = SecondsSince(start);
+  benchmark::DoNotOptimize(sim.pipe().alpha().data());
+  state.counters["cells"] = c.cells;
+  state.counters["ns_per_cell_step"] =
+      1e9 * wall_s / (static_cast<double>(state.iterations()) * c.cells);
+}
+
+void RegisterAll() {
+  const PipeModel models[] = {PipeModel::kQuasiLinear, PipeModel::kLinear};
+  const PipeScheme schemes[] = {PipeScheme::kCharacteristics, PipeScheme::kMethodOfLines};
+  const int cell_counts[] = {10, 100, 1000};
+  for (PipeModel model : models) {
+    for (PipeScheme scheme : schemes) {
+      for (int cells : cell_counts) {
+        const Case c{model, scheme, cells};
+        auto* simulate = benchmark::RegisterBenchmark(("BM_Simulate20s/" + CaseName(c)).c_str(),
+                                                      BM_Simulate20s, c);
+        simulate->Unit(benchmark::kMillisecond)->UseRealTime();
+        // The method of lines at N = 1000 takes seconds per run: one run is enough. The rest get
+        // at least 0.5 s of runs each.
+        if (scheme == PipeScheme::kMethodOfLines && cells >= 1000) {
+          simulate->Iterations(1);
+        } else {
+          simulate->MinTime(0.5);
+        }
+        auto* step = benchmark::RegisterBenchmark(("BM_Step/" + CaseName(c)).c_str(), BM_Step, c);
+        step->Unit(benchmark::kMicrosecond)->UseRealTime()->MinTime(0.2);
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace mpdrig
+
+int main(int argc, char** argv) {
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  mpdrig::RegisterAll();
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
