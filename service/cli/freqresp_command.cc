@@ -109,7 +109,8 @@ int RunFreqresp(const FreqrespArgs& args) {
 void AddFreqrespCommand(CLI::App* app, int* exit_code) {
   auto args = std::make_shared<FreqrespArgs>();
   CLI::App* command = app->add_subcommand(
-      "freqresp",
+      "freqresp", "Frequency response piston position -> bottom-hole pressure (thesis 9.2)");
+  command->footer(
       "Frequency response from piston position to bottom-hole pressure p(0) (thesis 9.2):\n"
       "columns freq_hz, magnitude_pa_per_m, phase_deg.\n"
       "  --analytic   the closed form (9.2.13): linear model, linear friction f1, choke "

@@ -47,10 +47,11 @@ int RunParams(const ParamsArgs& args) {
 
 void AddParamsCommand(CLI::App* app, int* exit_code) {
   auto args = std::make_shared<ParamsArgs>();
-  CLI::App* command = app->add_subcommand(
-      "params",
-      "Print every rig parameter: key, value, unit, meaning (thesis defaults, then --config,\n"
-      "then --set). `--format pbtxt` prints a complete config file to start from:\n"
+  CLI::App* command =
+      app->add_subcommand("params", "Print every rig parameter with its value, unit and meaning");
+  command->footer(
+      "Values: the thesis defaults, then --config, then --set. `--format pbtxt` prints a\n"
+      "complete config file to start from:\n"
       "  mpdrig params --format pbtxt > rig.pbtxt");
   args->model.AddParamOptions(command);
   command->add_option("--format", args->format, "table or pbtxt")

@@ -183,9 +183,10 @@ int RunSimulate(const SimulateArgs& args) {
 
 void AddSimulateCommand(CLI::App* app, int* exit_code) {
   auto args = std::make_shared<SimulateArgs>();
-  CLI::App* command = app->add_subcommand(
-      "simulate",
-      "Run the rig model and write every lab channel as a rig log (rig-log-format.md).\n"
+  CLI::App* command =
+      app->add_subcommand("simulate", "Run the rig model; write every lab channel as a rig log");
+  command->footer(
+      "Writes a rig log (rig-log-format.md) with every lab channel.\n"
       "Drive it with the inputs of a measured log (--inputs), or with profiles:\n"
       "  mpdrig simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 \\\n"
       "                  --outlet-barg 0 --duration 60 --out sim.csv\n"
