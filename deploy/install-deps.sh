@@ -9,6 +9,7 @@ packages=(
   libsundials-dev        # ARKODE for the method-of-lines scheme (pulls MPI/PETSc: ~700 MB)
   libprotobuf-dev protobuf-compiler  # rig configuration files
   libcli11-dev           # command line
+  cyclonedds-dev cyclonedds-tools  # DDS service: C API, headers and idlc (the IDL compiler)
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
 )
 

@@ -1,0 +1,69 @@
+#include "service/dds/dds.h"
+
+namespace mpdrig::dds {
+
+Status Check(dds_return_t code, const char* call) {
+  if (code >= 0) return Status::Ok();
+  return Status::Error(std::string(call) + ": " + dds_strretcode(code));
+}
+
+std::string LoopbackConfig() {
+  return "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+         "<AllowMulticast>false</AllowMulticast></General>"
+         "<Discovery><ParticipantIndex>auto</ParticipantIndex>"
+         "<MaxAutoParticipantIndex>40</MaxAutoParticipantIndex>"
+         "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>";
+}
+
+Qos SensorQos() {
+  Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 8);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
+Qos CommandQos(int ownership_strength, dds_duration_t liveliness_lease) {
+  Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+  if (ownership_strength >= 0) {
+    dds_qset_ownership(qos.get(), DDS_OWNERSHIP_EXCLUSIVE);
+    dds_qset_ownership_strength(qos.get(), ownership_strength);
+  }
+  if (liveliness_lease != DDS_INFINITY) {
+    dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, liveliness_lease);
+  }
+  return qos;
+}
+
+Qos StatusQos() {
+  Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+  return qos;
+}
+
+Result<Domain> Domain::Create(dds_domainid_t id, const std::string& config_xml) {
+  const dds_entity_t handle = dds_create_domain(id, config_xml.c_str());
+  if (handle < 0) return Check(handle, "dds_create_domain");
+  return Domain(id, Entity(handle));
+}
+
+Result<Entity> CreateParticipant(dds_domainid_t domain) {
+  const dds_entity_t handle = dds_create_participant(domain, nullptr, nullptr);
+  if (handle < 0) return Check(handle, "dds_create_participant");
+  return Entity(handle);
+}
+
+Result<Entity> CreateTopic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
+                           const std::string& name) {
+  const dds_entity_t handle =
+      dds_create_topic(participant, descriptor, name.c_str(), nullptr, nullptr);
+  if (handle < 0) return Check(handle, ("dds_create_topic " + name).c_str());
+  return Entity(handle);
+}
+
+}  // namespace mpdrig::dds

@@ -1,0 +1,169 @@
+// A thin C++ layer over Cyclone DDS's C API (Debian ships no C++ binding). It owns entities
+// (RAII: deleting a participant deletes its children), turns negative return codes into Status
+// values with dds_strretcode, and gives typed topics, writers and readers for the structs idlc
+// generates from idl/mpdrig.idl. Transport only: no physics, no model types.
+#pragma once
+
+#include <dds/dds.h>
+
+#include <functional>
+#include <string>
+#include <utility>
+
+#include "model/common/status.h"
+
+namespace mpdrig::dds {
+
+// Status for a DDS call: OK for a non-negative return, otherwise "<call>: <dds_strretcode>".
+Status Check(dds_return_t code, const char* call);
+
+// Cyclone configuration that keeps all traffic on loopback (127.0.0.1, no multicast, unicast
+// discovery to localhost): every test and single-machine run uses it.
+std::string LoopbackConfig();
+
+// Owns one entity handle; deleting it deletes its children too.
+class Entity {
+ public:
+  Entity() = default;
+  explicit Entity(dds_entity_t handle) : handle_(handle) {}
+  ~Entity() { Reset(); }
+  Entity(Entity&& other) noexcept : handle_(std::exchange(other.handle_, 0)) {}
+  Entity& operator=(Entity&& other) noexcept {
+    if (this != &other) {
+      Reset();
+      handle_ = std::exchange(other.handle_, 0);
+    }
+    return *this;
+  }
+  Entity(const Entity&) = delete;
+  Entity& operator=(const Entity&) = delete;
+
+  dds_entity_t handle() const { return handle_; }
+  void Reset() {
+    if (handle_ > 0) dds_delete(handle_);
+    handle_ = 0;
+  }
+
+ private:
+  dds_entity_t handle_ = 0;
+};
+
+// Owns a QoS object; QoS objects live briefly (style.md).
+class Qos {
+ public:
+  Qos() : qos_(dds_create_qos()) {}
+  ~Qos() {
+    if (qos_ != nullptr) dds_delete_qos(qos_);
+  }
+  Qos(Qos&& other) noexcept : qos_(std::exchange(other.qos_, nullptr)) {}
+  Qos& operator=(Qos&&) = delete;
+  Qos(const Qos&) = delete;
+  Qos& operator=(const Qos&) = delete;
+  dds_qos_t* get() const { return qos_; }
+
+ private:
+  dds_qos_t* qos_;
+};
+
+// The project's QoS choices, one place (README explains them):
+//   sensors  - reliable, keep last 8, volatile: a late sample is better than a gap, a late joiner
+//              wants the present, not history.
+//   commands - reliable, keep last 1, transient-local: a late-joining rig (or a restarted one)
+//              gets the current command; exclusive ownership when `ownership_strength` >= 0.
+//   status   - reliable, keep last 1, transient-local: a late joiner sees the current status.
+Qos SensorQos();
+Qos CommandQos(int ownership_strength = -1, dds_duration_t liveliness_lease = DDS_INFINITY);
+Qos StatusQos();
+
+// A domain with an explicit configuration (created before any participant on that id), and a
+// participant in it.
+class Domain {
+ public:
+  static Result<Domain> Create(dds_domainid_t id, const std::string& config_xml);
+  dds_domainid_t id() const { return id_; }
+
+ private:
+  Domain(dds_domainid_t id, Entity entity) : id_(id), entity_(std::move(entity)) {}
+  dds_domainid_t id_;
+  Entity entity_;
+};
+
+Result<Entity> CreateParticipant(dds_domainid_t domain);
+Result<Entity> CreateTopic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
+                           const std::string& name);
+
+// Typed writer for an idlc-generated struct T.
+template <typename T>
+class Writer {
+ public:
+  static Result<Writer> Create(dds_entity_t participant, dds_entity_t topic, const Qos& qos) {
+    const dds_entity_t handle = dds_create_writer(participant, topic, qos.get(), nullptr);
+    if (handle < 0) return Check(handle, "dds_create_writer");
+    return Writer(Entity(handle));
+  }
+  Status Write(const T& sample) const {
+    return Check(dds_write(entity_.handle(), &sample), "dds_write");
+  }
+  dds_entity_t handle() const { return entity_.handle(); }
+
+ private:
+  explicit Writer(Entity entity) : entity_(std::move(entity)) {}
+  Entity entity_;
+};
+
+// Typed reader with a waitset on "data available".
+template <typename T>
+class Reader {
+ public:
+  static Result<Reader> Create(dds_entity_t participant, dds_entity_t topic, const Qos& qos) {
+    Entity reader(dds_create_reader(participant, topic, qos.get(), nullptr));
+    if (reader.handle() < 0) return Check(reader.handle(), "dds_create_reader");
+    Entity waitset(dds_create_waitset(participant));
+    if (waitset.handle() < 0) return Check(waitset.handle(), "dds_create_waitset");
+    const dds_entity_t condition = dds_create_readcondition(reader.handle(), DDS_ANY_STATE);
+    if (condition < 0) return Check(condition, "dds_create_readcondition");
+    MPDRIG_RETURN_IF_ERROR(
+        Check(dds_waitset_attach(waitset.handle(), condition, 0), "dds_waitset_attach"));
+    return Reader(std::move(reader), std::move(waitset));
+  }
+
+  // Blocks until data is available or the timeout passes; true if data is there.
+  Result<bool> Wait(dds_duration_t timeout) const {
+    const dds_return_t n = dds_waitset_wait(waitset_.handle(), nullptr, 0, timeout);
+    if (n < 0) return Check(n, "dds_waitset_wait");
+    return n > 0;
+  }
+
+  // Takes every available sample and hands each valid one to `visit` while it is on loan (its
+  // strings belong to DDS and are gone after the call). Returns how many were visited.
+  Result<int> TakeEach(const std::function<void(const T&, const dds_sample_info_t&)>& visit) const {
+    constexpr int kBatch = 16;
+    int visited = 0;
+    for (;;) {
+      void* samples[kBatch] = {nullptr};
+      dds_sample_info_t infos[kBatch];
+      const dds_return_t n = dds_take(entity_.handle(), samples, infos, kBatch, kBatch);
+      if (n < 0) return Check(n, "dds_take");
+      for (int i = 0; i < n; ++i) {
+        if (infos[i].valid_data) {
+          visit(*static_cast<const T*>(samples[i]), infos[i]);
+          ++visited;
+        }
+      }
+      if (n > 0)
+        MPDRIG_RETURN_IF_ERROR(
+            Check(dds_return_loan(entity_.handle(), samples, n), "dds_return_loan"));
+      if (n < kBatch) return visited;
+    }
+  }
+
+  dds_entity_t handle() const { return entity_.handle(); }
+
+ private:
+  Reader(Entity reader, Entity waitset)
+      : entity_(std::move(reader)), waitset_(std::move(waitset)) {}
+  Entity entity_;
+  Entity waitset_;
+};
+
+}  // namespace mpdrig::dds
