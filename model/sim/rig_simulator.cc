@@ -167,6 +167,29 @@ RigSample Interpolate(const RigSample& a, const RigSample& b, double t) {
 
 }  // namespace
 
+RigSampler::RigSampler(RigSimulator simulator)
+    : simulator_(std::move(simulator)), current_(simulator_.Sample()) {
+  previous_ = current_;
+}
+
+Result<RigSample> RigSampler::SampleAt(double time_s, const StepInputsFn& step_inputs) {
+  if (time_s < previous_.time_s) {
+    std::ostringstream out;
+    out << "sample time " << time_s << " s lies before the rig's last step (" << previous_.time_s
+        << " s): times must not decrease";
+    return Status::Error(out.str());
+  }
+  while (current_.time_s < time_s) {
+    const StepInputs step = step_inputs(simulator_.next_step_end_s(), simulator_.time_step_s());
+    MPDRIG_RETURN_IF_ERROR(simulator_.Step(step));
+    ++steps_;
+    previous_ = std::move(current_);
+    current_ = simulator_.Sample();
+  }
+  if (steps_ == 0 || time_s == current_.time_s) return current_;
+  return Interpolate(previous_, current_, time_s);
+}
+
 Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& options,
                            const InputSignals& inputs, const std::vector<double>& output_times,
                            const std::function<void(double)>& progress) {
@@ -181,33 +204,14 @@ Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& opt
   auto simulator =
       RigSimulator::Create(params, options, inputs.rig(t0), inputs.piston_position_m(t0), t0);
   if (!simulator.ok()) return simulator.status();
-  RigSimulator& sim = *simulator;
+  RigSampler sampler(std::move(simulator).value());
 
-  RunResult result;
-  result.time_step_s = sim.time_step_s();
-  result.samples.reserve(output_times.size());
-  const double dt = sim.time_step_s();
-  RigSample previous = sim.Sample();
-  std::size_t next_output = 0;
-  long step_index = 0;
-  double next_progress = 0.1;
-  while (next_output < output_times.size()) {
-    // Outputs at or before the current grid time are interpolated between the last two samples.
-    const RigSample current = sim.Sample();
-    while (next_output < output_times.size() && output_times[next_output] <= current.time_s) {
-      result.samples.push_back(
-          step_index == 0 ? current : Interpolate(previous, current, output_times[next_output]));
-      ++next_output;
-    }
-    if (next_output == output_times.size()) break;
-
-    // Grid times are t0 + n dt (multiplied, not accumulated, so they do not drift).
-    const double t_b = t0 + (step_index + 1) * dt;
-    // Inputs at the end of the step. The piston velocity there is the centred difference of the
-    // position over [t_b - dt/2, t_b + dt/2]: second order, and the trapezoidal sum of these
-    // velocities displaces exactly the position's change.
-    // Near the ends of the run the window slides inside [t0, t_end] (a one-sided difference):
-    // a replayed log's inputs are not known beyond its ends.
+  // Inputs at the end of each step. The piston velocity there is the centred difference of the
+  // position over [t_b - dt/2, t_b + dt/2]: second order, and the trapezoidal sum of these
+  // velocities displaces exactly the position's change. Near the ends of the run the window
+  // slides inside [t0, t_end] (a one-sided difference): a replayed log's inputs are not known
+  // beyond its ends.
+  const auto step_inputs = [&](double t_b, double dt) {
     StepInputs step;
     double t_lo = t_b - 0.5 * dt;
     double t_hi = t_b + 0.5 * dt;
@@ -219,17 +223,24 @@ Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& opt
             : 0.0;
     step.piston_position_m = inputs.piston_position_m(t_b);
     step.rig = inputs.rig(t_b);
-    previous = current;
-    Status status = sim.Step(step);
-    if (!status.ok()) return status;
-    ++step_index;
-    if (progress && t_end > t0 && (t_b - t0) / (t_end - t0) >= next_progress) {
-      progress(std::min(1.0, (t_b - t0) / (t_end - t0)));
+    return step;
+  };
+
+  RunResult result;
+  result.time_step_s = sampler.simulator().time_step_s();
+  result.samples.reserve(output_times.size());
+  double next_progress = 0.1;
+  for (double t : output_times) {
+    auto sample = sampler.SampleAt(t, step_inputs);
+    if (!sample.ok()) return sample.status();
+    result.samples.push_back(std::move(sample).value());
+    if (progress && t_end > t0 && (t - t0) / (t_end - t0) >= next_progress) {
+      progress((t - t0) / (t_end - t0));
       next_progress += 0.1;
     }
   }
-  result.steps = step_index;
-  result.first_range_event = sim.first_range_event();
+  result.steps = sampler.steps();
+  result.first_range_event = sampler.simulator().first_range_event();
   return result;
 }
 

@@ -89,6 +89,8 @@ class RigSimulator {
                                      double start_time_s = 0.0);
 
   double time_s() const { return start_time_s_ + steps_ * pipe_->time_step_s(); }
+  // The time the next Step() ends at (start + (steps + 1) dt, without accumulated rounding).
+  double next_step_end_s() const { return start_time_s_ + (steps_ + 1) * pipe_->time_step_s(); }
   double time_step_s() const { return pipe_->time_step_s(); }
   const PipeSolver& pipe() const { return *pipe_; }
   const RigParams& params() const { return params_; }
@@ -119,6 +121,27 @@ class RigSimulator {
   StepInputs last_inputs_{};
   PipeBoundaryValues boundary_{};  // boundary inputs at the current time
   std::optional<RangeEvent> first_range_event_;
+};
+
+// Samples a RigSimulator at arbitrary, non-decreasing times: it steps the simulator on its own
+// grid until the grid reaches the requested time and interpolates linearly between the two grid
+// samples around it (second order, like the scheme). The inputs of each step come from
+// `step_inputs(step_end_s, dt_s)`: their values at the step's end (see StepInputs).
+class RigSampler {
+ public:
+  using StepInputsFn = std::function<StepInputs(double step_end_s, double dt_s)>;
+  explicit RigSampler(RigSimulator simulator);
+
+  Result<RigSample> SampleAt(double time_s, const StepInputsFn& step_inputs);
+  RigSimulator& simulator() { return simulator_; }
+  const RigSimulator& simulator() const { return simulator_; }
+  long steps() const { return steps_; }
+
+ private:
+  RigSimulator simulator_;
+  RigSample previous_;
+  RigSample current_;
+  long steps_ = 0;
 };
 
 // Time functions of the inputs for a batch run.
