@@ -1,0 +1,98 @@
+// One virtual rig as the service runs it: the simulator, the commands in force, and what was
+// refused. Transport-free: the DDS adapter translates wire samples to these calls, and tests can
+// drive a rig without DDS. Time is the rig's own (ticks of the sensor period); the scheduler that
+// paces ticks against the wall clock lives elsewhere.
+//
+// Commands mirror the lab's actuators (lab units): choke opening reference in degrees (through
+// the actuator lag and rate limit), heave generator (hold, a streamed position reference, or a
+// sine or sweep generated here), back-pressure pump flow in L/min, choke outlet pressure in barg.
+// A command with NaN, infinity or a value outside its range is refused: counted, its reason kept,
+// and the last valid command stays in force (design.md, Errors).
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "model/common/status.h"
+#include "model/params/rig_params.h"
+#include "model/sim/rig_simulator.h"
+
+namespace mpdrig::service {
+
+// What the service accepts: physical limits of the lab rig, not tuning ranges.
+struct CommandLimits {
+  double choke_min_deg = 0.0, choke_max_deg = 90.0;
+  double pump_min_lpm = 0.0, pump_max_lpm = 60.0;         // the lab's pump gives ~30 L/min
+  double outlet_min_barg = -0.5, outlet_max_barg = 16.0;  // transmitters read 0..16 bar
+  double piston_max_abs_m = 0.6;  // BHA travel in the 1.7 m compartment (Table 8.1.1)
+  double piston_max_frequency_hz = 2.0;
+};
+
+struct PistonCommandIn {
+  enum class Mode { kHold, kPosition, kSine, kSweep };
+  Mode mode = Mode::kHold;
+  double position_m = 0.0;
+  double mean_m = 0.0;
+  double amplitude_m = 0.0;
+  double frequency_hz = 0.0;
+  double sweep_end_hz = 0.0;
+  double sweep_duration_s = 0.0;
+};
+
+// The commands a rig starts with; it starts in their steady state (pipe at rest, pump flow
+// through the choke: RigSimulator's initial state).
+struct InitialCommands {
+  double choke_deg = 31.0;  // the thesis's usual opening
+  double pump_lpm = 0.0;
+  double outlet_barg = 0.0;
+};
+
+struct RigCounters {
+  std::uint64_t samples = 0;
+  std::uint64_t rejected_commands = 0;
+  std::string last_rejection;
+};
+
+class RigHost {
+ public:
+  static Result<RigHost> Create(std::string rig_id, const RigParams& params,
+                                SimulationOptions options, double sensor_rate_hz,
+                                InitialCommands initial = {}, CommandLimits limits = {});
+
+  const std::string& rig_id() const { return rig_id_; }
+  double sensor_period_s() const { return period_s_; }
+  double time_s() const { return time_s_; }
+  const RigCounters& counters() const { return counters_; }
+  const RigParams& params() const { return sampler_.simulator().params(); }
+
+  // Each returns OK if the command is now in force, or the reason it was refused (also counted
+  // and kept in counters().last_rejection).
+  Status SetChokeDeg(double opening_deg);
+  Status SetPumpLpm(double flow_lpm);
+  Status SetOutletBarg(double pressure_barg);
+  Status SetPiston(const PistonCommandIn& command);
+
+  // Advances one sensor period with the commands in force and returns every channel then.
+  // Fails only when the simulation itself fails (solver, or the model range if the options stop
+  // on it); the caller reports that and may keep the rig's last state.
+  Result<RigSample> Tick();
+
+ private:
+  RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
+          RigInputs inputs);
+  Status Refuse(const std::string& reason);
+  double PistonPositionAt(double time_s) const;
+
+  std::string rig_id_;
+  RigSampler sampler_;
+  double period_s_;
+  CommandLimits limits_;
+  RigInputs inputs_;        // choke reference, pump, outlet (SI)
+  PistonCommandIn piston_;  // in force since piston_since_s_
+  double piston_since_s_ = 0.0;
+  double piston_from_m_ = 0.0;  // position when the command arrived (ramps and holds start here)
+  double time_s_ = 0.0;
+  RigCounters counters_;
+};
+
+}  // namespace mpdrig::service
