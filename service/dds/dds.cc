@@ -15,10 +15,14 @@ std::string LoopbackConfig() {
          "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>";
 }
 
-Qos SensorQos() {
+Qos SensorQos(bool keep_all) {
   Qos qos;
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 8);
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
+  if (keep_all) {
+    dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  } else {
+    dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 8);
+  }
   dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
   return qos;
 }

@@ -66,12 +66,13 @@ class Qos {
 };
 
 // The project's QoS choices, one place (README explains them):
-//   sensors  - reliable, keep last 8, volatile: a late sample is better than a gap, a late joiner
-//              wants the present, not history.
+//   sensors  - reliable, volatile; keep last 8 (a slow reader must not hold back a real-time rig;
+//              a late joiner wants the present, not history), or keep all in lockstep, where the
+//              client sets the pace and must see every step.
 //   commands - reliable, keep last 1, transient-local: a late-joining rig (or a restarted one)
 //              gets the current command; exclusive ownership when `ownership_strength` >= 0.
 //   status   - reliable, keep last 1, transient-local: a late joiner sees the current status.
-Qos SensorQos();
+Qos SensorQos(bool keep_all = false);
 Qos CommandQos(int ownership_strength = -1, dds_duration_t liveliness_lease = DDS_INFINITY);
 Qos StatusQos();
 

@@ -67,6 +67,14 @@ Status RigHost::Refuse(const std::string& reason) {
   return Status::Error(reason);
 }
 
+double RigHost::choke_command_deg() const {
+  return units::ChokeFracToDeg(inputs_.choke_opening_frac);
+}
+double RigHost::pump_command_lpm() const { return units::M3psToLpm(inputs_.pump_flow_m3ps); }
+double RigHost::outlet_command_barg() const {
+  return units::PaAbsToBarg(inputs_.outlet_pressure_pa, params().atmospheric_pressure_pa);
+}
+
 Status RigHost::SetChokeDeg(double opening_deg) {
   if (!Within(opening_deg, limits_.choke_min_deg, limits_.choke_max_deg)) {
     return Refuse(OutOfRange("choke opening", opening_deg, limits_.choke_min_deg,

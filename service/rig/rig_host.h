@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "model/common/status.h"
@@ -71,6 +72,15 @@ class RigHost {
   Status SetPumpLpm(double flow_lpm);
   Status SetOutletBarg(double pressure_barg);
   Status SetPiston(const PistonCommandIn& command);
+  // A refusal decided outside the rig (e.g. a command for another rig id): counted the same way.
+  Status Refuse(const std::string& reason);
+  // The first departure from the model's range, if any (the rig keeps running and reports it).
+  const std::optional<RangeEvent>& range_event() const {
+    return sampler_.simulator().first_range_event();
+  }
+  double choke_command_deg() const;
+  double pump_command_lpm() const;
+  double outlet_command_barg() const;
 
   // Advances one sensor period with the commands in force and returns every channel then.
   // Fails only when the simulation itself fails (solver, or the model range if the options stop
@@ -80,7 +90,6 @@ class RigHost {
  private:
   RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
           RigInputs inputs);
-  Status Refuse(const std::string& reason);
   double PistonPositionAt(double time_s) const;
 
   std::string rig_id_;

@@ -1,0 +1,277 @@
+#include "service/rig/rig_service.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <thread>
+
+#include "service/rig/wire.h"
+
+namespace mpdrig::service {
+
+using Clock = std::chrono::steady_clock;
+
+struct RigService::Impl {
+  ServeOptions options;
+  std::vector<RigHost> rigs;
+  std::vector<std::uint64_t> last_step_request;
+  std::uint64_t deadline_misses = 0;
+  Clock::time_point started;
+
+  // Declared parent-first, so children are deleted before their participant and domain.
+  std::optional<dds::Domain> domain;
+  dds::Entity participant;
+  dds::Entity sensors_topic, choke_topic, piston_topic, pump_topic, outlet_topic, step_topic,
+      status_topic;
+  std::optional<dds::Writer<mpdrig_RigSensors>> sensors;
+  std::optional<dds::Writer<mpdrig_RigStatus>> status;
+  std::optional<dds::Reader<mpdrig_ChokeCommand>> choke;
+  std::optional<dds::Reader<mpdrig_PistonCommand>> piston;
+  std::optional<dds::Reader<mpdrig_PumpCommand>> pump;
+  std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
+  std::optional<dds::Reader<mpdrig_StepRequest>> steps;
+
+  RigHost* Find(const char* rig_id) {
+    for (RigHost& rig : rigs) {
+      if (rig.rig_id() == rig_id) return &rig;
+    }
+    return nullptr;
+  }
+
+  // A command for a rig this service does not run: every rig's status reports it.
+  void RefuseUnknown(const char* topic, const char* rig_id) {
+    std::string serving;
+    for (const RigHost& rig : rigs) serving += (serving.empty() ? "" : ", ") + rig.rig_id();
+    const std::string reason = std::string(topic) + " for unknown rig '" + rig_id +
+                               "' refused (this service runs: " + serving + ")";
+    for (RigHost& rig : rigs) (void)rig.Refuse(reason);
+  }
+
+  // Applies every pending command. Refusals are recorded by the rigs themselves.
+  Status TakeCommands() {
+    auto apply = [this](const char* topic, const char* rig_id, const auto& set) {
+      RigHost* rig = Find(rig_id);
+      if (rig == nullptr) {
+        RefuseUnknown(topic, rig_id);
+        return;
+      }
+      (void)set(*rig);  // a refusal is counted and kept by the rig
+    };
+    auto taken = choke->TakeEach([&](const mpdrig_ChokeCommand& c, const dds_sample_info_t&) {
+      apply(kChokeCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
+    });
+    if (!taken.ok()) return taken.status();
+    taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t&) {
+      apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
+    });
+    if (!taken.ok()) return taken.status();
+    taken = outlet->TakeEach([&](const mpdrig_OutletCommand& c, const dds_sample_info_t&) {
+      apply(kOutletCommandTopic, c.rig_id,
+            [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
+    });
+    if (!taken.ok()) return taken.status();
+    taken = piston->TakeEach([&](const mpdrig_PistonCommand& c, const dds_sample_info_t&) {
+      apply(kPistonCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
+    });
+    return taken.ok() ? Status::Ok() : taken.status();
+  }
+
+  Status TickAndPublish(RigHost& rig) {
+    auto sample = rig.Tick();
+    if (!sample.ok()) {
+      // The model failed (e.g. the solver): the rig keeps its last state and says why.
+      (void)rig.Refuse("simulation step failed: " + sample.status().message());
+      return Status::Ok();
+    }
+    const mpdrig_RigSensors wire = ToWire(rig.rig_id(), rig.counters().samples - 1, *sample,
+                                          rig.params().atmospheric_pressure_pa);
+    return sensors->Write(wire);
+  }
+
+  Status PublishStatus(std::size_t index) {
+    const RigHost& rig = rigs[index];
+    mpdrig_RigStatus wire{};
+    wire.rig_id = const_cast<char*>(rig.rig_id().c_str());
+    wire.clock = options.clock == ClockMode::kRealtime ? mpdrig_CLOCK_REALTIME
+                 : options.clock == ClockMode::kFast   ? mpdrig_CLOCK_FAST
+                                                       : mpdrig_CLOCK_LOCKSTEP;
+    wire.sim_time_s = rig.time_s();
+    const double wall_s = std::chrono::duration<double>(Clock::now() - started).count();
+    wire.real_time_factor = wall_s > 0.0 ? rig.time_s() / wall_s : 0.0;
+    wire.deadline_misses = deadline_misses;
+    wire.rejected_commands = rig.counters().rejected_commands;
+    wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
+    wire.last_completed_step_request = last_step_request[index];
+    std::string warning;
+    char* warnings[1];
+    if (rig.range_event()) {
+      warning = rig.range_event()->Describe();
+      warnings[0] = warning.data();
+      wire.warnings._length = wire.warnings._maximum = 1;
+      wire.warnings._buffer = warnings;
+    }
+    wire.warnings._release = false;
+    return status->Write(wire);
+  }
+
+  Status PublishAllStatus() {
+    for (std::size_t i = 0; i < rigs.size(); ++i) MPDRIG_RETURN_IF_ERROR(PublishStatus(i));
+    return Status::Ok();
+  }
+
+  Status RunPaced(const std::atomic<bool>& stop) {
+    const double period = rigs.front().sensor_period_s();
+    const auto period_wall =
+        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period));
+    Clock::time_point next = Clock::now() + period_wall;
+    double next_status_s = 0.0;
+    while (!stop.load()) {
+      if (options.duration_s > 0.0 && rigs.front().time_s() >= options.duration_s - 0.5 * period)
+        break;
+      MPDRIG_RETURN_IF_ERROR(TakeCommands());
+      for (RigHost& rig : rigs) MPDRIG_RETURN_IF_ERROR(TickAndPublish(rig));
+      if (rigs.front().time_s() >= next_status_s) {
+        MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
+        next_status_s += options.status_period_s;
+      }
+      if (options.clock == ClockMode::kRealtime) {
+        const Clock::time_point now = Clock::now();
+        if (now > next + period_wall) {  // more than a whole period late: a missed deadline
+          ++deadline_misses;
+          next = now + period_wall;
+        } else {
+          std::this_thread::sleep_until(next);
+          next += period_wall;
+        }
+      }
+    }
+    return PublishAllStatus();
+  }
+
+  Status RunLockstep(const std::atomic<bool>& stop) {
+    MPDRIG_RETURN_IF_ERROR(PublishAllStatus());  // clients see the rigs are up
+    struct Request {
+      std::string rig_id;
+      std::uint64_t id;
+      std::uint32_t steps;
+    };
+    while (!stop.load()) {
+      auto ready = steps->Wait(DDS_MSECS(50));
+      if (!ready.ok()) return ready.status();
+      if (!*ready) continue;
+      std::vector<Request> requests;
+      auto taken = steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t&) {
+        requests.push_back({r.rig_id, r.request_id, r.steps});
+      });
+      if (!taken.ok()) return taken.status();
+      for (const Request& request : requests) {
+        MPDRIG_RETURN_IF_ERROR(TakeCommands());
+        RigHost* rig = Find(request.rig_id.c_str());
+        if (rig == nullptr) {
+          RefuseUnknown(kStepRequestTopic, request.rig_id.c_str());
+          MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
+          continue;
+        }
+        for (std::uint32_t i = 0; i < request.steps; ++i)
+          MPDRIG_RETURN_IF_ERROR(TickAndPublish(*rig));
+        const std::size_t index = static_cast<std::size_t>(rig - rigs.data());
+        last_step_request[index] = request.id;
+        MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+      }
+    }
+    return Status::Ok();
+  }
+};
+
+RigService::RigService(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+RigService::~RigService() = default;
+
+const std::vector<RigHost>& RigService::rigs() const { return impl_->rigs; }
+
+Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs,
+                                                       const ServeOptions& options) {
+  if (rigs.empty()) return Status::Error("no rigs to serve");
+  for (std::size_t i = 0; i < rigs.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (rigs[i].rig_id() == rigs[j].rig_id()) {
+        return Status::Error("rig id '" + rigs[i].rig_id() + "' given twice");
+      }
+    }
+    if (rigs[i].sensor_period_s() != rigs.front().sensor_period_s()) {
+      return Status::Error("all rigs of one service share the sensor rate");
+    }
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  impl->rigs = std::move(rigs);
+  impl->last_step_request.assign(impl->rigs.size(), 0);
+
+  auto domain = dds::Domain::Create(options.domain, options.dds_config);
+  if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
+  impl->domain.emplace(std::move(domain).value());
+  auto participant = dds::CreateParticipant(options.domain);
+  if (!participant.ok()) return participant.status();
+  impl->participant = std::move(participant).value();
+  const dds_entity_t p = impl->participant.handle();
+
+  auto topic = [p](const dds_topic_descriptor_t* descriptor, const char* name,
+                   dds::Entity* out) -> Status {
+    auto created = dds::CreateTopic(p, descriptor, name);
+    if (!created.ok()) return created.status();
+    *out = std::move(created).value();
+    return Status::Ok();
+  };
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigSensors_desc, kSensorsTopic, &impl->sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_ChokeCommand_desc, kChokeCommandTopic, &impl->choke_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      topic(&mpdrig_PistonCommand_desc, kPistonCommandTopic, &impl->piston_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_PumpCommand_desc, kPumpCommandTopic, &impl->pump_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      topic(&mpdrig_OutletCommand_desc, kOutletCommandTopic, &impl->outlet_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_StepRequest_desc, kStepRequestTopic, &impl->step_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigStatus_desc, kStatusTopic, &impl->status_topic));
+
+  auto sensors = dds::Writer<mpdrig_RigSensors>::Create(
+      p, impl->sensors_topic.handle(), dds::SensorQos(options.clock == ClockMode::kLockstep));
+  if (!sensors.ok()) return sensors.status();
+  impl->sensors.emplace(std::move(sensors).value());
+  auto status =
+      dds::Writer<mpdrig_RigStatus>::Create(p, impl->status_topic.handle(), dds::StatusQos());
+  if (!status.ok()) return status.status();
+  impl->status.emplace(std::move(status).value());
+
+  auto choke =
+      dds::Reader<mpdrig_ChokeCommand>::Create(p, impl->choke_topic.handle(), dds::CommandQos());
+  if (!choke.ok()) return choke.status();
+  impl->choke.emplace(std::move(choke).value());
+  auto piston =
+      dds::Reader<mpdrig_PistonCommand>::Create(p, impl->piston_topic.handle(), dds::CommandQos());
+  if (!piston.ok()) return piston.status();
+  impl->piston.emplace(std::move(piston).value());
+  auto pump =
+      dds::Reader<mpdrig_PumpCommand>::Create(p, impl->pump_topic.handle(), dds::CommandQos());
+  if (!pump.ok()) return pump.status();
+  impl->pump.emplace(std::move(pump).value());
+  auto outlet =
+      dds::Reader<mpdrig_OutletCommand>::Create(p, impl->outlet_topic.handle(), dds::CommandQos());
+  if (!outlet.ok()) return outlet.status();
+  impl->outlet.emplace(std::move(outlet).value());
+  // Step requests are not state: reliable, keep all, volatile.
+  dds::Qos step_qos;
+  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto steps = dds::Reader<mpdrig_StepRequest>::Create(p, impl->step_topic.handle(), step_qos);
+  if (!steps.ok()) return steps.status();
+  impl->steps.emplace(std::move(steps).value());
+
+  return std::unique_ptr<RigService>(new RigService(std::move(impl)));
+}
+
+Status RigService::Run(const std::atomic<bool>& stop) {
+  impl_->started = Clock::now();
+  if (impl_->options.clock == ClockMode::kLockstep) return impl_->RunLockstep(stop);
+  return impl_->RunPaced(stop);
+}
+
+}  // namespace mpdrig::service

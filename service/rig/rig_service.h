@@ -1,0 +1,54 @@
+// The virtual rig as a DDS service: several rigs (one per rig id) in one process, commands in,
+// sensors and status out, paced by a clock:
+//   realtime - one sensor period of rig time per period of wall time; late ticks are counted as
+//              deadline misses (a tick that starts more than one period late);
+//   fast     - as fast as the machine goes;
+//   lockstep - the rig advances only when a client asks (StepRequest): all pending commands are
+//              taken first, then `steps` sensor periods run and each one's sensors are published,
+//              then the status carries last_completed_step_request. A client that needs its
+//              command applied in a given step waits for the command's acknowledgement
+//              (dds_wait_for_acks) before it sends the step request.
+// A command that is NaN, infinite, out of range or for an unknown rig is refused, counted and
+// reported on status; the rig runs on. Nothing a client sends stops the service.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "model/common/status.h"
+#include "service/dds/dds.h"
+#include "service/rig/rig_host.h"
+
+namespace mpdrig::service {
+
+enum class ClockMode { kRealtime, kFast, kLockstep };
+
+struct ServeOptions {
+  ClockMode clock = ClockMode::kRealtime;
+  dds_domainid_t domain = 0;
+  std::string dds_config = dds::LoopbackConfig();
+  double duration_s = 0.0;       // realtime/fast: stop after this much rig time (0: run on)
+  double status_period_s = 0.5;  // realtime/fast: status every this much rig time
+};
+
+class RigService {
+ public:
+  static Result<std::unique_ptr<RigService>> Create(std::vector<RigHost> rigs,
+                                                    const ServeOptions& options);
+  ~RigService();
+
+  // Serves until `stop` is set (SIGINT/SIGTERM in mpdrig serve) or the duration is reached.
+  // Fails only when the transport fails.
+  Status Run(const std::atomic<bool>& stop);
+
+  const std::vector<RigHost>& rigs() const;
+
+ private:
+  struct Impl;
+  explicit RigService(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mpdrig::service

@@ -1,0 +1,30 @@
+// The one place that translates between the DDS wire types (idl/mpdrig.idl, generated C structs)
+// and the service's own types. Nothing else here: no physics, no transport.
+#pragma once
+
+#include <string>
+
+#include "model/sim/rig_simulator.h"
+#include "mpdrig.h"
+#include "service/rig/rig_host.h"
+
+namespace mpdrig::service {
+
+// Topic names (Cyclone 0.10 allows [A-Za-z0-9_/] only).
+inline constexpr const char* kSensorsTopic = "mpdrig_sensors";
+inline constexpr const char* kChokeCommandTopic = "mpdrig_choke_command";
+inline constexpr const char* kPistonCommandTopic = "mpdrig_piston_command";
+inline constexpr const char* kPumpCommandTopic = "mpdrig_pump_command";
+inline constexpr const char* kOutletCommandTopic = "mpdrig_outlet_command";
+inline constexpr const char* kStepRequestTopic = "mpdrig_step_request";
+inline constexpr const char* kStatusTopic = "mpdrig_status";
+
+// A sample in the lab's units (bar gauge with the rig's atmospheric pressure, L/min, deg, m).
+// `rig_id` must outlive the returned struct (the wire struct points at it).
+mpdrig_RigSensors ToWire(const std::string& rig_id, std::uint64_t sample_counter,
+                         const RigSample& sample, double atmospheric_pressure_pa);
+RigSample FromWire(const mpdrig_RigSensors& wire, double atmospheric_pressure_pa);
+
+PistonCommandIn FromWire(const mpdrig_PistonCommand& wire);
+
+}  // namespace mpdrig::service

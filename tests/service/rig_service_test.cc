@@ -1,0 +1,201 @@
+// The rig service end to end over loopback DDS with the lockstep clock: a client commands the
+// rig, asks for steps, and reads sensors and status like a controller would. Each test runs the
+// service in its own DDS domain.
+#include "service/rig/rig_service.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <complex>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "mpdrig.h"
+#include "service/rig/wire.h"
+
+namespace mpdrig::service {
+namespace {
+
+dds_domainid_t TestDomain(int test_index) {
+  return static_cast<dds_domainid_t>(12 + (getpid() % 50) * 4 + test_index);
+}
+
+// The service on a thread, and a client participant in the same domain.
+class ServiceTest : public ::testing::Test {
+ protected:
+  void Start(int test_index) {
+    std::vector<RigHost> rigs;
+    for (const char* id : {"rig-1", "rig-2"}) {
+      auto rig = RigHost::Create(id, RigParams(), SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
+      ASSERT_TRUE(rig.ok()) << rig.status().message();
+      rigs.push_back(std::move(rig).value());
+    }
+    ServeOptions options;
+    options.clock = ClockMode::kLockstep;
+    options.domain = TestDomain(test_index);
+    auto service = RigService::Create(std::move(rigs), options);
+    ASSERT_TRUE(service.ok()) << service.status().message();
+    service_ = std::move(service).value();
+    thread_ = std::thread([this] { run_status_ = service_->Run(stop_); });
+
+    auto participant = dds::CreateParticipant(options.domain);
+    ASSERT_TRUE(participant.ok());
+    participant_ = std::move(participant).value();
+    const dds_entity_t p = participant_.handle();
+    auto make_topic = [p](const dds_topic_descriptor_t* d, const char* name) {
+      auto t = dds::CreateTopic(p, d, name);
+      EXPECT_TRUE(t.ok()) << t.status().message();
+      return std::move(t).value();
+    };
+    sensors_topic_ = make_topic(&mpdrig_RigSensors_desc, kSensorsTopic);
+    status_topic_ = make_topic(&mpdrig_RigStatus_desc, kStatusTopic);
+    choke_topic_ = make_topic(&mpdrig_ChokeCommand_desc, kChokeCommandTopic);
+    piston_topic_ = make_topic(&mpdrig_PistonCommand_desc, kPistonCommandTopic);
+    step_topic_ = make_topic(&mpdrig_StepRequest_desc, kStepRequestTopic);
+    sensors_.emplace(
+        *dds::Reader<mpdrig_RigSensors>::Create(p, sensors_topic_.handle(), dds::SensorQos(true)));
+    status_.emplace(
+        *dds::Reader<mpdrig_RigStatus>::Create(p, status_topic_.handle(), dds::StatusQos()));
+    choke_.emplace(
+        *dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic_.handle(), dds::CommandQos()));
+    piston_.emplace(
+        *dds::Writer<mpdrig_PistonCommand>::Create(p, piston_topic_.handle(), dds::CommandQos()));
+    dds::Qos step_qos;
+    dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+    dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+    step_.emplace(*dds::Writer<mpdrig_StepRequest>::Create(p, step_topic_.handle(), step_qos));
+  }
+
+  void TearDown() override {
+    stop_ = true;
+    if (thread_.joinable()) thread_.join();
+    EXPECT_TRUE(run_status_.ok()) << run_status_.message();
+  }
+
+  // Waits for commands to reach the service's reader cache, so the next step applies them.
+  void Acked(dds_entity_t writer) {
+    ASSERT_EQ(dds_wait_for_acks(writer, DDS_SECS(5)), DDS_RETCODE_OK);
+  }
+
+  // Sends a step request and waits for the status that completes it; returns that status's
+  // rejected-command count and last rejection.
+  std::pair<std::uint64_t, std::string> Step(const char* rig_id, std::uint32_t steps) {
+    const std::uint64_t id = ++request_id_;
+    mpdrig_StepRequest request{const_cast<char*>(rig_id), id, steps};
+    EXPECT_TRUE(step_->Write(request).ok());
+    std::pair<std::uint64_t, std::string> result{0, ""};
+    bool done = false;
+    for (int attempt = 0; attempt < 100 && !done; ++attempt) {
+      auto ready = status_->Wait(DDS_MSECS(100));
+      if (!ready.ok() || !*ready) continue;
+      (void)status_->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+        if (std::string(s.rig_id) == rig_id && s.last_completed_step_request == id) {
+          done = true;
+          result = {s.rejected_commands, s.last_rejection};
+        }
+      });
+    }
+    EXPECT_TRUE(done) << "step request " << id << " for " << rig_id << " never completed";
+    return result;
+  }
+
+  // All sensor samples received so far, per rig.
+  std::map<std::string, std::vector<RigSample>> TakeSensors(
+      std::map<std::string, std::vector<std::uint64_t>>* counters = nullptr) {
+    std::map<std::string, std::vector<RigSample>> out;
+    (void)sensors_->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
+      out[s.rig_id].push_back(FromWire(s, 101325.0));
+      if (counters) (*counters)[s.rig_id].push_back(s.sample_counter);
+    });
+    return out;
+  }
+
+  std::unique_ptr<RigService> service_;
+  std::thread thread_;
+  std::atomic<bool> stop_{false};
+  Status run_status_ = Status::Ok();
+  std::uint64_t request_id_ = 0;
+  dds::Entity participant_;
+  dds::Entity sensors_topic_, status_topic_, choke_topic_, piston_topic_, step_topic_;
+  std::optional<dds::Reader<mpdrig_RigSensors>> sensors_;
+  std::optional<dds::Reader<mpdrig_RigStatus>> status_;
+  std::optional<dds::Writer<mpdrig_ChokeCommand>> choke_;
+  std::optional<dds::Writer<mpdrig_PistonCommand>> piston_;
+  std::optional<dds::Writer<mpdrig_StepRequest>> step_;
+};
+
+TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
+  Start(0);
+  Step("rig-1", 100);
+  std::map<std::string, std::vector<std::uint64_t>> counters;
+  auto before = TakeSensors(&counters);
+  ASSERT_EQ(before["rig-1"].size(), 100u) << "one sensor sample per step, none lost";
+  for (std::size_t i = 0; i < counters["rig-1"].size(); ++i) EXPECT_EQ(counters["rig-1"][i], i);
+  EXPECT_EQ(before.count("rig-2"), 0u) << "rig-2 was not stepped";
+  const double c2_before = before["rig-1"].back()[Channel::kC2];
+
+  mpdrig_ChokeCommand close{const_cast<char*>("rig-1"), 28.0};
+  ASSERT_TRUE(choke_->Write(close).ok());
+  Acked(choke_->handle());
+  Step("rig-1", 3000);  // 30 s of rig time: several of the 7 s filling time constants
+  auto after = TakeSensors();
+  ASSERT_EQ(after["rig-1"].size(), 3000u);
+  const double c2_after = after["rig-1"].back()[Channel::kC2];
+  EXPECT_GT(c2_after - c2_before, 5e5)
+      << "closing the choke from 31 to 28 deg must raise C2 by bars";
+  EXPECT_NEAR(after["rig-1"].back()[Channel::kChokePosition], 28.0 / 90.0, 1e-6);
+}
+
+TEST_F(ServiceTest, PistonSineMakesBottomHolePressureOscillateAtItsFrequency) {
+  Start(1);
+  mpdrig_PistonCommand sine{};
+  sine.rig_id = const_cast<char*>("rig-1");
+  sine.mode = mpdrig_PISTON_SINE;
+  sine.amplitude_m = 0.1;
+  sine.frequency_hz = 0.2;
+  ASSERT_TRUE(piston_->Write(sine).ok());
+  Acked(piston_->handle());
+  Step("rig-1", 4000);
+  auto samples = TakeSensors()["rig-1"];
+  ASSERT_EQ(samples.size(), 4000u);
+  // Fourier amplitude of PT1 about its mean, after the start-up transient.
+  double mean = 0.0;
+  for (std::size_t i = 1500; i < samples.size(); ++i) mean += samples[i][Channel::kPT1];
+  mean /= static_cast<double>(samples.size() - 1500);
+  auto amplitude_at = [&](double f) {
+    std::complex<double> sum = 0.0;
+    for (std::size_t i = 1500; i < samples.size(); ++i) {
+      sum += (samples[i][Channel::kPT1] - mean) *
+             std::exp(std::complex<double>(0, -2 * M_PI * f * samples[i].time_s));
+    }
+    return std::abs(sum);
+  };
+  const double drive = amplitude_at(0.2);
+  for (double f : {0.1, 0.15, 0.25, 0.3, 0.4})
+    EXPECT_GT(drive, 5.0 * amplitude_at(f)) << f << " Hz";
+}
+
+TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
+  Start(2);
+  mpdrig_ChokeCommand nan_choke{const_cast<char*>("rig-1"), std::nan("")};
+  ASSERT_TRUE(choke_->Write(nan_choke).ok());
+  Acked(choke_->handle());
+  auto [rejected, reason] = Step("rig-1", 10);
+  EXPECT_EQ(rejected, 1u);
+  EXPECT_NE(reason.find("choke opening"), std::string::npos) << reason;
+
+  mpdrig_ChokeCommand unknown{const_cast<char*>("rig-9"), 40.0};
+  ASSERT_TRUE(choke_->Write(unknown).ok());
+  Acked(choke_->handle());
+  std::tie(rejected, reason) = Step("rig-1", 10);
+  EXPECT_EQ(rejected, 2u);
+  EXPECT_NE(reason.find("unknown rig 'rig-9'"), std::string::npos) << reason;
+  auto samples = TakeSensors()["rig-1"];
+  ASSERT_EQ(samples.size(), 20u) << "the rig kept running";
+  EXPECT_NEAR(samples.back()[Channel::kChokePosition], 31.0 / 90.0, 1e-9)
+      << "last valid command in force";
+}
+
+}  // namespace
+}  // namespace mpdrig::service
