@@ -16,6 +16,9 @@ int main(int argc, char** argv) {
   mpdrig::cli::AddSimulateCommand(&app, &exit_code);
   mpdrig::cli::AddFreqrespCommand(&app, &exit_code);
   mpdrig::cli::AddParamsCommand(&app, &exit_code);
+  mpdrig::cli::AddServeCommand(&app, &exit_code);
+  mpdrig::cli::AddObserveCommand(&app, &exit_code);
+  mpdrig::cli::AddGainsCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }

@@ -10,5 +10,8 @@ void AddSimulateCommand(CLI::App* app, int* exit_code);
 void AddFreqrespCommand(CLI::App* app, int* exit_code);
 void AddParamsCommand(CLI::App* app, int* exit_code);
 void AddDemoCommand(CLI::App* app, int* exit_code);
+void AddServeCommand(CLI::App* app, int* exit_code);
+void AddObserveCommand(CLI::App* app, int* exit_code);
+void AddGainsCommand(CLI::App* app, int* exit_code);
 
 }  // namespace mpdrig::cli

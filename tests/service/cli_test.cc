@@ -459,5 +459,24 @@ TEST_F(CliTest, DemoWritesALogAndSummarises) {
   EXPECT_NE(log.Find("PT1"), nullptr);
 }
 
+TEST_F(CliTest, ServeFastRunsForItsDurationAndReports) {
+  // DDS stays on loopback by default; a domain id of its own per process.
+  const std::string domain = std::to_string(100 + ::getpid() % 100);
+  const RunResult run =
+      Run("serve --clock fast --duration 2 --rate-hz 100 --rig a --rig b --domain " + domain);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(Contains(run.err, "loopback only")) << run.err;
+  EXPECT_TRUE(Contains(run.err, "a ran 2.000 s of rig time, 200 samples")) << run.err;
+  EXPECT_TRUE(Contains(run.err, "b ran 2.000 s of rig time, 200 samples")) << run.err;
+}
+
+TEST_F(CliTest, ServeRefusesBadOptions) {
+  EXPECT_NE(Run("serve --clock sundial").exit_code, 0);
+  EXPECT_NE(Run("serve --rate-hz 0").exit_code, 0);
+  const RunResult twice = Run("serve --clock fast --duration 1 --rig a --rig a --domain 3");
+  EXPECT_NE(twice.exit_code, 0);
+  EXPECT_TRUE(Contains(twice.err, "given twice")) << twice.err;
+}
+
 }  // namespace
 }  // namespace mpdrig

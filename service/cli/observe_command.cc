@@ -1,0 +1,169 @@
+// mpdrig observe: the backstepping observer (thesis 10) on a rig log's topside channels.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+
+#include "model/common/units.h"
+#include "model/observer/backstepping_observer.h"
+#include "model/riglog/rig_log.h"
+#include "service/cli/commands.h"
+#include "service/cli/model_options.h"
+
+namespace mpdrig::cli {
+namespace {
+
+struct ObserverArgs {
+  ModelOptions model;
+  double disturbance_hz = 0.0;
+  int cells = 200;
+  std::vector<double> pole{-40.0, 20.0};
+  bool quadratic_friction = false;
+  bool track_frequency = false;
+  double friction_f1_per_s = std::nan("");
+  std::string log_path;
+  std::string out_path;
+};
+
+void AddObserverOptions(CLI::App* command, ObserverArgs* args) {
+  args->model.AddParamOptions(command);
+  command->add_option("--disturbance-hz", args->disturbance_hz, "heave frequency [Hz] (10.2.10)")
+      ->required();
+  command->add_option("--cells", args->cells, "observer and kernel grid cells")
+      ->capture_default_str();
+  command
+      ->add_option("--pole", args->pole,
+                   "poles of A - LC [rad/s]: RE IM for the pair RE +- IM i (thesis 10.3: -40 20)")
+      ->expected(2)
+      ->capture_default_str();
+  command->add_flag("--quadratic-friction", args->quadratic_friction,
+                    "also run the plant's f2 u|u| friction in the observer's pipe copy (beyond "
+                    "the thesis; removes the observer's main error at 0.1 m strokes)");
+  command->add_flag("--track-frequency", args->track_frequency,
+                    "estimate the heave frequency online, starting from --disturbance-hz, and "
+                    "retune the gains as it moves (beyond the thesis)");
+  command->add_option("--friction-f1", args->friction_f1_per_s,
+                      "linear friction f1 used by the observer [1/s] (default: the rig's)");
+}
+
+Result<observer::ObserverOptions> MakeOptions(const ObserverArgs& args) {
+  observer::ObserverOptions o;
+  o.cells = args.cells;
+  o.disturbance_hz = args.disturbance_hz;
+  if (args.pole.size() != 2) return Status::Error("--pole takes two numbers: RE IM");
+  o.pole = {args.pole[0], args.pole[1]};
+  o.quadratic_friction = args.quadratic_friction;
+  o.track_frequency = args.track_frequency;
+  o.friction_f1_per_s = args.friction_f1_per_s;
+  MPDRIG_RETURN_IF_ERROR(o.Validate());
+  return o;
+}
+
+std::string Describe(const observer::ObserverOptions& o) {
+  std::ostringstream out;
+  out << "backstepping observer (thesis 10), " << o.disturbance_hz << " Hz, poles " << o.pole.real()
+      << " +- " << std::fabs(o.pole.imag()) << "i rad/s, " << o.cells << " cells"
+      << (o.quadratic_friction ? ", quadratic friction" : "")
+      << (o.track_frequency ? ", frequency tracked" : "");
+  return out.str();
+}
+
+int RunObserve(const ObserverArgs& args) {
+  const std::string name = "observe";
+  auto params = args.model.LoadParams();
+  if (!params.ok()) return Fail(name, params.status());
+  auto options = MakeOptions(args);
+  if (!options.ok()) return Fail(name, options.status());
+  auto log = riglog::ReadRigLog(args.log_path);
+  if (!log.ok()) return Fail(name, log.status());
+
+  // Topside channels: C2 = p(l), and the outlet flow FT1, or FT3 - FT2 (5.3.1).
+  const std::vector<double>* c2 = log->Find(riglog::Channel::kC2);
+  const std::vector<double>* ft1 = log->Find(riglog::Channel::kFT1);
+  const std::vector<double>* ft2 = log->Find(riglog::Channel::kFT2);
+  const std::vector<double>* ft3 = log->Find(riglog::Channel::kFT3);
+  if (c2 == nullptr) return Fail(name, Status::Error(args.log_path + ": needs a C2 column"));
+  if (ft1 == nullptr && (ft2 == nullptr || ft3 == nullptr)) {
+    return Fail(name, Status::Error(args.log_path + ": needs FT1, or FT3 and FT2"));
+  }
+  observer::TopsideSeries series;
+  std::size_t skipped = 0;
+  for (std::size_t r = 0; r < log->num_rows(); ++r) {
+    const double q = ft1 != nullptr ? (*ft1)[r] : (*ft3)[r] - (*ft2)[r];
+    if (!std::isfinite((*c2)[r]) || !std::isfinite(q)) {
+      ++skipped;  // not measured at this sample: interpolated from its neighbours
+      continue;
+    }
+    series.time_s.push_back(log->time_s[r]);
+    series.outlet_pressure_pa.push_back((*c2)[r]);
+    series.outlet_flow_m3ps.push_back(q);
+  }
+  auto estimates = observer::RunObserver(*params, *options, series, log->time_s);
+  if (!estimates.ok()) return Fail(name, estimates.status().Within(args.log_path));
+
+  // Estimates as extra columns beside the log's own.
+  const std::size_t rows = log->num_rows();
+  auto add = [&](std::string_view channel, riglog::Unit unit, auto value) -> Status {
+    auto column = riglog::MakeColumn(channel, unit);
+    if (!column.ok()) return column.status();
+    std::vector<double> values(rows);
+    for (std::size_t r = 0; r < rows; ++r) values[r] = value((*estimates)[r]);
+    return log->AddColumn(*column, std::move(values));
+  };
+  using riglog::Unit;
+  using E = observer::ObserverEstimate;
+  Status status = add("BHP_est", Unit::kBarg, [](const E& e) { return e.bhp_pa; });
+  for (int k = 0; k < 10 && status.ok(); ++k) {
+    status = add("PT" + std::to_string(k + 1) + "_est", Unit::kBarg,
+                 [k](const E& e) { return e.pt_pa[k]; });
+  }
+  if (status.ok()) {
+    status = add("FT4_est", Unit::kLpm, [](const E& e) { return e.inlet_flow_m3ps; });
+  }
+  if (status.ok()) {
+    status = add("piston_position_est", Unit::kM, [](const E& e) { return e.piston_position_m; });
+  }
+  if (status.ok()) {
+    status = add("FT1_innovation", Unit::kLpm, [](const E& e) { return e.output_error_m3ps; });
+  }
+  if (!status.ok()) return Fail(name, status.Within(args.log_path));
+  log->metadata.push_back({"observer", Describe(*options)});
+  const double final_hz = estimates->empty() ? std::nan("") : estimates->back().disturbance_hz;
+  if (options->track_frequency) {
+    log->metadata.push_back({"observer_final_frequency_hz", riglog::FormatNumber(final_hz)});
+  }
+  log->metadata.push_back(
+      {"observer_note",
+       "FT4_est = estimated inlet flow = -(A_d - A_d2) v_d; piston_position_est = -X1/omega "
+       "(zero-mean); FT1_innovation = up-going wave error y - u^(1) in m3/s units"});
+  const Status written = riglog::WriteRigLog(*log, args.out_path);
+  if (!written.ok()) return Fail(name, written);
+  if (args.out_path != "-") {
+    std::printf("%s: %zu samples of %s (%zu without C2/outlet flow) -> %s\n",
+                Describe(*options).c_str(), rows, args.log_path.c_str(), skipped,
+                args.out_path.c_str());
+    if (options->track_frequency)
+      std::printf("tracked heave frequency at the end: %.4g Hz\n", final_hz);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void AddObserveCommand(CLI::App* app, int* exit_code) {
+  auto args = std::make_shared<ObserverArgs>();
+  CLI::App* command = app->add_subcommand(
+      "observe", "Backstepping observer (thesis 10): bottom-hole pressure from C2 and FT1");
+  command->footer(
+      "Runs the observer of thesis chapter 10 (Aamo 2013) on the topside channels of a rig log\n"
+      "(C2 and FT1, or FT3 - FT2) and writes the log with estimate columns added:\n"
+      "BHP_est_barg, PT1_est_barg..PT10_est_barg, FT4_est_lpm (inlet flow = -(A_d-A_d2) v_d),\n"
+      "piston_position_est_m (zero-mean heave), FT1_innovation_lpm.\n"
+      "  mpdrig observe run.csv --disturbance-hz 0.2 --out est.csv");
+  AddObserverOptions(command, args.get());
+  command->add_option("log", args->log_path, "input rig log ('-' for stdin)")->required();
+  command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
+  command->callback([args, exit_code]() { *exit_code = RunObserve(*args); });
+}
+
+}  // namespace mpdrig::cli
