@@ -11,6 +11,9 @@ packages=(
   libcli11-dev           # command line
   cyclonedds-dev cyclonedds-tools  # DDS service: C API, headers and idlc (the IDL compiler)
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
+  libfftw3-dev pkg-config  # spectra for `mpdrig compare` (bands, lag, transfer functions)
+  # headless browser for the test that renders the comparison report (tests/service/report_test)
+  chromium
 )
 
 missing=()

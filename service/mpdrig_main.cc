@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   mpdrig::cli::AddFreqrespCommand(&app, &exit_code);
   mpdrig::cli::AddParamsCommand(&app, &exit_code);
   mpdrig::cli::AddServeCommand(&app, &exit_code);
+  mpdrig::cli::AddCompareCommand(&app, &exit_code);
   mpdrig::cli::AddObserveCommand(&app, &exit_code);
   mpdrig::cli::AddGainsCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);

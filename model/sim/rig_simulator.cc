@@ -190,9 +190,10 @@ Result<RigSample> RigSampler::SampleAt(double time_s, const StepInputsFn& step_i
   return Interpolate(previous_, current_, time_s);
 }
 
-Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& options,
-                           const InputSignals& inputs, const std::vector<double>& output_times,
-                           const std::function<void(double)>& progress) {
+Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions& options,
+                                const InputSignals& inputs, const std::vector<double>& output_times,
+                                const std::function<void(const RigSample&)>& sink,
+                                const std::function<void(double)>& progress) {
   if (output_times.empty()) return Status::Error("no output times");
   for (std::size_t i = 1; i < output_times.size(); ++i) {
     if (!(output_times[i] > output_times[i - 1])) {
@@ -226,21 +227,35 @@ Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& opt
     return step;
   };
 
-  RunResult result;
-  result.time_step_s = sampler.simulator().time_step_s();
-  result.samples.reserve(output_times.size());
-  double next_progress = 0.1;
+  double next_progress = 0.05;
   for (double t : output_times) {
     auto sample = sampler.SampleAt(t, step_inputs);
     if (!sample.ok()) return sample.status();
-    result.samples.push_back(std::move(sample).value());
+    sink(*sample);
     if (progress && t_end > t0 && (t - t0) / (t_end - t0) >= next_progress) {
       progress((t - t0) / (t_end - t0));
-      next_progress += 0.1;
+      next_progress += 0.05;
     }
   }
-  result.steps = sampler.steps();
-  result.first_range_event = sampler.simulator().first_range_event();
+  RunSummary summary;
+  summary.steps = sampler.steps();
+  summary.time_step_s = sampler.simulator().time_step_s();
+  summary.first_range_event = sampler.simulator().first_range_event();
+  return summary;
+}
+
+Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& options,
+                           const InputSignals& inputs, const std::vector<double>& output_times,
+                           const std::function<void(double)>& progress) {
+  RunResult result;
+  result.samples.reserve(output_times.size());
+  auto summary = SimulateEach(
+      params, options, inputs, output_times,
+      [&result](const RigSample& sample) { result.samples.push_back(sample); }, progress);
+  if (!summary.ok()) return summary.status();
+  result.steps = summary->steps;
+  result.time_step_s = summary->time_step_s;
+  result.first_range_event = summary->first_range_event;
   return result;
 }
 

@@ -157,8 +157,22 @@ struct RunResult {
   double time_step_s = 0.0;
 };
 
-// Runs the rig over [output_times.front(), output_times.back()] and returns every channel at the
-// output times (strictly increasing). `progress`, if given, is called with the fraction done.
+// What a run did besides its samples.
+struct RunSummary {
+  long steps = 0;
+  double time_step_s = 0.0;
+  std::optional<RangeEvent> first_range_event;
+};
+
+// Runs the rig over [output_times.front(), output_times.back()] and hands every channel at each
+// output time (strictly increasing) to `sink` as it goes, so a long run need not be held in
+// memory. `progress`, if given, is called with the fraction done, every 5%.
+Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions& options,
+                                const InputSignals& inputs, const std::vector<double>& output_times,
+                                const std::function<void(const RigSample&)>& sink,
+                                const std::function<void(double)>& progress = {});
+
+// The same, collecting every sample.
 Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& options,
                            const InputSignals& inputs, const std::vector<double>& output_times,
                            const std::function<void(double)>& progress = {});

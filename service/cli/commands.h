@@ -11,6 +11,7 @@ void AddFreqrespCommand(CLI::App* app, int* exit_code);
 void AddParamsCommand(CLI::App* app, int* exit_code);
 void AddDemoCommand(CLI::App* app, int* exit_code);
 void AddServeCommand(CLI::App* app, int* exit_code);
+void AddCompareCommand(CLI::App* app, int* exit_code);
 void AddObserveCommand(CLI::App* app, int* exit_code);
 void AddGainsCommand(CLI::App* app, int* exit_code);
 

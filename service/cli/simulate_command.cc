@@ -3,11 +3,10 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <sstream>
 
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
-#include "model/signal/smoothing.h"
+#include "model/sim/log_inputs.h"
 #include "model/sim/profile.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
@@ -30,63 +29,6 @@ struct SimulateArgs {
   std::vector<double> pressure_at_m;
   std::string out_path;
 };
-
-// A log column that must be finite on every row, converted to a time function.
-Result<std::vector<double>> RequireFinite(const riglog::RigLog& log, std::string_view channel,
-                                          const std::string& path) {
-  const std::vector<double>* values = log.Find(channel);
-  if (values == nullptr) {
-    return Status::Error(path + ": required input column '" + std::string(channel) +
-                         "_<unit>' is missing");
-  }
-  for (std::size_t row = 0; row < values->size(); ++row) {
-    if (!std::isfinite((*values)[row])) {
-      std::ostringstream out;
-      out << path << ": input " << channel << " is not measured (empty or nan) at data row "
-          << row + 1 << " (time_s = " << log.time_s[row] << "); the model needs every input sample";
-      return Status::Error(out.str());
-    }
-  }
-  return *values;
-}
-
-Result<InputSignals> SignalsFromLog(const riglog::RigLog& log, const std::string& path,
-                                    double smoothing_s) {
-  if (log.num_rows() < 2) return Status::Error(path + ": needs at least 2 samples");
-  auto piston = RequireFinite(log, "piston_position", path);
-  if (!piston.ok()) return piston.status();
-  auto choke = RequireFinite(log, "choke_position", path);
-  if (!choke.ok()) return choke.status();
-  const std::size_t n = log.num_rows();
-  // Optional inputs: absent means the documented default; present means measured everywhere.
-  std::vector<double> pump(n, 0.0);
-  std::vector<double> outlet(n, log.atmospheric_pressure_pa);
-  if (log.Find("FT2") != nullptr) {
-    auto values = RequireFinite(log, "FT2", path);
-    if (!values.ok()) return values.status();
-    pump = *values;
-  }
-  if (log.Find("C1") != nullptr) {
-    auto values = RequireFinite(log, "C1", path);
-    if (!values.ok()) return values.status();
-    outlet = *values;
-  }
-  auto position = std::make_shared<PiecewiseLinear>(
-      log.time_s, SmoothLocalQuadratic(log.time_s, *piston, smoothing_s));
-  auto choke_f = std::make_shared<PiecewiseLinear>(log.time_s, *choke);
-  auto pump_f = std::make_shared<PiecewiseLinear>(log.time_s, pump);
-  auto outlet_f = std::make_shared<PiecewiseLinear>(log.time_s, outlet);
-  InputSignals signals;
-  signals.piston_position_m = [position](double t) { return (*position)(t); };
-  signals.rig = [choke_f, pump_f, outlet_f](double t) {
-    RigInputs in;
-    in.choke_opening_frac = (*choke_f)(t);
-    in.pump_flow_m3ps = (*pump_f)(t);
-    in.outlet_pressure_pa = (*outlet_f)(t);
-    return in;
-  };
-  return signals;
-}
 
 int RunSimulate(const SimulateArgs& args) {
   const std::string name = "simulate";

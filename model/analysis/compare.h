@@ -1,0 +1,234 @@
+// Comparison of the model with a measured rig log (issue 3): replay the log's inputs through the
+// model, then measure how and where the model departs from every measured channel.
+//
+// Three steps, each reusable on its own (issue 4 fits and screens effects by calling the second
+// and third step many times on one loaded log):
+//   LoadMeasuredLog   streams the file; keeps time, the inputs and the compared channels only.
+//   ReplayModel       runs the model on the log's inputs; returns the compared channels only.
+//   CompareTraces     the metrics below, from measured and model traces on one time base.
+// CompareLog chains the three.
+//
+// Metrics per channel y (measured) and yhat (model), over the samples where y is measured:
+//   NRMSE = ||y - yhat|| / ||y - mean(y)||, fit = 100 (1 - NRMSE) %  (System Identification);
+//   rms = sqrt(mean((yhat - y)^2)), bias = mean(yhat - y)  (positive: the model reads high);
+//   lag_s: the model's lag behind the measurement: the peak within +-max lag of the cross-
+//     correlation of the Hann-windowed series, divided by the window's own correlation,
+//     r(k) ~ sum_n w[n] y[n] w[n + k] yhat[n + k] / sum_n w[n] w[n + k]  (mean removed),
+//     refined by a parabola through the peak and its neighbours. Positive: the model is late
+//     (yhat(t) ~ y(t - lag)); negative: the model leads.
+//   bands: around the piston's dominant frequencies f0, 2 f0, 3 f0, ... and any further spectral
+//     peak of the piston: Hann-windowed spectra Y, Yhat summed over the band (+-3 bins, the Hann
+//     main lobe plus one bin):
+//       magnitude_ratio = sqrt(sum |Yhat|^2 / sum |Y|^2)            (model / measurement)
+//       phase_diff_deg  = arg(sum Yhat conj(Y))                     (model - measurement;
+//                                                                    negative: model lags)
+//       band_nrmse      = sqrt(sum |Yhat - Y|^2 / sum |Y|^2)        (the error in that band)
+//       amplitudes      = 2 sqrt(sum |Y|^2 / (M sum w^2)), M the DFT size (a sinusoid's
+//                         amplitude, by Parseval)
+//   residual e = y - yhat as MATLAB's `resid`: normalised autocorrelation r_ee(k), k = 1..M, and
+//     cross-correlation with each input u, r_eu(k) = sum_n e[n] u[n - k] / (N sigma_e sigma_u),
+//     k = -M..M (k > 0: the input leads the residual), with the 99% band +-2.58/sqrt(N). White:
+//     every r_ee(k) inside the band; independent of u: every r_eu(k) inside it.
+// Spectral quantities (lag, bands, transfer functions) treat the log as uniformly sampled at its
+// mean interval; gaps (unmeasured samples) are filled by linear interpolation for them only.
+//
+// Units: SI with absolute pressure (differences in Pa, m^3/s). The edges (JSON, HTML) convert to
+// each channel's unit in the log.
+#pragma once
+
+#include <complex>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "model/common/status.h"
+#include "model/params/rig_params.h"
+#include "model/riglog/channels.h"
+#include "model/sim/log_inputs.h"
+#include "model/sim/rig_simulator.h"
+
+namespace mpdrig {
+
+// The measured channels a comparison looks at (not the inputs): P1 P2 PT1..PT10 C2 FT1 FT3 FT4.
+std::vector<Channel> ComparedChannels();
+// x [m] of PTk along the lab's pipe (0, 100, ..., 900, rig-log-format.md); nullopt otherwise.
+std::optional<double> PipePositionM(Channel channel);
+
+// "stage" names the part of the work ("read", "simulate", "analyse"); fraction in [0, 1].
+using CompareProgress = std::function<void(std::string_view stage, double fraction)>;
+
+struct MeasuredChannel {
+  Channel channel = Channel::kP1;
+  riglog::Unit unit = riglog::Unit::kBarg;  // the log's unit, for the edges
+  std::vector<double> values_si;            // NaN where not measured
+};
+
+// What a comparison needs from a log. Memory: 8 bytes per sample for time, each input and each
+// compared channel present (nothing else of the file is kept).
+struct MeasuredLog {
+  std::string path;
+  riglog::Metadata metadata;
+  double atmospheric_pressure_pa = units::kStandardAtmospherePa;
+  LogInputColumns inputs;  // time_s lives here
+  // Present (at least one sample measured), in the order of ComparedChannels().
+  std::vector<MeasuredChannel> channels;
+  const std::vector<double>& time_s() const { return inputs.time_s; }
+};
+
+// Streams `path` (RigLogReader): errors are `path:line:column: message`. Refuses a log without
+// piston_position or choke_position (or with an unmeasured input sample), fewer than 4 samples,
+// or no compared channel.
+Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress = {});
+// The same from a log already in memory (tests, tools that build logs).
+Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& log, const std::string& path);
+
+struct ReplayOptions {
+  // Window of the local quadratic that smooths the measured piston position (as `simulate`).
+  double piston_smoothing_s = 0.05;
+};
+
+// The model's values of the compared channels at the log's times, in the order of
+// log.channels. The same numbers Simulate() gives for the log's inputs (the test checks this),
+// but only the compared channels are kept: 8 bytes per sample and channel.
+struct ModelTraces {
+  std::vector<std::vector<double>> values_si;
+  std::optional<RangeEvent> first_range_event;
+  long steps = 0;
+  double time_step_s = 0.0;
+};
+
+// The choke input is forced to ChokeInput::kMeasured (design.md: a log's choke_position is the
+// measured opening).
+Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
+                                const SimulationOptions& sim_options,
+                                const ReplayOptions& replay = {},
+                                const CompareProgress& progress = {});
+
+struct CompareOptions {
+  int residual_lags = 25;   // M, as MATLAB resid's default
+  int max_harmonics = 3;    // f0, 2 f0, 3 f0
+  int max_extra_peaks = 3;  // further piston peaks above extra_peak_fraction of the largest
+  double extra_peak_fraction = 0.01;  // of the dominant peak's power
+  int band_half_width_bins = 3;
+  // Lag search window; 0: half the dominant period (the cross-correlation of a periodic signal
+  // is periodic, so only that is unambiguous), at most 10 s, without dominant frequency 10 s.
+  double max_lag_s = 0.0;
+  int trace_columns = 1200;   // min/max envelope columns of the traces for plots
+  double zoom_periods = 5.0;  // close-up window in dominant periods (10 s without one)
+  int max_zoom_samples = 3000;
+  int transfer_points = 300;  // at most this many points of the empirical transfer functions
+  double transfer_min_power_fraction = 1.0e-4;  // of the piston's largest bin power
+  double piston_smoothing_s = 0.05;  // for the piston velocity used by the residual analysis
+};
+
+struct BandMetrics {
+  double freq_hz = 0.0;  // centre (piston peak or harmonic)
+  double low_hz = 0.0, high_hz = 0.0;
+  int harmonic = 0;                 // k of k f0; 0 for a further peak
+  double measured_amplitude = 0.0;  // SI
+  double model_amplitude = 0.0;
+  double magnitude_ratio = 0.0;  // model / measured
+  double phase_diff_deg = 0.0;   // model - measured, in (-180, 180]
+  double band_nrmse = 0.0;
+  double error_amplitude = 0.0;  // SI: amplitude of yhat - y in the band (band_nrmse * measured)
+};
+
+struct Correlation {
+  std::string input;            // "piston_velocity", "piston_position", "choke_position"
+  bool constant_input = false;  // zero variance: no correlation defined, nothing to explain
+  std::vector<double> r;        // k = -M..M (index k + M)
+  double max_abs = 0.0;
+  bool independent = true;  // every |r| within the confidence band
+};
+
+struct ResidualAnalysis {
+  int lags = 0;                          // M
+  double confidence = 0.0;               // 2.58 / sqrt(N), 99%
+  std::vector<double> autocorrelation;   // k = 0..M, r_ee(0) = 1
+  double max_abs_autocorrelation = 0.0;  // over k = 1..M
+  bool white = true;
+  std::vector<Correlation> cross;
+  bool independent_of_inputs = true;
+};
+
+// Per-pixel-column min/max of the traces, for plots of long logs (design: readable at 10 min of
+// 100 Hz and at an hour of 1 kHz alike). Column c covers [t0 + c w, t0 + (c + 1) w).
+struct TraceEnvelope {
+  double t0_s = 0.0, t1_s = 0.0;
+  std::vector<double> measured_min, measured_max, model_min, model_max, residual_min,
+      residual_max;  // NaN where a column has no sample
+};
+
+// The raw samples of a short window (a few dominant periods, at most max_zoom_samples) centred on
+// the largest |residual|, for a close look beside the envelope.
+struct TraceWindow {
+  std::vector<double> time_s, measured, model;  // SI; measured NaN where not measured
+};
+
+struct ChannelMetrics {
+  Channel channel = Channel::kP1;
+  riglog::Unit unit = riglog::Unit::kBarg;
+  long samples = 0;          // measured samples used
+  double nrmse = 0.0;        // NaN if the measurement is constant
+  double fit_percent = 0.0;  // 100 (1 - nrmse)
+  double rms_si = 0.0;
+  double bias_si = 0.0;
+  double measured_mean_si = 0.0;
+  double measured_std_si = 0.0;
+  double lag_s = 0.0;
+  double lag_correlation = 0.0;  // normalised r at the peak (1: same shape)
+  std::vector<BandMetrics> bands;
+  ResidualAnalysis residual;
+  TraceEnvelope envelope;
+  TraceWindow zoom;
+};
+
+struct TransferPoint {
+  double freq_hz = 0.0;
+  std::complex<double> measured;  // SI per m of piston position
+  std::complex<double> model;
+};
+
+struct TransferFunction {
+  Channel output = Channel::kPT1;  // from piston_position
+  std::vector<TransferPoint> points;
+};
+
+// One point of the error profile along the pipe (PT1..PT10 present in the log).
+struct ProfilePoint {
+  Channel channel = Channel::kPT1;
+  double x_m = 0.0;
+  double nrmse = 0.0, fit_percent = 0.0, rms_si = 0.0, bias_si = 0.0, lag_s = 0.0;
+};
+
+struct Comparison {
+  std::string path;
+  long samples = 0;
+  double duration_s = 0.0;
+  double sample_interval_s = 0.0;         // mean
+  bool uniform_sampling = true;           // every interval within 1% of the mean
+  double error = 0.0;                     // mean NRMSE over channels with a defined NRMSE
+  std::vector<double> dominant_freqs_hz;  // the band centres
+  double max_lag_s = 0.0;                 // the lag search window used
+  std::vector<ChannelMetrics> channels;   // order of the log's compared channels
+  std::vector<ProfilePoint> profile;      // x increasing
+  std::vector<TransferFunction> transfer_functions;  // piston -> PT1 and -> C2 when present
+  std::optional<RangeEvent> first_range_event;
+
+  const ChannelMetrics* Find(Channel channel) const;
+};
+
+// Metrics of `model` against `log` (model.values_si in the order of log.channels).
+Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& model,
+                                 const CompareOptions& options = {},
+                                 const CompareProgress& progress = {});
+
+// LoadMeasuredLog + ReplayModel + CompareTraces.
+Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
+                              const SimulationOptions& sim_options,
+                              const CompareOptions& options = {},
+                              const CompareProgress& progress = {});
+
+}  // namespace mpdrig
