@@ -2,6 +2,7 @@
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <sstream>
 
@@ -26,6 +27,7 @@ struct ServeArgs {
   double choke_deg = 31.0;
   double pump_lpm = 0.0;
   double outlet_barg = 0.0;
+  double safe_choke_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
 int RunServe(const ServeArgs& args) {
@@ -48,6 +50,7 @@ int RunServe(const ServeArgs& args) {
                                            : service::ClockMode::kRealtime;
   serve.domain = static_cast<dds_domainid_t>(args.domain);
   serve.duration_s = args.duration_s;
+  serve.safe_choke_deg = args.safe_choke_deg;
   if (!args.dds_config.empty()) {
     std::ifstream file(args.dds_config);
     if (file) {
@@ -119,6 +122,11 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--outlet-barg", args->outlet_barg, "initial outlet pressure [barg]")
       ->capture_default_str();
+  command
+      ->add_option("--safe-choke-deg", args->safe_choke_deg,
+                   "choke opening when a rig's last choke controller goes [deg] (default: keep "
+                   "the last command); the piston always holds")
+      ->check(CLI::Range(0.0, 90.0));
   command->callback([args, exit_code]() { *exit_code = RunServe(*args); });
 }
 

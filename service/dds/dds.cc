@@ -27,18 +27,18 @@ Qos SensorQos(bool keep_all) {
   return qos;
 }
 
-Qos CommandQos(int ownership_strength, dds_duration_t liveliness_lease) {
+Qos CommandQos(int ownership_strength) {
   Qos qos;
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
   dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
-  if (ownership_strength >= 0) {
-    dds_qset_ownership(qos.get(), DDS_OWNERSHIP_EXCLUSIVE);
-    dds_qset_ownership_strength(qos.get(), ownership_strength);
-  }
-  if (liveliness_lease != DDS_INFINITY) {
-    dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, liveliness_lease);
-  }
+  dds_qset_ownership(qos.get(), DDS_OWNERSHIP_EXCLUSIVE);
+  dds_qset_ownership_strength(qos.get(), ownership_strength);
+  dds_qset_liveliness(qos.get(), DDS_LIVELINESS_AUTOMATIC, kCommandLivelinessLease);
+  // A controller that leaves unregisters its instances instead of disposing them: the rig's
+  // command stays in force while another controller is alive, and when none is, the instance
+  // becomes "no writers" (the service's cue for the safe state), not "disposed".
+  dds_qset_writer_data_lifecycle(qos.get(), false);
   return qos;
 }
 

@@ -70,10 +70,15 @@ class Qos {
 //              a late joiner wants the present, not history), or keep all in lockstep, where the
 //              client sets the pace and must see every step.
 //   commands - reliable, keep last 1, transient-local: a late-joining rig (or a restarted one)
-//              gets the current command; exclusive ownership when `ownership_strength` >= 0.
+//              gets the current command. Exclusive ownership: of several controllers the
+//              strongest alive writer wins, the next takes over when it goes. Automatic liveliness
+//              with a 1 s lease: a controller that dies is noticed within a second (readers and
+//              writers use the same QoS, so every client must offer a lease of at most 1 s).
+//              Writers unregister (not dispose) their instances when they go.
 //   status   - reliable, keep last 1, transient-local: a late joiner sees the current status.
 Qos SensorQos(bool keep_all = false);
-Qos CommandQos(int ownership_strength = -1, dds_duration_t liveliness_lease = DDS_INFINITY);
+inline constexpr dds_duration_t kCommandLivelinessLease = DDS_SECS(1);
+Qos CommandQos(int ownership_strength = 0);
 Qos StatusQos();
 
 // A domain with an explicit configuration (created before any participant on that id), and a
@@ -136,8 +141,11 @@ class Reader {
   }
 
   // Takes every available sample and hands each valid one to `visit` while it is on loan (its
-  // strings belong to DDS and are gone after the call). Returns how many were visited.
-  Result<int> TakeEach(const std::function<void(const T&, const dds_sample_info_t&)>& visit) const {
+  // strings belong to DDS and are gone after the call). When an instance has lost all its
+  // writers (deleted, or their liveliness lease ran out), `on_no_writers` gets the sample, whose
+  // key fields identify the instance. Returns how many valid samples were visited.
+  Result<int> TakeEach(const std::function<void(const T&, const dds_sample_info_t&)>& visit,
+                       const std::function<void(const T&)>& on_no_writers = {}) const {
     constexpr int kBatch = 16;
     int visited = 0;
     for (;;) {
@@ -149,11 +157,14 @@ class Reader {
         if (infos[i].valid_data) {
           visit(*static_cast<const T*>(samples[i]), infos[i]);
           ++visited;
+        } else if (on_no_writers && infos[i].instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS) {
+          on_no_writers(*static_cast<const T*>(samples[i]));
         }
       }
-      if (n > 0)
+      if (n > 0) {
         MPDRIG_RETURN_IF_ERROR(
             Check(dds_return_loan(entity_.handle(), samples, n), "dds_return_loan"));
+      }
       if (n < kBatch) return visited;
     }
   }

@@ -67,6 +67,12 @@ Status RigHost::Refuse(const std::string& reason) {
   return Status::Error(reason);
 }
 
+void RigHost::NoteEvent(const std::string& what) {
+  std::ostringstream out;
+  out << "t = " << time_s_ << " s: " << what;
+  counters_.last_event = out.str();
+}
+
 double RigHost::choke_command_deg() const {
   return units::ChokeFracToDeg(inputs_.choke_opening_frac);
 }

@@ -52,6 +52,7 @@ struct RigCounters {
   std::uint64_t samples = 0;
   std::uint64_t rejected_commands = 0;
   std::string last_rejection;
+  std::string last_event;  // e.g. "t = 12.3 s: no choke controller left: choke to 90 deg"
 };
 
 class RigHost {
@@ -74,6 +75,8 @@ class RigHost {
   Status SetPiston(const PistonCommandIn& command);
   // A refusal decided outside the rig (e.g. a command for another rig id): counted the same way.
   Status Refuse(const std::string& reason);
+  // Notes an event the status should carry (e.g. a safe state taken), with the rig time.
+  void NoteEvent(const std::string& what);
   // The first departure from the model's range, if any (the rig keeps running and reports it).
   const std::optional<RangeEvent>& range_event() const {
     return sampler_.simulator().first_range_event();

@@ -58,9 +58,23 @@ struct RigService::Impl {
       }
       (void)set(*rig);  // a refusal is counted and kept by the rig
     };
-    auto taken = choke->TakeEach([&](const mpdrig_ChokeCommand& c, const dds_sample_info_t&) {
-      apply(kChokeCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
-    });
+    // No choke controller left for a rig: the configured safe opening, or keep the last one.
+    auto choke_lost = [this](const mpdrig_ChokeCommand& c) {
+      RigHost* rig = Find(c.rig_id);
+      if (rig == nullptr) return;
+      if (std::isnan(options.safe_choke_deg)) {
+        rig->NoteEvent("no choke controller left: the choke keeps its last command");
+      } else if (rig->SetChokeDeg(options.safe_choke_deg).ok()) {
+        rig->NoteEvent("no choke controller left: safe state, choke to " +
+                       std::to_string(options.safe_choke_deg) + " deg");
+      }
+    };
+    auto taken = choke->TakeEach(
+        [&](const mpdrig_ChokeCommand& c, const dds_sample_info_t&) {
+          apply(kChokeCommandTopic, c.rig_id,
+                [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
+        },
+        choke_lost);
     if (!taken.ok()) return taken.status();
     taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t&) {
       apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
@@ -71,9 +85,19 @@ struct RigService::Impl {
             [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
     });
     if (!taken.ok()) return taken.status();
-    taken = piston->TakeEach([&](const mpdrig_PistonCommand& c, const dds_sample_info_t&) {
-      apply(kPistonCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
-    });
+    // No piston controller left: the heave generator stops where it is.
+    auto piston_lost = [this](const mpdrig_PistonCommand& c) {
+      RigHost* rig = Find(c.rig_id);
+      if (rig == nullptr) return;
+      (void)rig->SetPiston(PistonCommandIn{});  // hold
+      rig->NoteEvent("no piston controller left: safe state, piston holds");
+    };
+    taken = piston->TakeEach(
+        [&](const mpdrig_PistonCommand& c, const dds_sample_info_t&) {
+          apply(kPistonCommandTopic, c.rig_id,
+                [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
+        },
+        piston_lost);
     return taken.ok() ? Status::Ok() : taken.status();
   }
 
@@ -103,14 +127,15 @@ struct RigService::Impl {
     wire.rejected_commands = rig.counters().rejected_commands;
     wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
     wire.last_completed_step_request = last_step_request[index];
-    std::string warning;
-    char* warnings[1];
-    if (rig.range_event()) {
-      warning = rig.range_event()->Describe();
-      warnings[0] = warning.data();
-      wire.warnings._length = wire.warnings._maximum = 1;
-      wire.warnings._buffer = warnings;
-    }
+    // Warnings: leaving the model's range, and the last event (e.g. a safe state taken).
+    std::string range_warning = rig.range_event() ? rig.range_event()->Describe() : "";
+    std::string event = rig.counters().last_event;
+    char* warnings[2];
+    std::uint32_t count = 0;
+    if (!range_warning.empty()) warnings[count++] = range_warning.data();
+    if (!event.empty()) warnings[count++] = event.data();
+    wire.warnings._length = wire.warnings._maximum = count;
+    wire.warnings._buffer = count > 0 ? warnings : nullptr;
     wire.warnings._release = false;
     return status->Write(wire);
   }

@@ -10,9 +10,13 @@
 //              (dds_wait_for_acks) before it sends the step request.
 // A command that is NaN, infinite, out of range or for an unknown rig is refused, counted and
 // reported on status; the rig runs on. Nothing a client sends stops the service.
+// Several controllers may command one rig: each actuator's topic uses exclusive ownership, so
+// the strongest live writer wins and the next takes over when it goes; when none is left, the
+// actuator goes to its safe state (ServeOptions) and the status says so.
 #pragma once
 
 #include <atomic>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -31,6 +35,10 @@ struct ServeOptions {
   std::string dds_config = dds::LoopbackConfig();
   double duration_s = 0.0;       // realtime/fast: stop after this much rig time (0: run on)
   double status_period_s = 0.5;  // realtime/fast: status every this much rig time
+  // Safe state when a rig's last controller of an actuator goes (deleted, or its 1 s liveliness
+  // lease ran out): the piston holds where it is; the choke goes to this opening (NaN: it keeps
+  // its last command). Pump and outlet keep theirs.
+  double safe_choke_deg = std::numeric_limits<double>::quiet_NaN();
 };
 
 class RigService {

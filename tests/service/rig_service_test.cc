@@ -24,7 +24,7 @@ dds_domainid_t TestDomain(int test_index) {
 // The service on a thread, and a client participant in the same domain.
 class ServiceTest : public ::testing::Test {
  protected:
-  void Start(int test_index) {
+  void Start(int test_index, double safe_choke_deg = std::nan("")) {
     std::vector<RigHost> rigs;
     for (const char* id : {"rig-1", "rig-2"}) {
       auto rig = RigHost::Create(id, RigParams(), SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
@@ -34,6 +34,7 @@ class ServiceTest : public ::testing::Test {
     ServeOptions options;
     options.clock = ClockMode::kLockstep;
     options.domain = TestDomain(test_index);
+    options.safe_choke_deg = safe_choke_deg;
     auto service = RigService::Create(std::move(rigs), options);
     ASSERT_TRUE(service.ok()) << service.status().message();
     service_ = std::move(service).value();
@@ -93,6 +94,10 @@ class ServiceTest : public ::testing::Test {
         if (std::string(s.rig_id) == rig_id && s.last_completed_step_request == id) {
           done = true;
           result = {s.rejected_commands, s.last_rejection};
+          last_warnings_.clear();
+          for (std::uint32_t i = 0; i < s.warnings._length; ++i) {
+            last_warnings_ += std::string(s.warnings._buffer[i]) + "\n";
+          }
         }
       });
     }
@@ -116,6 +121,7 @@ class ServiceTest : public ::testing::Test {
   std::atomic<bool> stop_{false};
   Status run_status_ = Status::Ok();
   std::uint64_t request_id_ = 0;
+  std::string last_warnings_;  // of the last completed step's status
   dds::Entity participant_;
   dds::Entity sensors_topic_, status_topic_, choke_topic_, piston_topic_, step_topic_;
   std::optional<dds::Reader<mpdrig_RigSensors>> sensors_;
@@ -195,6 +201,46 @@ TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
   ASSERT_EQ(samples.size(), 20u) << "the rig kept running";
   EXPECT_NEAR(samples.back()[Channel::kChokePosition], 31.0 / 90.0, 1e-9)
       << "last valid command in force";
+}
+
+TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeState) {
+  Start(3, /*safe_choke_deg=*/90.0);
+  const dds_entity_t p = participant_.handle();
+  auto weak =
+      dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic_.handle(), dds::CommandQos(10));
+  auto strong =
+      dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic_.handle(), dds::CommandQos(20));
+  ASSERT_TRUE(weak.ok() && strong.ok());
+  choke_.reset();  // the fixture's strength-0 writer leaves: only the two controllers remain
+  char rig_id[] = "rig-1";
+  auto opening_after_steps = [&]() {
+    Step("rig-1", 300);  // 3 s: the actuator (rate 90 deg/s, lag 0.1 s) settles
+    auto samples = TakeSensors()["rig-1"];
+    EXPECT_FALSE(samples.empty());
+    return samples.empty() ? -1.0 : 90.0 * samples.back()[Channel::kChokePosition];
+  };
+
+  mpdrig_ChokeCommand from_weak{rig_id, 40.0};
+  mpdrig_ChokeCommand from_strong{rig_id, 50.0};
+  ASSERT_TRUE(weak->Write(from_weak).ok());
+  ASSERT_TRUE(strong->Write(from_strong).ok());
+  Acked(weak->handle());
+  Acked(strong->handle());
+  EXPECT_NEAR(opening_after_steps(), 50.0, 0.01) << "the stronger controller wins";
+
+  // The strong controller goes; the weak one's next command is in force.
+  dds::Writer<mpdrig_ChokeCommand> gone = std::move(strong).value();
+  { auto leaving = std::move(gone); }
+  from_weak.opening_deg = 45.0;
+  ASSERT_TRUE(weak->Write(from_weak).ok());
+  Acked(weak->handle());
+  EXPECT_NEAR(opening_after_steps(), 45.0, 0.01) << "the next controller takes over";
+
+  // The last controller goes: the safe state (choke fully open), and the status says so.
+  { auto leaving = std::move(weak).value(); }
+  dds_sleepfor(DDS_MSECS(200));  // the writer's disappearance reaches the service's reader
+  EXPECT_NEAR(opening_after_steps(), 90.0, 0.01) << "safe state: choke open";
+  EXPECT_NE(last_warnings_.find("no choke controller left"), std::string::npos) << last_warnings_;
 }
 
 }  // namespace
