@@ -157,5 +157,37 @@ TEST(ModelPurity, ModelHasNoDdsThreadsWallClockOrSockets) {
       << report;
 }
 
+// design.md: clients/ only speak the DDS topics. They may use the transport layer (service/dds)
+// and the generated types, never the model or the service's rigs.
+TEST(ClientPurity, ClientsUseOnlyTheWireAndTheTransport) {
+  const fs::path clients = fs::path(MPDRIG_SOURCE_DIR) / "clients";
+  ASSERT_TRUE(fs::is_directory(clients)) << clients;
+  const std::regex model_include(R"(^\s*#\s*include\s*"(model|service/(rig|cli|report))/)");
+  const std::regex model_link(R"(\bmpdrig_(model|rig|report|config_proto)\w*)");
+  std::string report;
+  int scanned = 0;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(clients)) {
+    if (!entry.is_regular_file()) continue;
+    const fs::path& path = entry.path();
+    const bool cmake = IsCMake(path);
+    if (!cmake && !IsSource(path)) continue;
+    std::ifstream file(path, std::ios::binary);
+    std::string line;
+    int number = 0;
+    while (std::getline(file, line)) {
+      ++number;
+      const std::string code = line.substr(0, line.find(cmake ? "#" : "//"));
+      if (std::regex_search(cmake ? code : line, cmake ? model_link : model_include)) {
+        report += "  " + fs::relative(path, MPDRIG_SOURCE_DIR).string() + ":" +
+                  std::to_string(number) + ": " + line + "\n";
+      }
+    }
+    ++scanned;
+  }
+  EXPECT_GT(scanned, 1);
+  EXPECT_TRUE(report.empty()) << "clients/ must not use the model or the service's internals:\n"
+                              << report;
+}
+
 }  // namespace
 }  // namespace mpdrig

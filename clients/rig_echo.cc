@@ -1,0 +1,119 @@
+// rig_echo: prints or records what a rig publishes, as a rig log (rig-log-format.md), so any DDS
+// recording of a rig (virtual or physical) is a file the comparison tools read. A client: it
+// speaks only the DDS topics and never links model/.
+//
+//   rig_echo --rig rig-1 --out run.csv            # until Ctrl-C
+//   rig_echo --rig rig-1 --samples 6000 --out -   # 6000 samples to stdout
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include <CLI/CLI.hpp>
+
+#include "mpdrig.h"
+#include "service/dds/dds.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+
+// Columns in the wire's own lab units, so values are written as they arrive.
+constexpr const char* kHeader =
+    "time_s,piston_position_m,choke_position_deg,FT2_lpm,C1_barg,P1_barg,P2_barg,PT1_barg,"
+    "PT2_barg,PT3_barg,PT4_barg,PT5_barg,PT6_barg,PT7_barg,PT8_barg,PT9_barg,PT10_barg,C2_barg,"
+    "FT1_lpm,FT3_lpm,FT4_lpm";
+
+void WriteRow(std::ostream& out, const mpdrig_RigSensors& s) {
+  char line[1024];
+  int n = std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g",
+                        s.sim_time_s, s.piston_position_m, s.choke_position_deg, s.FT2_lpm,
+                        s.C1_barg, s.P1_barg, s.P2_barg);
+  for (double pt : s.PT_barg) n += std::snprintf(line + n, sizeof line - n, ",%.17g", pt);
+  std::snprintf(line + n, sizeof line - n, ",%.17g,%.17g,%.17g,%.17g\n", s.C2_barg, s.FT1_lpm,
+                s.FT3_lpm, s.FT4_lpm);
+  out << line;
+}
+
+int Fail(const mpdrig::Status& status) {
+  std::fprintf(stderr, "rig_echo: %s\n", status.message().c_str());
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("rig_echo - record what a rig publishes on DDS as a rig log (rig-log-format.md)");
+  std::string rig_id = "rig-1";
+  std::string out_path = "-";
+  int domain = 0;
+  long max_samples = 0;
+  double timeout_s = 0.0;
+  std::string dds_config;
+  app.add_option("--rig", rig_id, "rig id to record")->capture_default_str();
+  app.add_option("--out", out_path, "rig log to write ('-' for stdout)")->capture_default_str();
+  app.add_option("--domain", domain, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  app.add_option("--samples", max_samples, "stop after this many samples (0: until Ctrl-C)");
+  app.add_option("--timeout", timeout_s,
+                 "give up after this many seconds without a sample (0: wait)");
+  app.add_option("--dds-config", dds_config, "Cyclone DDS XML (default: loopback only)");
+  CLI11_PARSE(app, argc, argv);
+
+  auto created = mpdrig::dds::Domain::Create(
+      domain, dds_config.empty() ? mpdrig::dds::LoopbackConfig() : dds_config);
+  if (!created.ok()) return Fail(created.status());
+  auto participant = mpdrig::dds::CreateParticipant(domain);
+  if (!participant.ok()) return Fail(participant.status());
+  auto topic =
+      mpdrig::dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc, "mpdrig_sensors");
+  if (!topic.ok()) return Fail(topic.status());
+  // Keep all: a recording should not drop samples the rig sent.
+  auto reader = mpdrig::dds::Reader<mpdrig_RigSensors>::Create(
+      participant->handle(), topic->handle(), mpdrig::dds::SensorQos(true));
+  if (!reader.ok()) return Fail(reader.status());
+
+  std::ofstream file;
+  std::ostream* out = &std::cout;
+  if (out_path != "-") {
+    file.open(out_path);
+    if (!file) return Fail(mpdrig::Status::Error(out_path + ": cannot write"));
+    out = &file;
+  }
+  *out << "# rig-log: 1\n# source: rig_echo, rig " << rig_id << ", DDS domain " << domain
+       << "\n# atmospheric_pressure_pa: 101325\n"
+       << kHeader << "\n";
+
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  long written = 0;
+  double previous_time = -1e300;
+  double waited_s = 0.0;
+  while (!g_stop && (max_samples == 0 || written < max_samples)) {
+    auto ready = reader->Wait(DDS_MSECS(100));
+    if (!ready.ok()) return Fail(ready.status());
+    if (!*ready) {
+      waited_s += 0.1;
+      if (timeout_s > 0.0 && waited_s >= timeout_s) break;
+      continue;
+    }
+    waited_s = 0.0;
+    auto taken = reader->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
+      // Only this rig, and only increasing times (a rig log's time is strictly increasing).
+      if (rig_id != s.rig_id || !(s.sim_time_s > previous_time)) return;
+      if (max_samples != 0 && written >= max_samples) return;
+      WriteRow(*out, s);
+      previous_time = s.sim_time_s;
+      ++written;
+    });
+    if (!taken.ok()) return Fail(taken.status());
+  }
+  out->flush();
+  if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
+  std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", written, rig_id.c_str());
+  return written > 0 ? 0 : 1;
+}
