@@ -4,12 +4,17 @@
 //
 //   rig_echo --rig rig-1 --out run.csv            # until Ctrl-C
 //   rig_echo --rig rig-1 --samples 6000 --out -   # 6000 samples to stdout
+//   rig_echo --samples 10000 --timing --out /dev/null  # sensor period jitter as received
+#include <algorithm>
 #include <atomic>
+#include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -38,6 +43,29 @@ void WriteRow(std::ostream& out, const mpdrig_RigSensors& s) {
   out << line;
 }
 
+// Inter-arrival statistics of the received samples against the nominal period (the median):
+// what a controller subscribed to the rig sees of its sensor clock.
+void PrintTiming(const char* what, const std::vector<double>& arrival_s) {
+  if (arrival_s.size() < 3) return;
+  std::vector<double> periods;
+  for (std::size_t i = 1; i < arrival_s.size(); ++i)
+    periods.push_back(arrival_s[i] - arrival_s[i - 1]);
+  std::vector<double> sorted = periods;
+  std::sort(sorted.begin(), sorted.end());
+  const double nominal = sorted[sorted.size() / 2];
+  std::vector<double> jitter;
+  for (double p : periods) jitter.push_back(std::fabs(p - nominal));
+  std::sort(jitter.begin(), jitter.end());
+  auto quantile = [&](double q) {
+    return jitter[static_cast<std::size_t>(q * (jitter.size() - 1))];
+  };
+  std::fprintf(stderr,
+               "rig_echo: %s: %zu periods, median %.3f ms; |period - median|: p50 %.3f ms, "
+               "p99 %.3f ms, max %.3f ms\n",
+               what, periods.size(), 1e3 * nominal, 1e3 * quantile(0.5), 1e3 * quantile(0.99),
+               1e3 * jitter.back());
+}
+
 int Fail(const mpdrig::Status& status) {
   std::fprintf(stderr, "rig_echo: %s\n", status.message().c_str());
   return 1;
@@ -53,6 +81,8 @@ int main(int argc, char** argv) {
   long max_samples = 0;
   double timeout_s = 0.0;
   std::string dds_config;
+  bool timing = false;
+  app.add_flag("--timing", timing, "report the sensor period jitter as received (stderr)");
   app.add_option("--rig", rig_id, "rig id to record")->capture_default_str();
   app.add_option("--out", out_path, "rig log to write ('-' for stdout)")->capture_default_str();
   app.add_option("--domain", domain, "DDS domain id")
@@ -91,6 +121,8 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   long written = 0;
+  std::vector<double> arrival_s, source_s;
+  const auto started = std::chrono::steady_clock::now();
   double previous_time = -1e300;
   double waited_s = 0.0;
   while (!g_stop && (max_samples == 0 || written < max_samples)) {
@@ -102,11 +134,16 @@ int main(int argc, char** argv) {
       continue;
     }
     waited_s = 0.0;
-    auto taken = reader->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
+    auto taken = reader->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
       // Only this rig, and only increasing times (a rig log's time is strictly increasing).
       if (rig_id != s.rig_id || !(s.sim_time_s > previous_time)) return;
       if (max_samples != 0 && written >= max_samples) return;
       WriteRow(*out, s);
+      if (timing) {
+        arrival_s.push_back(
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+        source_s.push_back(1e-9 * static_cast<double>(info.source_timestamp));
+      }
       previous_time = s.sim_time_s;
       ++written;
     });
@@ -115,5 +152,9 @@ int main(int argc, char** argv) {
   out->flush();
   if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
   std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", written, rig_id.c_str());
+  if (timing) {
+    PrintTiming("published (source timestamps)", source_s);
+    PrintTiming("received (arrival at this reader)", arrival_s);
+  }
   return written > 0 ? 0 : 1;
 }

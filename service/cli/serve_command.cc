@@ -1,6 +1,8 @@
 // mpdrig serve: the virtual rig as a DDS service (service/rig/rig_service.h).
+#include <chrono>
 #include <csignal>
 #include <cstdio>
+#include <ctime>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -76,8 +78,17 @@ int RunServe(const ServeArgs& args) {
                ids.c_str(), args.domain,
                args.dds_config.empty() ? "loopback only" : "configured network", args.clock.c_str(),
                args.rate_hz);
+  const auto started = std::chrono::steady_clock::now();
+  const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
   if (!run.ok()) return Fail(name, run);
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  const double cpu_s = static_cast<double>(std::clock() - cpu_started) / CLOCKS_PER_SEC;
+  std::fprintf(stderr,
+               "mpdrig serve: %.3f s wall, %.3f s CPU (%.0f%% of one core), %llu deadline misses\n",
+               wall_s, cpu_s, wall_s > 0 ? 100.0 * cpu_s / wall_s : 0.0,
+               static_cast<unsigned long long>((*service)->deadline_misses()));
   for (const service::RigHost& rig : (*service)->rigs()) {
     std::fprintf(
         stderr, "mpdrig serve: %s ran %.3f s of rig time, %llu samples, %llu commands refused\n",

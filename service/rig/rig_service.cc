@@ -213,6 +213,7 @@ RigService::RigService(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RigService::~RigService() = default;
 
 const std::vector<RigHost>& RigService::rigs() const { return impl_->rigs; }
+std::uint64_t RigService::deadline_misses() const { return impl_->deadline_misses; }
 
 Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs,
                                                        const ServeOptions& options) {

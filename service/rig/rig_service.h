@@ -52,6 +52,8 @@ class RigService {
   Status Run(const std::atomic<bool>& stop);
 
   const std::vector<RigHost>& rigs() const;
+  // Ticks (of all rigs together) that started more than one sensor period late (realtime).
+  std::uint64_t deadline_misses() const;
 
  private:
   struct Impl;
