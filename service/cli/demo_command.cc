@@ -76,13 +76,14 @@ int RunDemo(const DemoArgs& args) {
       "  choke pressure C2:        %.3f .. %.3f barg\n"
       "  choke flow FT3:           %.2f .. %.2f L/min\n"
       "  wrote %zu samples of every lab channel (P1, P2, PT1..PT10, C1, C2, FT1..FT4) to %s\n"
-      "next: mpdrig simulate --help | mpdrig freqresp --help | mpdrig params\n",
+      "next: compare it with the model: mpdrig compare %s --json c.json --report c.html\n"
+      "      run the rig as a DDS service: mpdrig serve --help;  everything: mpdrig --help\n",
       args.model.Describe(*params).c_str(), kHeaveAmplitudeM, kHeaveFrequencyHz, kChokeDeg,
       kPumpLpm, kDurationS, units::PaAbsToBarg(bhp_lo, atmosphere),
       units::PaAbsToBarg(bhp_hi, atmosphere), (bhp_hi - bhp_lo) / units::kPaPerBar,
       units::PaAbsToBarg(c2_lo, atmosphere), units::PaAbsToBarg(c2_hi, atmosphere),
       units::M3psToLpm(ft3_lo), units::M3psToLpm(ft3_hi), run->samples.size(),
-      args.out_path.c_str());
+      args.out_path.c_str(), args.out_path.c_str());
   return 0;
 }
 
