@@ -12,6 +12,7 @@
 #include "model/boundary/choke.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
+#include "tests/support/test_domain.h"
 
 namespace mpdrig {
 namespace {
@@ -19,7 +20,9 @@ namespace {
 TEST(RigEcho, RecordsARunningRigAsARigLog) {
   const std::string dir = ::testing::TempDir();
   const std::string log = dir + "rig_echo_" + std::to_string(::getpid()) + ".csv";
-  const std::string domain = std::to_string(150 + ::getpid() % 60);
+  const int claimed = testing::ClaimTestDomain();  // no other test process uses it
+  ASSERT_GT(claimed, 0);
+  const std::string domain = std::to_string(claimed);
   // The recorder starts first and waits (up to 20 s) for 150 samples; the service runs 4 s of
   // real time at 100 Hz with 5 L/min through the choke at 31 deg.
   const std::string command =

@@ -19,6 +19,7 @@
 #include "model/params/rig_config.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/rig_log.h"
+#include "tests/support/test_domain.h"
 
 namespace mpdrig {
 namespace {
@@ -505,8 +506,10 @@ TEST_F(CliTest, GainsWritesTheInjectionGainsAlongThePipe) {
 }
 
 TEST_F(CliTest, ServeFastRunsForItsDurationAndReports) {
-  // DDS stays on loopback by default; a domain id of its own per process.
-  const std::string domain = std::to_string(100 + ::getpid() % 100);
+  // DDS stays on loopback by default; a domain no other test process uses.
+  const int claimed = testing::ClaimTestDomain();
+  ASSERT_GT(claimed, 0);
+  const std::string domain = std::to_string(claimed);
   const RunResult run =
       Run("serve --clock fast --duration 2 --rate-hz 100 --rig a --rig b --domain " + domain);
   ASSERT_EQ(run.exit_code, 0) << run.err;
@@ -518,7 +521,8 @@ TEST_F(CliTest, ServeFastRunsForItsDurationAndReports) {
 TEST_F(CliTest, ServeRefusesBadOptions) {
   EXPECT_NE(Run("serve --clock sundial").exit_code, 0);
   EXPECT_NE(Run("serve --rate-hz 0").exit_code, 0);
-  const RunResult twice = Run("serve --clock fast --duration 1 --rig a --rig a --domain 3");
+  const RunResult twice = Run("serve --clock fast --duration 1 --rig a --rig a --domain " +
+                              std::to_string(testing::ClaimTestDomain()));
   EXPECT_NE(twice.exit_code, 0);
   EXPECT_TRUE(Contains(twice.err, "given twice")) << twice.err;
 }

@@ -12,13 +12,16 @@
 #include <gtest/gtest.h>
 
 #include "mpdrig.h"
+#include "tests/support/test_domain.h"
 
 namespace mpdrig::dds {
 namespace {
 
-// A domain id per test and per process (0..232 are valid): concurrent test processes differ.
-dds_domainid_t TestDomain(int test_index) {
-  return static_cast<dds_domainid_t>(10 + (getpid() % 50) * 4 + test_index);
+// A domain no other test process uses (tests/support/test_domain.h).
+dds_domainid_t TestDomain() {
+  const int id = testing::ClaimTestDomain();
+  EXPECT_GT(id, 0) << "no free DDS domain id for the test";
+  return static_cast<dds_domainid_t>(id);
 }
 
 struct Fixture {
@@ -26,8 +29,8 @@ struct Fixture {
   Entity participant;
 };
 
-Fixture Open(int test_index) {
-  auto domain = Domain::Create(TestDomain(test_index), LoopbackConfig());
+Fixture Open() {
+  auto domain = Domain::Create(TestDomain(), LoopbackConfig());
   EXPECT_TRUE(domain.ok()) << domain.status().message();
   auto participant = CreateParticipant(domain->id());
   EXPECT_TRUE(participant.ok()) << participant.status().message();
@@ -35,7 +38,7 @@ Fixture Open(int test_index) {
 }
 
 TEST(Dds, SensorSampleRoundTripOverLoopback) {
-  Fixture f = Open(0);
+  Fixture f = Open();
   auto topic = CreateTopic(f.participant.handle(), &mpdrig_RigSensors_desc, "mpdrig_sensors");
   ASSERT_TRUE(topic.ok()) << topic.status().message();
   auto reader =
@@ -72,7 +75,7 @@ TEST(Dds, SensorSampleRoundTripOverLoopback) {
 }
 
 TEST(Dds, LateJoinerGetsTheCurrentCommand) {
-  Fixture f = Open(1);
+  Fixture f = Open();
   auto topic =
       CreateTopic(f.participant.handle(), &mpdrig_ChokeCommand_desc, "mpdrig_choke_command");
   ASSERT_TRUE(topic.ok());
@@ -104,10 +107,10 @@ TEST(Dds, LoopbackConfigSelectsOnlyTheLoopbackInterface) {
   // Cyclone's own trace names the interfaces it selected; the machine may have others (eth0).
   const std::string trace = ::testing::TempDir() + "mpdrig_dds_trace_" + std::to_string(getpid());
   {
-    auto domain = Domain::Create(TestDomain(3), LoopbackConfig() +
-                                                    "<Tracing><Verbosity>config</Verbosity>"
-                                                    "<OutputFile>" +
-                                                    trace + "</OutputFile></Tracing>");
+    auto domain = Domain::Create(TestDomain(), LoopbackConfig() +
+                                                   "<Tracing><Verbosity>config</Verbosity>"
+                                                   "<OutputFile>" +
+                                                   trace + "</OutputFile></Tracing>");
     ASSERT_TRUE(domain.ok()) << domain.status().message();
     auto participant = CreateParticipant(domain->id());
     ASSERT_TRUE(participant.ok());
@@ -128,7 +131,7 @@ TEST(Dds, LoopbackConfigSelectsOnlyTheLoopbackInterface) {
 }
 
 TEST(Dds, InvalidTopicNameIsAnErrorWithTheReason) {
-  Fixture f = Open(2);
+  Fixture f = Open();
   auto topic = CreateTopic(f.participant.handle(), &mpdrig_RigSensors_desc, "bad name!");
   ASSERT_FALSE(topic.ok());
   EXPECT_NE(topic.status().message().find("dds_create_topic bad name!"), std::string::npos)

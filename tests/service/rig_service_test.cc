@@ -13,18 +13,22 @@
 
 #include "mpdrig.h"
 #include "service/rig/wire.h"
+#include "tests/support/test_domain.h"
 
 namespace mpdrig::service {
 namespace {
 
-dds_domainid_t TestDomain(int test_index) {
-  return static_cast<dds_domainid_t>(12 + (getpid() % 50) * 4 + test_index);
+// A domain no other test process uses (tests/support/test_domain.h).
+dds_domainid_t TestDomain() {
+  const int id = testing::ClaimTestDomain();
+  EXPECT_GT(id, 0) << "no free DDS domain id for the test";
+  return static_cast<dds_domainid_t>(id);
 }
 
 // The service on a thread, and a client participant in the same domain.
 class ServiceTest : public ::testing::Test {
  protected:
-  void Start(int test_index, double safe_choke_deg = std::nan("")) {
+  void Start(double safe_choke_deg = std::nan("")) {
     std::vector<RigHost> rigs;
     for (const char* id : {"rig-1", "rig-2"}) {
       auto rig = RigHost::Create(id, RigParams(), SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
@@ -33,7 +37,7 @@ class ServiceTest : public ::testing::Test {
     }
     ServeOptions options;
     options.clock = ClockMode::kLockstep;
-    options.domain = TestDomain(test_index);
+    options.domain = TestDomain();
     options.safe_choke_deg = safe_choke_deg;
     auto service = RigService::Create(std::move(rigs), options);
     ASSERT_TRUE(service.ok()) << service.status().message();
@@ -132,7 +136,7 @@ class ServiceTest : public ::testing::Test {
 };
 
 TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
-  Start(0);
+  Start();
   Step("rig-1", 100);
   std::map<std::string, std::vector<std::uint64_t>> counters;
   auto before = TakeSensors(&counters);
@@ -154,7 +158,7 @@ TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
 }
 
 TEST_F(ServiceTest, PistonSineMakesBottomHolePressureOscillateAtItsFrequency) {
-  Start(1);
+  Start();
   mpdrig_PistonCommand sine{};
   sine.rig_id = const_cast<char*>("rig-1");
   sine.mode = mpdrig_PISTON_SINE;
@@ -183,7 +187,7 @@ TEST_F(ServiceTest, PistonSineMakesBottomHolePressureOscillateAtItsFrequency) {
 }
 
 TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
-  Start(2);
+  Start();
   mpdrig_ChokeCommand nan_choke{const_cast<char*>("rig-1"), std::nan("")};
   ASSERT_TRUE(choke_->Write(nan_choke).ok());
   Acked(choke_->handle());
@@ -204,7 +208,7 @@ TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
 }
 
 TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeState) {
-  Start(3, /*safe_choke_deg=*/90.0);
+  Start(/*safe_choke_deg=*/90.0);
   const dds_entity_t p = participant_.handle();
   auto weak =
       dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic_.handle(), dds::CommandQos(10));
