@@ -176,25 +176,30 @@ Status BacksteppingObserver::Step(const TopsideMeasurement& at_end) {
   return Status::Ok();
 }
 
-double BacksteppingObserver::PressureAtPa(double x_m) const {
+void BacksteppingObserver::Locate(double x_m, int* index, double* weight) const {
   const int n = options_.cells;
   const double s = std::clamp(x_m / params_.pipe_length_m, 0.0, 1.0) * n;
-  const int i = std::min(static_cast<int>(s), n - 1);
-  const double w = s - i;
+  *index = std::min(static_cast<int>(s), n - 1);
+  *weight = s - *index;
+}
+
+double BacksteppingObserver::PressureAtPa(double x_m) const {
+  int i;
+  double w;
+  Locate(x_m, &i, &w);
+  const double n = options_.cells;
   const ObserverCoordinates& co = gains_.coordinates;
-  const double pa = co.Pressure(static_cast<double>(i) / n, u_[i], v_[i], p_sp_pa_);
-  const double pb = co.Pressure(static_cast<double>(i + 1) / n, u_[i + 1], v_[i + 1], p_sp_pa_);
-  return (1.0 - w) * pa + w * pb;
+  return (1.0 - w) * co.Pressure(i / n, u_[i], v_[i], p_sp_pa_) +
+         w * co.Pressure((i + 1) / n, u_[i + 1], v_[i + 1], p_sp_pa_);
 }
 
 double BacksteppingObserver::FlowAtM3ps(double x_m) const {
-  const int n = options_.cells;
-  const double s = std::clamp(x_m / params_.pipe_length_m, 0.0, 1.0) * n;
-  const int i = std::min(static_cast<int>(s), n - 1);
-  const double w = s - i;
+  int i;
+  double w;
+  Locate(x_m, &i, &w);
+  const double n = options_.cells;
   const ObserverCoordinates& co = gains_.coordinates;
-  return (1.0 - w) * co.Flow(static_cast<double>(i) / n, u_[i], v_[i]) +
-         w * co.Flow(static_cast<double>(i + 1) / n, u_[i + 1], v_[i + 1]);
+  return (1.0 - w) * co.Flow(i / n, u_[i], v_[i]) + w * co.Flow((i + 1) / n, u_[i + 1], v_[i + 1]);
 }
 
 ObserverEstimate BacksteppingObserver::Estimate() const {

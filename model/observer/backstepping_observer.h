@@ -82,6 +82,8 @@ class BacksteppingObserver {
   double FlowAtM3ps(double x_m) const;
 
  private:
+  // The grid interval holding x and the weight of its upper node.
+  void Locate(double x_m, int* index, double* weight) const;
   BacksteppingObserver(const RigParams& params, const ObserverOptions& options, ObserverGains gains,
                        KernelSolution kernel);
   double MeasuredUp(const TopsideMeasurement& m) const;    // y = u(1)
