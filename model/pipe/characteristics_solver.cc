@@ -124,23 +124,93 @@ MPDRIG_HOT_LOOP void CharacteristicsSolver::StepInteriorQuasiLinear() {
   }
 }
 
+namespace {
+
+// p(0) as a function of u(0) once beta(0) is known: alpha(0) = 2 u - beta(0).
+class InletRelation final : public BoundaryRelation {
+ public:
+  InletRelation(const PipeLaw& law, double beta) : law_(law), beta_(beta) {}
+  double PressurePa(double u) const override {
+    return law_.PressureFromDifference(2.0 * (u - beta_));
+  }
+  double DPressureDVelocity(double u) const override {
+    return -law_.DPressureDVelocityAtPressure(PressurePa(u));
+  }
+
+ private:
+  const PipeLaw& law_;
+  double beta_;
+};
+
+// p(L) as a function of u(L) once alpha(L) is known.
+class OutletRelation final : public BoundaryRelation {
+ public:
+  OutletRelation(const PipeLaw& law, double alpha) : law_(law), alpha_(alpha) {}
+  double PressurePa(double u) const override { return law_.PressureFromAlpha(alpha_, u); }
+  double DPressureDVelocity(double u) const override {
+    return law_.DPressureDVelocityAtPressure(PressurePa(u));
+  }
+
+ private:
+  const PipeLaw& law_;
+  double alpha_;
+};
+
+}  // namespace
+
 Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation* violation) {
   const int n = config_.cells;
   const double h = dt_s_;
   const double gs = config_.gravity_slope_mps2;
+  // Extra momentum sources from the state before the step (pipe_extension.h); none by default.
+  const bool has_sources = EvaluateMomentumSources();
+  // S = a + b u at a boundary node whose new velocity is u.
+  const auto source_at = [&](int i, double u) {
+    return has_sources ? source_explicit_[i] + source_implicit_[i] * u : 0.0;
+  };
 
   if (config_.model == PipeModel::kLinear) {
     StepInteriorLinear();
   } else {
     StepInteriorQuasiLinear();
   }
+  if (has_sources) {
+    // The node update without S gave u_P0 with 2 u_P0 D = alpha_A + beta_B - ..., D = 2 + h lambda
+    // (NodeUpdate). With S = a + b u_P in both characteristic equations:
+    //   u_P = (D u_P0 - 2 h a) / (D + 2 h b),
+    //   alpha_P = alpha_P0 - h lambda (u_P - u_P0)/2 - h (a + b u_P), beta_P likewise,
+    // which keeps alpha_P + beta_P = 2 u_P.
+    for (int i = 1; i < n; ++i) {
+      const double u_old = 0.5 * (alpha_[i] + beta_[i]);
+      const double lambda =
+          config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(u_old);
+      const double d = 2.0 + h * lambda;
+      const double u_p0 = 0.5 * (alpha_next_[i] + beta_next_[i]);
+      const double a = source_explicit_[i];
+      const double b = source_implicit_[i];
+      const double u_p = (d * u_p0 - 2.0 * h * a) / (d + 2.0 * h * b);
+      const double change = 0.5 * h * lambda * (u_p - u_p0) + h * (a + b * u_p);
+      alpha_next_[i] -= change;
+      beta_next_[i] -= change;
+    }
+  }
 
-  // Inlet, x = 0 (6.7.1): the beta characteristic arrives from node 1; u(0) is imposed.
+  // Inlet, x = 0 (6.7.1): the beta characteristic arrives from node 1; u(0) is imposed by the
+  // piston, or by an extension's closure. With a closure the friction at the new point needs
+  // u(0), which needs beta(0): two passes settle it, as at the outlet.
   {
     const Foot fb = BetaFoot(0);
-    const double u0 = inputs.end.inlet_velocity_mps;
-    beta_next_[0] =
-        fb.invariant - 0.5 * h * (config_.Friction(fb.velocity) + config_.Friction(u0)) - h * gs;
+    const double f_b = config_.Friction(fb.velocity);
+    double u0 = inputs.end.inlet_velocity_mps;
+    if (inlet_closure_ != nullptr) u0 = 0.5 * (alpha_[0] + beta_[0]);
+    const InletInputs inlet{inputs.end.inlet_velocity_mps * config_.area_m2, config_.area_m2, h};
+    for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
+      beta_next_[0] =
+          fb.invariant - 0.5 * h * (f_b + config_.Friction(u0)) - h * gs - h * source_at(0, u0);
+      if (inlet_closure_ != nullptr) {
+        u0 = inlet_closure_->SolveInletVelocity(InletRelation(law_, beta_next_[0]), inlet);
+      }
+    }
     alpha_next_[0] = 2.0 * u0 - beta_next_[0];
   }
 
@@ -152,8 +222,11 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
     double u_l = 0.5 * (alpha_[n] + beta_[n]);
     double alpha_l = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
-      alpha_l = fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs;
-      u_l = choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
+      alpha_l = fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs - h * source_at(n, u_l);
+      u_l = outlet_closure_ != nullptr
+                ? outlet_closure_->SolveOutletVelocity(OutletRelation(law_, alpha_l),
+                                                       inputs.end.choke, h, u_l)
+                : choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
     }
     alpha_next_[n] = alpha_l;
     beta_next_[n] = 2.0 * u_l - alpha_l;

@@ -25,6 +25,12 @@ class CharacteristicsSolver final : public PipeSolver {
   double time_step_s() const override { return dt_s_; }
   Status Step(const PipeStepInputs& inputs, RangeViolation* violation) override;
 
+ protected:
+  // Momentum sources are added explicitly along both characteristics; closures replace the
+  // piston's or the choke's relation at the ends (pipe_extension.h).
+  bool supports_momentum_sources() const override { return true; }
+  bool supports_boundary_closures() const override { return true; }
+
  private:
   // Values at the foot of the characteristics that arrive at node i (the velocity is the
   // neighbouring node's, see StepInteriorQuasiLinear).

@@ -18,7 +18,6 @@ namespace {
 struct CompareArgs {
   ModelOptions model;
   std::string log_path;
-  std::vector<std::string> effects;
   std::string json_path;
   std::string report_path;
   double piston_smoothing_s = 0.05;
@@ -41,10 +40,6 @@ Status WriteText(const std::string& path, const std::string& text) {
 
 int RunCompare(const CompareArgs& args) {
   const std::string name = "compare";
-  if (!args.effects.empty()) {
-    return Fail(name, Status::Error("--effect " + args.effects.front() +
-                                    ": effects arrive with issue 4 (not available yet)"));
-  }
   if (args.json_path.empty() && args.report_path.empty()) {
     return Fail(name, Status::Error("give --json OUT.json and/or --report OUT.html"));
   }
@@ -135,8 +130,6 @@ void AddCompareCommand(CLI::App* app, int* exit_code) {
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
       ->required()
       ->check(CLI::ExistingFile);
-  command->add_option("--effect", args->effects,
-                      "switch a physical effect on (arrives with issue 4; refused for now)");
   command->add_option("--json", args->json_path, "metrics as JSON ('-' for stdout)");
   command->add_option("--report", args->report_path, "self-contained HTML report");
   command
