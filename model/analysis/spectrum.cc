@@ -2,6 +2,7 @@
 
 #include <fftw3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -80,6 +81,44 @@ std::vector<double> HannWindow(std::size_t n_total) {
     w[n] = 0.5 * (1.0 - std::cos(2.0 * std::numbers::pi * n / (n_total - 1)));
   }
   return w;
+}
+
+WelchSegmenter::WelchSegmenter(std::size_t max_length)
+    : max_length_(std::max<std::size_t>(max_length, 8)), hop_(max_length_ / 2) {}
+
+std::optional<std::size_t> WelchSegmenter::Push() {
+  ++count_;
+  if (count_ >= max_length_ && (count_ - max_length_) % hop_ == 0) return max_length_;
+  return std::nullopt;
+}
+
+std::optional<std::size_t> WelchSegmenter::Finish() const {
+  if (count_ < max_length_) return count_;  // the whole series, one segment
+  if ((count_ - max_length_) % hop_ != 0) return max_length_;
+  return std::nullopt;  // the last regular segment ended at the last sample
+}
+
+std::size_t WelchSegmenter::SegmentLength(std::size_t samples, std::size_t max_length) {
+  return std::min(samples, std::max<std::size_t>(max_length, 8));
+}
+
+std::size_t WelchSegmenter::SegmentCount(std::size_t samples, std::size_t max_length) {
+  const std::size_t length = std::max<std::size_t>(max_length, 8);
+  if (samples <= length) return 1;
+  const std::size_t hop = length / 2;
+  const std::size_t regular = (samples - length) / hop + 1;
+  return regular + ((samples - length) % hop != 0 ? 1 : 0);
+}
+
+void SampleRing::CopyLast(std::size_t length, std::vector<double>* out) const {
+  MPDRIG_CHECK(length <= values_.size());
+  out->resize(length);
+  const std::size_t capacity = values_.size();
+  std::size_t index = (next_ + capacity - length) % capacity;
+  for (std::size_t i = 0; i < length; ++i) {
+    (*out)[i] = values_[index];
+    index = index + 1 == capacity ? 0 : index + 1;
+  }
 }
 
 }  // namespace mpdrig
