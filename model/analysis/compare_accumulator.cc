@@ -113,10 +113,13 @@ std::vector<std::pair<double, int>> DominantFrequencies(const std::vector<double
 
 // The window's autocorrelation W(k) = sum_n w[n] w[n + k], |k| <= max_lag (index k + max_lag).
 std::vector<double> WindowCorrelation(const std::vector<double>& window, std::size_t max_lag,
-                                      std::size_t fft_size) {
-  std::vector<std::complex<double>> spectrum = RealDft(window, fft_size);
+                                      RealFft* fft) {
+  const std::size_t fft_size = fft->size();
+  std::vector<std::complex<double>> spectrum;
+  fft->Forward(window, &spectrum);
   for (auto& value : spectrum) value = std::norm(value);
-  const std::vector<double> raw = InverseRealDft(spectrum, fft_size);
+  std::vector<double> raw;
+  fft->Inverse(spectrum, &raw);
   std::vector<double> correlation;
   for (long k = -static_cast<long>(max_lag); k <= static_cast<long>(max_lag); ++k) {
     const std::size_t index =
@@ -177,13 +180,15 @@ void LogScanner::Add(const PipelineSample& sample) {
 void LogScanner::AddPistonSegment(std::size_t length) {
   if (segments_ == 0) {
     segment_length_ = length;
-    piston_power_.assign(FastFftSize(length) / 2 + 1, 0.0);
+    window_ = HannWindow(length);
+    fft_ = std::make_unique<RealFft>(FastFftSize(length));
+    piston_power_.assign(fft_->size() / 2 + 1, 0.0);
   }
   MPDRIG_CHECK(length == segment_length_);
   piston_ring_.CopyLast(length, &scratch_);
-  RemoveMeanAndWindow(HannWindow(length), &scratch_);
-  const std::vector<std::complex<double>> spectrum = RealDft(scratch_, FastFftSize(length));
-  for (std::size_t k = 0; k < spectrum.size(); ++k) piston_power_[k] += std::norm(spectrum[k]);
+  RemoveMeanAndWindow(window_, &scratch_);
+  fft_->Forward(scratch_, &spectrum_);
+  for (std::size_t k = 0; k < spectrum_.size(); ++k) piston_power_[k] += std::norm(spectrum_[k]);
   ++segments_;
 }
 
@@ -310,7 +315,9 @@ ComparisonAccumulator::ComparisonAccumulator(const LogSummary& summary,
   lag_fft_size_ = FastFftSize(length + max_lag_ + 1);
   window_ = HannWindow(length);
   window_power_ = std::inner_product(window_.begin(), window_.end(), window_.begin(), 0.0);
-  window_correlation_ = WindowCorrelation(window_, max_lag_, lag_fft_size_);
+  fft_ = std::make_unique<RealFft>(summary.fft_size);
+  lag_fft_ = std::make_unique<RealFft>(lag_fft_size_);
+  window_correlation_ = WindowCorrelation(window_, max_lag_, lag_fft_.get());
   for (const auto& band : band_centres_) {
     if (band.second == 1) zoom_span_s_ = options.zoom_periods / band.first;
   }
@@ -481,13 +488,12 @@ void ComparisonAccumulator::Add(const PipelineSample& sample, const double* mode
 
 void ComparisonAccumulator::AddSegment(std::size_t length) {
   MPDRIG_CHECK(length == summary_.segment_length);
-  const std::size_t fft_size = summary_.fft_size;
   const double df_hz = summary_.df_hz;
-  std::vector<std::complex<double>> piston;
+  std::vector<std::complex<double>> piston, y, yhat;
   if (!excited_bins_.empty()) {
     piston_ring_.CopyLast(length, &piston_segment_);
     RemoveMeanAndWindow(window_, &piston_segment_);
-    piston = RealDft(piston_segment_, fft_size);
+    fft_->Forward(piston_segment_, &piston);
   }
   std::vector<double> a, b;
   for (ChannelState& s : channels_) {
@@ -499,8 +505,8 @@ void ComparisonAccumulator::AddSegment(std::size_t length) {
     RemoveMeanAndWindow(window_, &b);
     ++s.segments;
     {
-      const std::vector<std::complex<double>> y = RealDft(a, fft_size);
-      const std::vector<std::complex<double>> yhat = RealDft(b, fft_size);
+      fft_->Forward(a, &y);
+      fft_->Forward(b, &yhat);
       for (std::size_t i = 0; i < band_centres_.size(); ++i) {
         const double centre = band_centres_[i].first;
         const double low = std::max(0.0, centre - options_.band_half_width_bins * df_hz);
@@ -529,11 +535,9 @@ void ComparisonAccumulator::AddSegment(std::size_t length) {
     }
     s.lag_aa += std::inner_product(a.begin(), a.end(), a.begin(), 0.0);
     s.lag_bb += std::inner_product(b.begin(), b.end(), b.begin(), 0.0);
-    const std::vector<std::complex<double>> spectrum_a = RealDft(a, lag_fft_size_);
-    const std::vector<std::complex<double>> spectrum_b = RealDft(b, lag_fft_size_);
-    for (std::size_t k = 0; k < spectrum_a.size(); ++k) {
-      s.lag_cross[k] += std::conj(spectrum_a[k]) * spectrum_b[k];
-    }
+    lag_fft_->Forward(a, &y);
+    lag_fft_->Forward(b, &yhat);
+    for (std::size_t k = 0; k < y.size(); ++k) s.lag_cross[k] += std::conj(y[k]) * yhat[k];
   }
 }
 
@@ -630,7 +634,8 @@ Result<Comparison> ComparisonAccumulator::Finish(
     const double norm = std::sqrt(s.lag_aa * s.lag_bb);
     if (norm > 0.0) {
       const std::size_t size = lag_fft_size_;
-      const std::vector<double> raw = InverseRealDft(s.lag_cross, size);
+      std::vector<double> raw;
+      lag_fft_->Inverse(s.lag_cross, &raw);
       const long max_lag = static_cast<long>(max_lag_);
       const double w0 = window_correlation_[max_lag_];
       auto r = [&](long k) {

@@ -77,7 +77,9 @@ class LogScanner {
   SampleRing piston_ring_;
   std::vector<double> piston_power_;
   std::size_t segment_length_ = 0, segments_ = 0;
-  std::vector<double> scratch_;
+  std::vector<double> scratch_, window_;
+  std::vector<std::complex<double>> spectrum_;
+  std::unique_ptr<RealFft> fft_;
 };
 
 class ComparisonAccumulator {
@@ -115,6 +117,7 @@ class ComparisonAccumulator {
   WelchSegmenter segmenter_;
   SampleRing piston_ring_;
   std::vector<double> piston_segment_;
+  std::unique_ptr<RealFft> fft_, lag_fft_;  // sizes M and P
   // Residual inputs (mean removed): the last M + 1 values, newest first, and their sums.
   class History;
   std::vector<History> input_history_;

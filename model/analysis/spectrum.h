@@ -12,6 +12,28 @@ namespace mpdrig {
 // The smallest n >= min_size with no prime factor above 7 (FFTW is fast for those).
 std::size_t FastFftSize(std::size_t min_size);
 
+// A real DFT of one size planned once, for many transforms of that size: planning (FFTW's
+// twiddle factors) costs about as much as a transform. Same results as RealDft / InverseRealDft.
+class RealFft {
+ public:
+  explicit RealFft(std::size_t size);
+  ~RealFft();
+  RealFft(const RealFft&) = delete;
+  RealFft& operator=(const RealFft&) = delete;
+  std::size_t size() const { return size_; }
+  // As RealDft(x, size()).
+  void Forward(const std::vector<double>& x, std::vector<std::complex<double>>* spectrum);
+  // As InverseRealDft(spectrum, size()).
+  void Inverse(const std::vector<std::complex<double>>& spectrum, std::vector<double>* x);
+
+ private:
+  std::size_t size_;
+  double* real_ = nullptr;
+  void* complex_ = nullptr;  // fftw_complex[size / 2 + 1]
+  void* forward_ = nullptr;  // fftw_plan
+  void* inverse_ = nullptr;
+};
+
 // X[k] = sum_n x[n] e^{-2 pi i k n / size}, k = 0..size/2, x zero-padded to `size` (>= x.size()).
 std::vector<std::complex<double>> RealDft(const std::vector<double>& x, std::size_t size);
 
