@@ -72,7 +72,8 @@ std::vector<Channel> ComparedChannels();
 // x [m] of PTk along the lab's pipe (0, 100, ..., 900, rig-log-format.md); nullopt otherwise.
 std::optional<double> PipePositionM(Channel channel);
 
-// "stage" names the part of the work ("read", "simulate", "analyse"); fraction in [0, 1].
+// "stage" names the part of the work ("read", "replay", "simulate", "analyse"); fraction in
+// [0, 1], or minus a sample count where the total is unknown (reading standard input).
 using CompareProgress = std::function<void(std::string_view stage, double fraction)>;
 
 struct MeasuredChannel {
@@ -248,8 +249,8 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
                                  const CompareProgress& progress = {});
 
 // The same numbers as LoadMeasuredLog + ReplayModel + CompareTraces, streaming the file twice
-// (above) in bounded memory. Progress: ("read", -samples) during pass 1, ("replay", fraction)
-// during pass 2.
+// (above) in bounded memory. Progress: ("read", fraction of the file) during pass 1, ("replay",
+// fraction of the samples) during pass 2.
 Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
                               const SimulationOptions& sim_options,
                               const CompareOptions& options = {},

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <utility>
 
@@ -20,9 +22,24 @@ constexpr std::size_t kSmoothingBlock = 4096;
 
 Result<std::unique_ptr<FileRowSource>> FileRowSource::Open(const std::string& path,
                                                            const CompareProgress& progress) {
-  auto opened = riglog::RigLogReader::Open(path);
-  if (!opened.ok()) return opened.status();
-  std::unique_ptr<FileRowSource> source(new FileRowSource(std::move(opened).value()));
+  // A regular file is opened here so that its read position gives the progress in percent;
+  // anything else (and every error message) is the reader's.
+  std::error_code error;
+  const auto size = std::filesystem::file_size(path, error);
+  std::istream* stream = nullptr;
+  std::optional<Result<riglog::RigLogReader>> opened;
+  if (!error && size > 0 && std::filesystem::is_regular_file(path, error)) {
+    auto file = std::make_unique<std::ifstream>(path, std::ios::binary);
+    if (file->is_open()) {
+      stream = file.get();
+      opened.emplace(riglog::RigLogReader::FromStream(std::move(file), path));
+    }
+  }
+  if (!opened) opened.emplace(riglog::RigLogReader::Open(path));
+  if (!opened->ok()) return opened->status();
+  std::unique_ptr<FileRowSource> source(new FileRowSource(std::move(*opened).value()));
+  source->stream_ = stream;
+  source->file_size_ = stream != nullptr ? static_cast<double>(size) : 0.0;
   source->path_ = path;
   source->progress_ = progress;
   const riglog::RigLogReader& reader = source->reader_;
@@ -53,7 +70,10 @@ Result<std::unique_ptr<FileRowSource>> FileRowSource::Open(const std::string& pa
 Result<bool> FileRowSource::Next(LogRow* row) {
   auto more = reader_.Next(&values_);
   if (!more.ok()) return more.status();
-  if (!*more) return false;
+  if (!*more) {
+    if (progress_ && stream_ != nullptr) progress_("read", 1.0);
+    return false;
+  }
   // Inputs must be measured on every row: the model cannot run on a gap.
   for (const auto& [slot, required] :
        {std::pair{std::optional(piston_), true}, std::pair{std::optional(choke_), true},
@@ -75,12 +95,26 @@ Result<bool> FileRowSource::Next(LogRow* row) {
   for (std::size_t i = 0; i < compared_columns_.size(); ++i) {
     row->measured_si[i] = values_[compared_columns_[i]];
   }
-  // The file's length is unknown while streaming: report a sample count.
-  if (progress_ && static_cast<double>(reader_.samples_read()) >= next_report_) {
-    progress_("read", -static_cast<double>(reader_.samples_read()));
-    next_report_ += 100000.0;
-  }
+  if (progress_) ReportProgress();
   return true;
+}
+
+// The share of the file's bytes read, checked every 16384 samples, reported every percent; a
+// sample count every 100 000 samples where the length is unknown (standard input).
+void FileRowSource::ReportProgress() {
+  const auto samples = static_cast<double>(reader_.samples_read());
+  if (stream_ == nullptr) {
+    if (samples >= next_report_) progress_("read", -samples), next_report_ += 100000.0;
+    return;
+  }
+  if (reader_.samples_read() % 16384 != 1) return;
+  const auto position = static_cast<double>(stream_->tellg());
+  if (!(position >= 0.0)) return;
+  const double fraction = std::min(1.0, position / file_size_);
+  if (fraction >= next_report_) {
+    progress_("read", fraction);
+    next_report_ = std::floor(fraction * 100.0 + 1.0) / 100.0;
+  }
 }
 
 MemoryRowSource::MemoryRowSource(const MeasuredLog& log) : log_(log) {

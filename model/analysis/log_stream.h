@@ -58,7 +58,8 @@ class LogRowSource {
 
 // Streams a rig-log file. Open() refuses a header without piston_position or choke_position;
 // Next() a row whose input is not measured (the model cannot run on a gap). FT2 absent is 0,
-// C1 absent is atmospheric. `progress` gets ("read", -samples) every 100 000 samples.
+// C1 absent is atmospheric. `progress` gets ("read", fraction of the file's bytes) every percent,
+// or ("read", -samples) every 100 000 samples from standard input ("-").
 class FileRowSource final : public LogRowSource {
  public:
   static Result<std::unique_ptr<FileRowSource>> Open(const std::string& path,
@@ -70,7 +71,10 @@ class FileRowSource final : public LogRowSource {
 
  private:
   explicit FileRowSource(riglog::RigLogReader reader) : reader_(std::move(reader)) {}
+  void ReportProgress();
   riglog::RigLogReader reader_;
+  std::istream* stream_ = nullptr;  // owned by reader_; null when reading standard input
+  double file_size_ = 0.0;
   std::string path_;
   CompareProgress progress_;
   std::size_t piston_ = 0, choke_ = 0;
