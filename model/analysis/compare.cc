@@ -177,6 +177,9 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
                                 const CompareProgress& progress) {
   const std::vector<double>& times = log.time_s();
   if (times.size() < 2) return Status::Error(log.path + ": needs at least 2 samples");
+  if (log.channels.size() > kComparedChannelCount) {
+    return Status::Error(log.path + ": more channels than P1 P2 PT1..PT10 C2 FT1 FT3 FT4");
+  }
   // Keep only the compared channels of each sample.
   ModelTraces traces;
   traces.values_si.assign(log.channels.size(), {});
@@ -227,6 +230,9 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
     if (values.size() != n) return Status::Error("model traces: length differs from the log's");
   }
   if (n < 4) return Status::Error(log.path + ": needs at least 4 samples to compare");
+  if (log.channels.size() > kComparedChannelCount) {
+    return Status::Error(log.path + ": more channels than P1 P2 PT1..PT10 C2 FT1 FT3 FT4");
+  }
   MPDRIG_RETURN_IF_ERROR(CheckOptions(options));
 
   // Pass 1: what the metrics need of the whole log.

@@ -139,7 +139,7 @@ struct CompareOptions {
   double transfer_min_power_fraction = 1.0e-4;  // of the piston's largest bin power
   double piston_smoothing_s = 0.05;  // for the piston velocity used by the residual analysis
   // Welch segment length (samples, >= 8): longer logs are averaged over segments this long.
-  // Memory per compared channel is about 40 bytes times this (compare_accumulator.h).
+  // Memory per compared channel is about 24 bytes times this (compare_accumulator.h): 3 MB.
   int welch_segment_samples = 1 << 17;
 };
 
