@@ -65,10 +65,10 @@ const EffectInfo& PumpCurveEffect() {
        {"b_per_pa", "1/Pa", "b of (8.5.1)", -2.5070e-6, -1.0e-5, 0.0, false},
        {"c_m3ps", "m^3/s", "c of (8.5.1): the curve's level", 4.7967e-4, 1.0e-5, 1.0e-2, false}},
       [](const EffectContext& context) {
-        return std::make_unique<PumpCurve>(
-            context.Get("scale"), context.Get("a_m3ps"), context.Get("b_per_pa"),
-            context.Get("c_m3ps"), context.Get("reference_pressure_pa"),
-            context.rig.atmospheric_pressure_pa);
+        return std::make_unique<PumpCurve>(context.Get("scale"), context.Get("a_m3ps"),
+                                           context.Get("b_per_pa"), context.Get("c_m3ps"),
+                                           context.Get("reference_pressure_pa"),
+                                           context.rig.atmospheric_pressure_pa);
       }};
   return info;
 }

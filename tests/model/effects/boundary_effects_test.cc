@@ -2,6 +2,7 @@
 // the way their physics says: closed-form fixed points, mass balances of the added volumes, and
 // the linearised transfer functions of the added states measured on the periodic response to a
 // piston sine.
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -55,7 +56,8 @@ std::array<Complex, kChannelCount> Response(RigParams params, const SineRun& run
   const double t_start = std::ceil(run.settle_s * f) / f;
   std::vector<double> times;
   times.push_back(0.0);
-  for (int k = 0; k < run.periods * per_period; ++k) times.push_back(t_start + k / (f * per_period));
+  for (int k = 0; k < run.periods * per_period; ++k)
+    times.push_back(t_start + k / (f * per_period));
   SimulationOptions options;
   options.cells = run.cells;
   options.model = PipeModel::kLinear;
@@ -128,14 +130,15 @@ TEST(PumpCurve, SteadyChokePressureAfterAChokeStepIsTheOrificeFixedPoint) {
     const double q = SteadyPumpFlow(params, in.pump_flow_m3ps, scale, g, in.outlet_pressure_pa);
     const double p_c = in.outlet_pressure_pa + params.choke_density_kgpm3 * q * q / (g * g);
     const RigSample s = sim->Sample();
-    EXPECT_LT(q, in.pump_flow_m3ps * 0.99);  // the curve matters at this pressure
+    EXPECT_LT(q, in.pump_flow_m3ps * 0.99);      // the curve matters at this pressure
     EXPECT_NEAR(s[Channel::kFT2], q, 1e-6 * q);  // the model's FT2 is the delivered flow
     EXPECT_NEAR(s[Channel::kFT3], q, 1e-4 * q);
     EXPECT_NEAR(s[Channel::kC2], p_c, 2e-4 * (p_c - in.outlet_pressure_pa));
   }
   const double rise_with = with.Sample()[Channel::kC2] - before.Sample()[Channel::kC2];
-  const double rise_base = base.Sample()[Channel::kC2] -
-                           testing::RunSteps(RigParams(), options, drive, 0.5).Sample()[Channel::kC2];
+  const double rise_base =
+      base.Sample()[Channel::kC2] -
+      testing::RunSteps(RigParams(), options, drive, 0.5).Sample()[Channel::kC2];
   EXPECT_LT(rise_with, 0.9 * rise_base) << rise_with << " " << rise_base;
 }
 
@@ -148,6 +151,122 @@ TEST(PumpCurve, CommandIsTheFlowAtTheReferencePressure) {
   drive.rig = [](double) { return testing::Held(90.0, 1e-3, 2.0); };  // tiny flow: p_c ~ p_0
   const RigSample s = testing::RunSteps(params, options, drive, 1.0).Sample();
   EXPECT_NEAR(s[Channel::kFT2], units::LpmToM3ps(1e-3), 1e-9 * units::LpmToM3ps(1e-3));
+}
+
+// --- hose_compliance ----------------------------------------------------------------------------
+
+TEST(HoseCompliance, MassBalanceOfTheHose) {
+  // C dp(0)/dt = q_0 - A u(0), summed over the steps (implicit Euler: exact up to the solver's
+  // tolerance): C (P2(T) - P2(0)) = sum dt (q_0 - FT4).
+  const double compliance = 5e-11;
+  const RigParams params = With("hose_compliance:compliance_m3_per_pa=5e-11");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.piston_position_m = [](double t) {
+    return 0.02 * std::sin(2.0 * std::numbers::pi * 0.3 * t);
+  };
+  drive.rig = [](double t) { return testing::Held(t < 3.0 ? 31.0 : 20.0, 5.0, 3.0); };
+  const double dt = TimeStep(params, options.cells);
+  double p_start = 0.0, p_end = 0.0, net_inflow = 0.0;
+  bool first = true;
+  testing::RunSteps(params, options, drive, 10.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    if (first) {
+      p_start = s[Channel::kP2];
+      first = false;
+      return;
+    }
+    const double t = sim.time_s();
+    const double v_d =
+        (drive.piston_position_m(t + 0.5 * dt) - drive.piston_position_m(t - 0.5 * dt)) / dt;
+    const double q_0 = -v_d * params.PistonDisplacementAreaM2();
+    net_inflow += dt * (q_0 - s[Channel::kFT4]);
+    p_end = s[Channel::kP2];
+  });
+  EXPECT_GT(std::fabs(p_end - p_start), 1e4);  // the choke step moved the hose pressure
+  EXPECT_NEAR(compliance * (p_end - p_start), net_inflow,
+              1e-9 * compliance * std::fabs(p_end - p_start) + 1e-16);
+}
+
+TEST(HoseCompliance, InletFlowFollowsTheCapacitanceAgainstThePipesInputImpedance) {
+  // The pipe's input impedance Z_in = P2/FT4 belongs to the pipe and choke, not to the inlet:
+  // measure it on the rigid inlet and predict the hose's FT4/q_0 = 1 / (1 + i w C Z_in).
+  const double compliance = 1e-10;
+  SineRun run;
+  const RigParams base;
+  const auto b = Response(base, run);
+  const auto h = Response(With("hose_compliance:compliance_m3_per_pa=1e-10"), run);
+  const double w = 2.0 * std::numbers::pi * run.freq_hz;
+  const Complex q_0 = -kI * w * base.PistonDisplacementAreaM2();  // per metre of piston position
+  EXPECT_NEAR(std::abs(b[Index(Channel::kFT4)] / q_0 - 1.0), 0.0, 2e-3);  // rigid: FT4 = q_0
+  const Complex z_in = b[Index(Channel::kP2)] / b[Index(Channel::kFT4)];
+  const Complex predicted = 1.0 / (1.0 + EulerIw(w, TimeStep(base, run.cells)) * compliance * z_in);
+  const Complex measured = h[Index(Channel::kFT4)] / q_0;
+  EXPECT_LT(std::abs(measured), 0.95);  // the hose matters at this compliance
+  EXPECT_NEAR(std::abs(measured), std::abs(predicted), 0.01 * std::abs(predicted));
+  EXPECT_NEAR(PhaseDeg(measured), PhaseDeg(predicted), 1.0);
+  EXPECT_LT(PhaseDeg(measured), -3.0);  // a lag behind the piston
+}
+
+// The frequency [in units of `unit_hz`] of the largest PT1 response in [from, to], scanned at
+// steps of 0.01 and refined by a parabola through the largest three.
+double PeakFactor(const RigParams& params, SineRun run, double unit_hz, double from, double to) {
+  std::vector<double> factors, gains;
+  for (double f = from; f <= to + 1e-9; f += 0.01) {
+    run.freq_hz = f * unit_hz;
+    factors.push_back(f);
+    gains.push_back(std::abs(Response(params, run)[Index(Channel::kPT1)]));
+  }
+  const std::size_t k = std::max_element(gains.begin(), gains.end()) - gains.begin();
+  EXPECT_TRUE(k > 0 && k + 1 < gains.size()) << "peak at the end of the scan";
+  if (k == 0 || k + 1 == gains.size()) return factors[k];
+  const double curvature = gains[k - 1] - 2.0 * gains[k] + gains[k + 1];
+  return factors[k] + 0.01 * 0.5 * (gains[k - 1] - gains[k + 1]) / curvature;
+}
+
+TEST(HoseCompliance, LowersTheOpenChokeResonance) {
+  // Open outlet (no flow through the choke: its linearised impedance is zero): the pipe seen
+  // from the inlet is Z_in = i Z_c tan(w L / c), Z_c = rho c / A, first resonance c/4L (9.3.2).
+  // The hose in parallel with it,
+  //   P2 / q_0 = 1 / (i w C - i cot(w L / c) / Z_c),
+  // peaks where cot(theta) = theta (c / L) C Z_c, theta = w L / c: below c/4L (theta < pi/2).
+  // Friction moves both peaks a little; their ratio is the closed form's theta / (pi/2).
+  const double compliance = 3e-11;
+  const RigParams base;
+  const RigParams hose = With("hose_compliance:compliance_m3_per_pa=3e-11");
+  const double c = base.wave_speed_mps, length = base.pipe_length_m;
+  const double z_c = base.density_kgpm3 * c / base.PipeAreaM2();
+  double lo = 1e-9, hi = 0.5 * std::numbers::pi;  // cot(theta) - x theta decreases on (0, pi/2)
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (1.0 / std::tan(mid) - mid * c / length * compliance * z_c > 0.0 ? lo : hi) = mid;
+  }
+  const double predicted = 0.5 * (lo + hi) / (0.5 * std::numbers::pi);  // in units of c/4L
+  SineRun run;
+  run.choke_deg = 90.0;
+  run.pump_lpm = 0.0;
+  const double c4l = c / (4.0 * length);
+  const double peak_base = PeakFactor(base, run, c4l, 0.9, 1.15);
+  const double peak_hose = PeakFactor(hose, run, c4l, 0.75, 1.0);
+  EXPECT_LT(predicted, 0.92);
+  EXPECT_NEAR(peak_hose / peak_base, predicted, 0.01) << peak_base << " " << peak_hose;
+}
+
+TEST(HoseCompliance, LeavesPressureBelowTheBhaAlgebraic) {
+  // With the piston at rest P1 - P2 = rho g h (5.4.2) at every step, also during a choke step.
+  const RigParams params = With("hose_compliance:compliance_m3_per_pa=1e-10");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(t < 1.0 ? 40.0 : 31.0, 10.0, 2.0); };
+  const double rho_g_h = params.density_kgpm3 * params.gravity_mps2 * params.compartment_height_m;
+  double worst = 0.0;
+  testing::RunSteps(params, options, drive, 5.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    worst = std::max(worst, std::fabs(s[Channel::kP1] - s[Channel::kP2] - rho_g_h));
+  });
+  EXPECT_LT(worst, 1e-6);
 }
 
 }  // namespace
