@@ -269,5 +269,172 @@ TEST(HoseCompliance, LeavesPressureBelowTheBhaAlgebraic) {
   EXPECT_LT(worst, 1e-6);
 }
 
+// --- piston_compressibility ----------------------------------------------------------------------
+
+constexpr double kVolumeAboveM3 = 6.28e-4;  // the effect's defaults (Table 8.1.1)
+constexpr double kVolumeBelowM3 = 7.02e-4;
+constexpr double kInertanceKgPerM4 = 3.27e6;
+constexpr double kBhaDiameterM = 0.0409;
+
+TEST(PistonCompressibility, LeavesTheSteadyStateAlone) {
+  // At rest the three states reduce to (5.4.1)-(5.4.2): after a pump step has settled every
+  // channel is the rigid model's, and P1 - P2 = rho g h.
+  const RigParams params = With("piston_compressibility:bulk_modulus_pa=5e6");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(31.0, t < 1.0 ? 5.0 : 8.0, 2.0); };
+  const RigSample base = testing::RunSteps(RigParams(), options, drive, 150.0).Sample();
+  const RigSample with = testing::RunSteps(params, options, drive, 150.0).Sample();
+  for (Channel channel : {Channel::kP1, Channel::kP2, Channel::kPT1, Channel::kPT5, Channel::kC2}) {
+    EXPECT_NEAR(with[channel], base[channel], 5.0) << riglog::ChannelName(channel);  // Pa
+  }
+  EXPECT_NEAR(with[Channel::kFT4], 0.0, 1e-10);
+  EXPECT_NEAR(with[Channel::kFT3], base[Channel::kFT3], 1e-9);
+}
+
+TEST(PistonCompressibility, MassBalanceOfTheCompartment) {
+  // (5.4.3) + (5.4.4): (V_p dp_p + V_b dp_b) / K = (q_0 - A u(0)) dt, the clearance flow
+  // cancels; implicit Euler keeps it exactly. P2 = p_p and P1 = p_b are the effect's states.
+  const double k = 5e6;
+  const RigParams params = With("piston_compressibility:bulk_modulus_pa=5e6");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.piston_position_m = [](double t) {
+    return 0.02 * std::sin(2.0 * std::numbers::pi * 0.3 * t);
+  };
+  drive.rig = [](double t) { return testing::Held(t < 3.0 ? 31.0 : 20.0, 5.0, 3.0); };
+  const double dt = TimeStep(params, options.cells);
+  double stored_start = 0.0, stored_end = 0.0, net_inflow = 0.0;
+  bool first = true;
+  testing::RunSteps(params, options, drive, 10.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    const double stored = (kVolumeAboveM3 * s[Channel::kP2] + kVolumeBelowM3 * s[Channel::kP1]) / k;
+    if (first) {
+      stored_start = stored;
+      first = false;
+      return;
+    }
+    const double t = sim.time_s();
+    const double v_d =
+        (drive.piston_position_m(t + 0.5 * dt) - drive.piston_position_m(t - 0.5 * dt)) / dt;
+    net_inflow += dt * (-v_d * params.PistonDisplacementAreaM2() - s[Channel::kFT4]);
+    stored_end = stored;
+  });
+  EXPECT_GT(std::fabs(stored_end - stored_start), 1e-6);
+  EXPECT_NEAR(stored_end - stored_start, net_inflow, 1e-8 * std::fabs(stored_end - stored_start));
+}
+
+TEST(PistonCompressibility, StiffCompartmentIsTheRigidModel) {
+  // The thesis's finding (5.4.1, 11.3): with the compartment's liquid stiff, the inlet flow and
+  // the pressures are those of (5.4.1)-(5.4.2).
+  SineRun run;
+  run.freq_hz = 0.2;
+  const auto b = Response(RigParams(), run);
+  const auto w = Response(With("piston_compressibility:bulk_modulus_pa=2.2e9"), run);
+  for (Channel channel : {Channel::kFT4, Channel::kP1, Channel::kP2, Channel::kPT5, Channel::kC2}) {
+    const Complex ratio = w[Index(channel)] / b[Index(channel)];
+    EXPECT_NEAR(std::abs(ratio - 1.0), 0.0, 0.01) << riglog::ChannelName(channel);
+  }
+  // P1 - P2 is (5.4.2) plus the clearance liquid's inertia: (r_1 + i w M) (A_b - A_d2) v_d
+  // (8.2.1 written for the clearance flow; the compression term i w C_b P1 is 1e-4 of it here).
+  const double w_rad = 2.0 * std::numbers::pi * run.freq_hz;
+  const Complex velocity = kI * w_rad;
+  const Complex drop_base = b[Index(Channel::kP1)] - b[Index(Channel::kP2)];
+  const Complex drop_with = w[Index(Channel::kP1)] - w[Index(Channel::kP2)];
+  const RigParams rig;
+  EXPECT_NEAR(std::abs(drop_base / (rig.piston_friction_fd1_pa_s_per_m * velocity) - 1.0), 0.0,
+              1e-3);
+  const double face_below =
+      0.25 * std::numbers::pi *
+      (kBhaDiameterM * kBhaDiameterM - rig.lower_rod_diameter_m * rig.lower_rod_diameter_m);
+  const Complex predicted = drop_base - kI * w_rad * kInertanceKgPerM4 * face_below * velocity;
+  EXPECT_NEAR(std::abs(drop_with / predicted - 1.0), 0.0, 0.01);
+}
+
+TEST(PistonCompressibility, SoftCompartmentLagsTheInletFlowAndCouplesP1ToPressure) {
+  // Linearised (5.4.3)-(5.4.5) at the drive frequency, with V the piston velocity, Z_in = P2/FT4
+  // the pipe's input impedance (from the rigid run) and C_x = V_x / K:
+  //   (5.4.4)-(5.4.5): P1 - P2 = (r_1 + i w M) Q,  Q = -(A_b - A_d2) V - i w C_b P1,
+  //   (5.4.3): i w C_p P2 = Q + (A_b - A_d) V - P2 / Z_in,
+  // solved for P2 and FT4 = P2 / Z_in with i w as implicit Euler sees it. At low frequency it is
+  // FT4 / q_0 ~ 1 / (1 + i w (C_p + C_b) Z_in): a capacitance like hose_compliance's.
+  const double k = 5e6;
+  SineRun run;
+  const RigParams base;
+  const auto b = Response(base, run);
+  const auto c = Response(With("piston_compressibility:bulk_modulus_pa=5e6"), run);
+  const double w = 2.0 * std::numbers::pi * run.freq_hz;
+  const Complex velocity = kI * w;  // per metre of piston position
+  const Complex q_0 = -velocity * base.PistonDisplacementAreaM2();
+
+  const Complex z_in = b[Index(Channel::kP2)] / b[Index(Channel::kFT4)];
+  const Complex s = EulerIw(w, TimeStep(base, run.cells));
+  const double bha = 0.25 * std::numbers::pi * kBhaDiameterM * kBhaDiameterM;
+  const double face_above =
+      bha - 0.25 * std::numbers::pi * base.upper_rod_diameter_m * base.upper_rod_diameter_m;
+  const double face_below =
+      bha - 0.25 * std::numbers::pi * base.lower_rod_diameter_m * base.lower_rod_diameter_m;
+  const double c_p = kVolumeAboveM3 / k, c_b = kVolumeBelowM3 / k;
+  const double r_1 = -base.piston_friction_fd1_pa_s_per_m / face_below;
+  const Complex z_gap = r_1 + s * kInertanceKgPerM4;
+  const Complex fill = 1.0 + s * c_b * z_gap;
+  const Complex p2 =
+      (face_above - face_below / fill) * velocity / (s * c_p + 1.0 / z_in + s * c_b / fill);
+  const Complex predicted_ft4 = p2 / z_in / q_0;
+  const Complex measured_ft4 = c[Index(Channel::kFT4)] / q_0;
+  EXPECT_LT(PhaseDeg(measured_ft4), -3.0);
+  EXPECT_NEAR(std::abs(measured_ft4 - predicted_ft4), 0.0, 0.01 * std::abs(predicted_ft4));
+  const Complex capacitance_only = 1.0 / (1.0 + s * (c_p + c_b) * z_in);
+  EXPECT_NEAR(std::abs(measured_ft4 - capacitance_only), 0.0, 0.08 * std::abs(predicted_ft4));
+
+  const Complex p1 = c[Index(Channel::kP1)];
+  const Complex gap = -face_below * velocity - s * c_b * p1;
+  const Complex predicted_drop = z_gap * gap;
+  const Complex measured_drop = c[Index(Channel::kP1)] - c[Index(Channel::kP2)];
+  const Complex rigid_drop = b[Index(Channel::kP1)] - b[Index(Channel::kP2)];
+  // The pressure-driven part is visible against (5.4.2) and the linearised law holds.
+  EXPECT_GT(std::abs(measured_drop - rigid_drop), 0.05 * std::abs(rigid_drop));
+  EXPECT_NEAR(std::abs(measured_drop - predicted_drop), 0.0, 0.02 * std::abs(measured_drop));
+}
+
+TEST(PistonCompressibility, PressureBelowTheBhaAnswersAChokeStep) {
+  // Piston at rest, choke closing: the rising pressure must fill the volume below the BHA
+  // through the clearance, so P1 lags P2 (P1 - P2 < rho g h while P2 rises) and returns to
+  // rho g h. The rigid model keeps P1 - P2 = rho g h throughout.
+  const RigParams params = With("piston_compressibility:bulk_modulus_pa=5e6");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(t < 1.0 ? 40.0 : 31.0, 10.0, 2.0); };
+  const double rho_g_h = params.density_kgpm3 * params.gravity_mps2 * params.compartment_height_m;
+  double most_negative = 0.0;
+  const RigSimulator sim =
+      testing::RunSteps(params, options, drive, 120.0, [&](const RigSimulator& s) {
+        const RigSample sample = s.Sample();
+        most_negative =
+            std::min(most_negative, sample[Channel::kP1] - sample[Channel::kP2] - rho_g_h);
+      });
+  EXPECT_LT(most_negative, -100.0);  // Pa
+  const RigSample end = sim.Sample();
+  EXPECT_NEAR(end[Channel::kP1] - end[Channel::kP2], rho_g_h, 1.0);
+}
+
+TEST(BoundaryEffects, PumpCurveCombinesAndTheInletHasOneClosure) {
+  // pump_curve acts on the pump, hose_compliance on the inlet: they run together. The hose and
+  // the compartment both close the inlet, and the pipe refuses two closures of one end.
+  RigParams params = With("pump_curve");
+  params = With(params, "hose_compliance");
+  SimulationOptions options;
+  options.cells = 30;
+  testing::Drive drive;
+  drive.rig = [](double) { return testing::Held(31.0, 5.0, 2.0); };
+  testing::RunSteps(params, options, drive, 1.0);
+  params = With(params, "piston_compressibility");
+  auto created = RigSimulator::Create(params, options, drive.rig(0.0), 0.0);
+  EXPECT_FALSE(created.ok());  // hose_compliance and piston_compressibility both close the inlet
+}
+
 }  // namespace
 }  // namespace mpdrig
