@@ -13,7 +13,9 @@
 //
 // The pump reads the last step's choke pressure (RigSimulator: the pump is slow against one
 // step); the initial steady state is the fixed point q_b = q_b(p_c(q_b)) (RigSimulator::Create).
-// For a log without FT2, the logged FT2 is the command and the model's FT2 is the delivered q_b.
+// Use it where the pump command drives the model (a log without FT2, whose pump flow is then the
+// command; the service's pump command): the model's FT2 is the delivered q_b. A log's measured
+// FT2 already is the delivered flow, so replaying it with this effect would count the curve twice.
 //
 // Config example:  effect { name: "pump_curve" value { key: "scale" value: 3 } }
 #include <algorithm>
