@@ -3,11 +3,14 @@
 //
 // Residuals: for every compared channel c present in the log (ComparedChannels(), P1 P2
 // PT1..PT10 C2 FT1 FT3 FT4) and every measured sample n inside the fit window,
-//   r_cn = (yhat_cn - y_cn) / (||y_c - mean(y_c)|| sqrt(1 / N_c)) / sqrt(C)
-// i.e. each channel's residual normalised by its own variation, so that sum_n r_cn^2 = NRMSE_c^2
-// / C and every channel weighs the same whatever its unit (the compare metric, compare.h).
-// Solved by Ceres (trust region, Levenberg-Marquardt) with box bounds; derivatives by central
-// differences of full replays (the model is a black box to the solver).
+//   r_cn = (yhat_cn - y_cn) / ||y_c - mean(y_c)|| / sqrt(C)
+// (norms and mean over the channel's measured samples in the window, C the channels with a
+// non-constant measurement there), i.e. each channel's residual normalised by its own variation,
+// so that sum_n r_cn^2 = NRMSE_c^2 / C and every channel weighs the same whatever its unit (the
+// compare metric, compare.h): the cost is the mean squared NRMSE.
+// Solved by Ceres (trust region, Levenberg-Marquardt) with box bounds, on parameters scaled by
+// their start values; derivatives by finite differences of full replays (the model is a black box
+// to the solver): forward inside the solver, central at the optimum for the covariance.
 // Standard errors: from the Jacobian J at the optimum, cov = s^2 (J^T J)^-1 with
 // s^2 = ||r||^2 / (m - p) rescaled to the unnormalised residuals (Gauss-Newton / Ceres
 // Covariance); correlation = cov_ij / sqrt(cov_ii cov_jj).
@@ -52,6 +55,13 @@ struct FitOptions {
   double window_end_s = std::numeric_limits<double>::infinity();
   int max_iterations = 30;
   double function_tolerance = 1e-6;  // relative change of the cost that stops the solver
+  // Finite-difference step, relative to max(|x|, 1% of the bound range). Larger than the usual
+  // sqrt(eps): the replay is piecewise smooth in the parameters (its time step dt = dx / c moves
+  // against the log's sample times), and a step below ~1e-4 sees that texture, not the slope.
+  double relative_step = 1.0e-3;
+  // false: forward differences inside the solver (p replays per Jacobian); true: central (2p).
+  // The covariance at the optimum always uses central differences.
+  bool central_differences = false;
   // Called after each solver iteration: iteration number and current error (mean NRMSE).
   std::function<void(int iteration, double error)> progress;
 };
