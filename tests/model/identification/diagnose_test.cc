@@ -35,7 +35,7 @@ struct Case {
   Diagnosis diagnosis;
 };
 
-Case Run(std::optional<std::string> effect, std::uint64_t seed) {
+Case RunCase(std::optional<std::string> effect, std::uint64_t seed) {
   SyntheticLogOptions options;
   options.seed = seed;
   options.duration_s = kDurationS;
@@ -70,7 +70,7 @@ std::string Ranking(const Diagnosis& d) {
 
 TEST(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
   for (int seed = 1; seed <= kCasesPerEffect; ++seed) {
-    const Case c = Run(std::nullopt, 1000 + seed);
+    const Case c = RunCase(std::nullopt, 1000 + seed);
     SCOPED_TRACE(c.synthetic.description);
     std::printf("seed %d: base %.4g%% floor %.4g%% |%s\n", seed, 100.0 * c.diagnosis.baseline.error,
                 100.0 * c.diagnosis.noise_floor, Ranking(c.diagnosis).c_str());
@@ -87,7 +87,7 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
   const std::string effect = GetParam();
   int detectable = 0, first = 0;
   for (int seed = 1; seed <= kCasesPerEffect; ++seed) {
-    const Case c = Run(effect, seed);
+    const Case c = RunCase(effect, seed);
     const Diagnosis& d = c.diagnosis;
     const bool is_detectable = d.baseline.error > (1.0 + kDetectableMargin) * d.noise_floor;
     std::printf("%s seed %d: %s | base %.4g%% floor %.4g%% |%s\n", effect.c_str(), seed,
