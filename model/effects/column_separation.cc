@@ -19,7 +19,8 @@
 // dissolved gas coming out of solution, at a higher "gaseous cavitation" pressure.
 // The method-of-characteristics scheme supports it; `--scheme mol` refuses it.
 //
-// Config example:  effect { name: "column_separation" param { key: "vapour_pressure_pa" value: 2300 } }
+// Config example:  effect { name: "column_separation" param { key: "vapour_pressure_pa" value: 2300
+// } }
 #include "model/effects/effect.h"
 
 namespace mpdrig {

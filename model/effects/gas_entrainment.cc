@@ -65,8 +65,8 @@ const EffectInfo& GasEntrainmentEffect() {
         0.0, 0.02, true},
        {"reference_pressure_pa", "Pa", "absolute pressure at which the fraction is eps0",
         units::kStandardAtmospherePa, 1.0e4, 1.0e7, false},
-       {"polytropic_index", "-", "n of p V^n = const (1 isothermal, 1.4 adiabatic)", 1.0, 1.0,
-        1.4, false}},
+       {"polytropic_index", "-", "n of p V^n = const (1 isothermal, 1.4 adiabatic)", 1.0, 1.0, 1.4,
+        false}},
       [](const EffectContext& context) {
         const double c = context.pipe.wave_speed_mps;
         return std::make_unique<GasEntrainment>(

@@ -223,7 +223,8 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
     double u_l = 0.5 * (alpha_[n] + beta_[n]);
     double alpha_l = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
-      alpha_l = fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs - h * source_at(n, u_l);
+      alpha_l =
+          fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs - h * source_at(n, u_l);
       u_l = outlet_closure_ != nullptr
                 ? outlet_closure_->SolveOutletVelocity(OutletRelation(law_, alpha_l),
                                                        inputs.end.choke, h, u_l)
@@ -336,14 +337,14 @@ void CharacteristicsSolver::OnExtensionsChanged() {
   mixture_.reset();
   if (!compressibility_extensions_.empty()) {
     const std::vector<const PipeExtension*> extensions = compressibility_extensions_;
-    mixture_ = std::make_unique<MixtureLaw>(
-        law_, config_.density_kgpm3, config_.k_pa, [extensions](double p) {
-          double sum = 0.0;
-          for (const PipeExtension* extension : extensions) {
-            sum += extension->ExtraCompressibilityPerPa(p);
-          }
-          return sum;
-        });
+    mixture_ = std::make_unique<MixtureLaw>(law_, config_.density_kgpm3, config_.k_pa,
+                                            [extensions](double p) {
+                                              double sum = 0.0;
+                                              for (const PipeExtension* extension : extensions) {
+                                                sum += extension->ExtraCompressibilityPerPa(p);
+                                              }
+                                              return sum;
+                                            });
   }
   vapour_pressure_pa_ =
       vapour_pressure_extension_ != nullptr ? vapour_pressure_extension_->VapourPressurePa() : 0.0;
@@ -363,13 +364,18 @@ void CharacteristicsSolver::OnStateReset() {
 }
 
 double CharacteristicsSolver::CavityVolumeM3() const {
+  // The cavities are advanced by implicit Euler, half a step ahead of the time level: the
+  // time-centred volume V - A dt (u_right - u_left)/2 is the one the liquid balances (exactly,
+  // for the linear model: the sum of alpha - beta over the nodes changes by the boundary flows
+  // plus the trapezoidal sum of the jumps).
   double sum = 0.0;
-  for (double v : cavity_volume_) sum += v;
+  for (std::size_t i = 0; i < cavity_volume_.size(); ++i) {
+    sum += std::max(0.0, cavity_volume_[i] - 0.5 * dt_s_ * config_.area_m2 * velocity_jump_[i]);
+  }
   return sum;
 }
 
-Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
-                                          RangeViolation* violation) {
+Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation) {
   const int n = config_.cells;
   const double h = dt_s_;
   const double r = dt_s_ / config_.dx_m();  // 1 / c of the grid
@@ -395,9 +401,11 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     w_[i] = w;
     speed_up_[i] = linear ? c : u + c;  // the linear model's characteristics move at +-c (7.0.4)
     speed_down_[i] = linear ? c : c - u;
-    const double half_jump = (cavitation && i > 0 && i < n) ? 0.5 * velocity_jump_[i] : 0.0;
-    u_left_[i] = u - half_jump;
-    u_right_[i] = u + half_jump;
+    // An interior cavity node stores the mean of its sides, a boundary node its outer side.
+    const double jump = cavitation ? velocity_jump_[i] : 0.0;
+    const double right_share = i == 0 ? 1.0 : (i == n ? 0.0 : 0.5);
+    u_left_[i] = u - (1.0 - right_share) * jump;
+    u_right_[i] = u + right_share * jump;
     alpha_left_[i] = w + u_left_[i];
     alpha_right_[i] = w + u_right_[i];
     beta_left_[i] = -w + u_left_[i];
@@ -433,10 +441,16 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     *u_foot = (1.0 - tau) * u_right_[i + 1] + tau * u_left_[j];
     return (1.0 - tau) * beta_right_[i + 1] + tau * beta_left_[j];
   };
-  // A cavity's volume after the step with the new jump u_right - u_left (trapezoidal in time);
-  // <= 0 means it collapses.
-  const auto cavity_after = [&](int i, double jump) {
-    return cavity_volume_[i] + 0.5 * h * area * (jump + velocity_jump_[i]);
+  // A cavity's volume after the step with the new jump u_right - u_left (implicit Euler, see the
+  // header); <= 0 means it collapses.
+  const auto cavity_after = [&](int i, double jump) { return cavity_volume_[i] + h * area * jump; };
+  const auto in_cavity = [&](int i, double liquid_pressure_pa) {
+    return liquid_pressure_pa < p_v || cavity_volume_[i] > 0.0;
+  };
+  // Below p_v the node is a cavity whatever the volume (a closure at an end need not make the
+  // jump positive); above it, while the cavity has volume.
+  const auto keeps_cavity = [&](double liquid_pressure_pa, double volume) {
+    return liquid_pressure_pa < p_v || volume > 0.0;
   };
 
   // Interior nodes: the trapezoidal rule along both characteristics with the new point's
@@ -447,7 +461,8 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     const double b_foot = beta_foot(i, &ub);
     const double fa = config_.Friction(ua);
     const double fb = config_.Friction(ub);
-    const double lambda = config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(velocity_[i]);
+    const double lambda =
+        config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(velocity_[i]);
     const double sa = source_explicit(i);
     const double sb = source_implicit(i);
     double u_p = (a_foot + b_foot - 0.5 * h * (fa + fb) - 2.0 * h * gs - 2.0 * h * sa) /
@@ -455,17 +470,17 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     double p_p = fn.Pressure(0.5 * (a_foot - b_foot) - 0.25 * h * (fa - fb), pressure_[i]);
     if (cavitation) {
       double jump = 0.0;
-      if (p_p < p_v || cavity_volume_[i] > 0.0) {
+      if (in_cavity(i, p_p)) {
         // Each side at p_v: alpha_P = W(p_v) + u_left, beta_P = -W(p_v) + u_right.
         const double d = 1.0 + 0.5 * h * lambda + h * sb;
         const double u_l = (a_foot - 0.5 * h * fa - h * gs - h * sa - w_v) / d;
         const double u_r = (b_foot - 0.5 * h * fb - h * gs - h * sa + w_v) / d;
         const double volume = cavity_after(i, u_r - u_l);
-        if (volume > 0.0) {
+        if (keeps_cavity(p_p, volume)) {
           p_p = p_v;
           u_p = 0.5 * (u_l + u_r);
           jump = u_r - u_l;
-          cavity_volume_[i] = volume;
+          cavity_volume_[i] = std::max(volume, 0.0);
         } else {
           cavity_volume_[i] = 0.0;  // collapse: the liquid solution stands
         }
@@ -498,7 +513,7 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     double p0 = fn.Pressure(u0 - beta0, pressure_[0]);
     if (cavitation) {
       double jump = 0.0;
-      if (p0 < p_v || cavity_volume_[0] > 0.0) {
+      if (in_cavity(0, p0)) {
         // Pipe side from C- at p_v (friction settled by fixed-point passes, h f' << 1); the
         // piston side is what the inlet delivers against p_v.
         double u_pipe = u0;
@@ -507,11 +522,11 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
                                   ? inlet_closure_->SolveInletVelocity(CavityRelation(p_v), inlet)
                                   : inputs.end.inlet_velocity_mps;
         const double volume = cavity_after(0, u_pipe - u_side);
-        if (volume > 0.0) {
+        if (keeps_cavity(p0, volume)) {
           p0 = p_v;
-          u0 = u_pipe;
+          u0 = u_side;  // the node keeps the flow at x = 0, the pipe side leaves on alpha
           jump = u_pipe - u_side;
-          cavity_volume_[0] = volume;
+          cavity_volume_[0] = std::max(volume, 0.0);
         } else {
           cavity_volume_[0] = 0.0;
         }
@@ -534,8 +549,8 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     const auto solve = [&](const BoundaryRelation& relation, double guess) {
       return outlet_closure_ != nullptr
                  ? outlet_closure_->SolveOutletVelocity(relation, inputs.end.choke, h, guess)
-                 : SolveChokeVelocity(relation, inputs.end.choke, area,
-                                      config_.choke_density_kgpm3, guess);
+                 : SolveChokeVelocity(relation, inputs.end.choke, area, config_.choke_density_kgpm3,
+                                      guess);
     };
     double u_l = velocity_[n];
     double alpha_l = 0.0;
@@ -546,16 +561,16 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs,
     double p_l = fn.Pressure(alpha_l - u_l, pressure_[n]);
     if (cavitation) {
       double jump = 0.0;
-      if (p_l < p_v || cavity_volume_[n] > 0.0) {
+      if (in_cavity(n, p_l)) {
         double u_pipe = u_l;
         for (int pass = 0; pass < 3; ++pass) u_pipe = alpha_at(u_pipe) - w_v;
         const double u_side = solve(CavityRelation(p_v), u_l);
         const double volume = cavity_after(n, u_side - u_pipe);
-        if (volume > 0.0) {
+        if (keeps_cavity(p_l, volume)) {
           p_l = p_v;
-          u_l = u_pipe;
+          u_l = u_side;  // the node keeps the flow through the choke, the pipe side leaves on beta
           jump = u_side - u_pipe;
-          cavity_volume_[n] = volume;
+          cavity_volume_[n] = std::max(volume, 0.0);
         } else {
           cavity_volume_[n] = 0.0;
         }

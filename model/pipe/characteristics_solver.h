@@ -22,12 +22,15 @@
 // - Column separation by the discrete vapour cavity model (Wylie & Streeter 1993; Bergant &
 //   Simpson 1999): where a node's pressure would fall below p_v, it is held at p_v and each
 //   characteristic gives its own side's velocity, u_left from C+ and u_right from C-; the cavity
-//   at the node grows as dV/dt = A (u_right - u_left) (trapezoidal in time). While V > 0 the node
-//   stays at p_v; when V would fall below 0 the cavity collapses (V = 0) and the node takes the
-//   liquid solution: the colliding columns give the Joukowsky jump rho c du.
+//   at the node grows as dV/dt = A (u_right - u_left), by implicit Euler (the DVCM weighting
+//   psi = 1: a node whose liquid solution falls below p_v has u_right > u_left, so its cavity
+//   grows and p >= p_v always holds). While V > 0 the node stays at p_v; when V would fall below 0
+//   the cavity collapses (V = 0) and the node takes the liquid solution: the colliding columns
+//   give the Joukowsky jump rho c du. The liquid balances with the time-centred cavity volume
+//   (CavityVolumeM3) up to what each collapse leaves, at most A dt |u_right - u_left|.
 //   An interior cavity node stores the mean of its two velocities and the jump u_right - u_left;
-//   a boundary node stores the pipe side (the piston or the choke gives the other side).
-//   Characteristics leaving a cavity node carry the velocity of their side.
+//   a boundary node stores the velocity of the boundary (piston, choke: FT4 and FT1 stay the
+//   flows at the ends). Characteristics leaving a cavity node carry the velocity of their side.
 #pragma once
 
 #include <memory>
@@ -47,6 +50,8 @@ class CharacteristicsSolver final : public PipeSolver {
   double CavityVolumeM3() const override;
   // Cavity volume at each node [m^3] (empty without column separation).
   const std::vector<double>& cavity_volumes_m3() const { return cavity_volume_; }
+  // u_right - u_left at each node [m/s] (non-zero at cavities).
+  const std::vector<double>& velocity_jumps_mps() const { return velocity_jump_; }
 
  protected:
   // Momentum sources are added explicitly along both characteristics; closures replace the

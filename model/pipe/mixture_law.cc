@@ -34,8 +34,7 @@ MixtureLaw::MixtureLaw(const PipeLaw& law, double density_kgpm3, double k_pa,
     const double mid = x_lo_ + (j + 0.5) * step_;
     const double half = 0.5 * step_;
     const double integral =
-        half * (5.0 * Slope(mid - g * half) + 8.0 * Slope(mid) + 5.0 * Slope(mid + g * half)) /
-        9.0;
+        half * (5.0 * Slope(mid - g * half) + 8.0 * Slope(mid) + 5.0 * Slope(mid + g * half)) / 9.0;
     w_[j + 1] = w_[j] + integral;
     slope_[j + 1] = Slope(x_lo_ + (j + 1) * step_);
   }
@@ -83,7 +82,8 @@ double MixtureLaw::W(double pressure_pa) const {
   const double x = std::log(std::max(pressure_pa, 1e-300));
   const double s = (x - x_lo_) / step_;
   if (s <= 0.0) return w_[0] + slope_[0] * (x - x_lo_);
-  if (s >= kIntervals) return w_[kIntervals] + slope_[kIntervals] * (x - x_lo_ - kIntervals * step_);
+  if (s >= kIntervals)
+    return w_[kIntervals] + slope_[kIntervals] * (x - x_lo_ - kIntervals * step_);
   return Interpolate(std::min(static_cast<int>(s), kIntervals - 1), x, nullptr);
 }
 

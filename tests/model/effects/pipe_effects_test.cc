@@ -20,8 +20,8 @@
 namespace mpdrig {
 namespace {
 
-using ::testing::HasSubstr;
 using testing::Drive;
+using ::testing::HasSubstr;
 using testing::Held;
 
 RigParams With(RigParams params, std::string_view spec) {
@@ -40,7 +40,8 @@ RigParams Frictionless() {
 // Steps until the end or the first failure; returns the status (RunSteps expects success).
 Status StepUntil(const RigParams& params, const SimulationOptions& options, const Drive& drive,
                  double duration_s) {
-  auto created = RigSimulator::Create(params, options, drive.rig(0.0), drive.piston_position_m(0.0));
+  auto created =
+      RigSimulator::Create(params, options, drive.rig(0.0), drive.piston_position_m(0.0));
   if (!created.ok()) return created.status();
   RigSimulator sim = std::move(created).value();
   const double dt = sim.time_step_s();
@@ -187,7 +188,8 @@ TEST(GasEntrainment, TravelTimeFollowsThePressureDependentWaveSpeed) {
       const auto rest_at = [&](double x) { return p_out + rho_g * (params.pipe_length_m - x); };
       // Predicted: the step (rho c |du| at the inlet) and the travel time at half its height.
       const double du = PistonBoundary(params).InletVelocityMps(dv);
-      const double step_pa = params.density_kgpm3 * MixtureWaveSpeed(params, void_fraction, rest_at(0)) * du;
+      const double step_pa =
+          params.density_kgpm3 * MixtureWaveSpeed(params, void_fraction, rest_at(0)) * du;
       double predicted = 0.0;
       const int pieces = 1000;
       for (int j = 0; j < pieces; ++j) {
@@ -198,8 +200,8 @@ TEST(GasEntrainment, TravelTimeFollowsThePressureDependentWaveSpeed) {
       // Measured: crossing of half of each point's own plateau, linear in time between steps.
       double crossing[2];
       for (int k = 0; k < 2; ++k) {
-        const double t_arrival = 0.15 + (k == 0 ? x1 : x2) /
-                                            MixtureWaveSpeed(params, void_fraction, rest[k]);
+        const double t_arrival =
+            0.15 + (k == 0 ? x1 : x2) / MixtureWaveSpeed(params, void_fraction, rest[k]);
         std::size_t plateau = 0;
         while (plateau + 1 < times.size() && times[plateau] < t_arrival + 0.4) ++plateau;
         const double half = 0.5 * (rest[k] + p[plateau][k]);
@@ -250,9 +252,7 @@ TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
   const double v_piston = u0 / piston.InletVelocityMps(1.0);
   const double t0 = 0.1, duration = 0.2;
   Drive drive;
-  drive.piston_position_m = [&](double t) {
-    return v_piston * std::clamp(t - t0, 0.0, duration);
-  };
+  drive.piston_position_m = [&](double t) { return v_piston * std::clamp(t - t0, 0.0, duration); };
   drive.rig = [](double) { return Held(0.0, 0.0, 0.0); };
   SimulationOptions options;
 
@@ -261,14 +261,24 @@ TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
 
   double p_init = 0.0, min_pressure = 1e300, max_volume = 0.0, t_max_volume = 0.0;
   double t_collapse = -1.0, p_after_collapse = 0.0, worst_hold = 0.0, dt = 0.0;
+  double v0 = 0.0, inflow = 0.0, previous_q = 0.0, worst_balance = 0.0;
   testing::RunSteps(params, options, drive, 1.0, [&](const RigSimulator& s) {
     const double t = s.time_s();
     const double p0 = s.PressureAtPa(0.0);
     const double volume = s.pipe().CavityVolumeM3();
+    // The liquid balance (see RunHeave below); the choke is closed, its leak is shut off by
+    // the rest state (no flow until the wave arrives at 1.06 s).
+    const double q = s.Sample()[Channel::kFT4] - s.Sample()[Channel::kFT1];
     if (t == 0.0) {
       p_init = p0;
       dt = s.time_step_s();
+      v0 = s.pipe().StoredVolumeM3();
+    } else {
+      inflow += 0.5 * dt * (q + previous_q);
     }
+    previous_q = q;
+    worst_balance =
+        std::max(worst_balance, std::fabs(s.pipe().StoredVolumeM3() - v0 - volume - inflow));
     for (int k = 0; k <= 10; ++k) min_pressure = std::min(min_pressure, s.PressureAtPa(90.0 * k));
     if (volume > max_volume) max_volume = volume, t_max_volume = t;
     if (volume > 0.0) worst_hold = std::max(worst_hold, std::fabs(p0 - p_v));
@@ -283,24 +293,44 @@ TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
   EXPECT_LT(worst_hold, 1e-6);  // held at p_v exactly while the cavity lives
   const double expected_volume = area * (std::fabs(u0) - std::fabs(u_col)) * duration;
   // 1%: the ramp's kinks fall inside a step (the stroke is 38 steps long).
-  EXPECT_NEAR(max_volume, expected_volume, 1e-2 * expected_volume);
+  // The stroke's start and end fall inside a step: the column's flow over one and a half steps.
+  const double step_volume = area * std::fabs(u_col) * dt;
+  EXPECT_NEAR(max_volume, expected_volume, 1.5 * step_volume);
   EXPECT_NEAR(t_max_volume, t0 + duration, 1.5 * dt);
   EXPECT_NEAR(t_collapse, t0 + duration * u0 / u_col, 2.0 * dt);
   // The jump at the collapse: Joukowsky rho c |u_col| on top of p_v, 1% (friction is off; the
   // quasi-linear law is exact here through W).
   EXPECT_NEAR(p_after_collapse - p_v, p_init - p_v, 1e-2 * (p_init - p_v));
-  std::printf("u_col %.4f m/s, cavity %.3e m^3 (expected %.3e), collapse at %.4f s "
-              "(expected %.4f s), jump %.0f Pa\n",
-              u_col, max_volume, expected_volume, t_collapse, t0 + duration * u0 / u_col,
-              p_after_collapse - p_v);
+  // The liquid balances to the step in which the cavity collapses: the liquid solution takes
+  // over from the start of that step, when at most one step of the closing flow was left to fill.
+  EXPECT_LT(worst_balance, area * std::fabs(u_col) * dt) << worst_balance;
+  std::printf("liquid balance within %.3e m^3\n", worst_balance);
+  std::printf(
+      "u_col %.4f m/s, cavity %.3e m^3 (expected %.3e), collapse at %.4f s "
+      "(expected %.4f s), jump %.0f Pa\n",
+      u_col, max_volume, expected_volume, t_collapse, t0 + duration * u0 / u_col,
+      p_after_collapse - p_v);
 }
 
-TEST(ColumnSeparation, RepeatedCavitiesConserveTheLiquidAndStayAboveVapourPressure) {
-  // A 0.1 m heave at 0.45 Hz, near the open-choke resonance 3c/4L... well above the base model's
-  // range (it stops with a negative absolute pressure). With cavities, for 30 s: every pressure
-  // >= p_v, and the liquid balances: the piston's displaced volume minus the outflow FT1 equals
-  // the change of the stored liquid (5.2.1) plus the cavities.
-  const RigParams base;
+struct HeaveBalance {
+  double worst_imbalance_m3 = 0.0;  // max |stored change - cavities - net inflow|
+  double exchanged_m3 = 0.0;        // max |net inflow|
+  double largest_cavity_m3 = 0.0;
+  double min_pressure_pa = 1e300;
+  int cavity_openings = 0;         // the pipe's total cavity volume leaving zero
+  int node_collapses = 0;          // a node's cavity closing
+  double collapse_bound_m3 = 0.0;  // sum over the collapses of A dt |u_right - u_left| before it
+};
+
+// A 0.1 m heave at 0.45 Hz (inlet velocity up to 0.16 m/s: a Joukowsky suction of 1.3 bar)
+// through an open choke to the atmosphere, no pump: beyond the base model's range (it stops with a
+// negative absolute pressure). With cavities, for 30 s, the liquid balance: it conserves its mass
+// and the cavities take room in the pipe, so the stored volume (5.2.1) rises by the cavities'
+// volume on top of the net inflow,
+//   stored(t) - stored(0) - V_cavities(t) = integral (q_0 - FT1) dt,
+// q_0 the piston's displaced flow (5.4.1), trapezoidal in time like the solver's boundaries.
+HeaveBalance RunHeave(RigParams base, double elevation_gain_m) {
+  base.pipe_elevation_gain_m = elevation_gain_m;
   const RigParams params = With(base, "column_separation:vapour_pressure_pa=3000");
   const PistonBoundary piston(params);
   Drive drive;
@@ -310,46 +340,73 @@ TEST(ColumnSeparation, RepeatedCavitiesConserveTheLiquidAndStayAboveVapourPressu
   const Status base_status = StepUntil(base, options, drive, 30.0);
   EXPECT_EQ(base_status.code(), Status::Code::kModelRange) << base_status.message();
 
-  double v0 = 0.0, dt = 0.0, balance = 0.0, previous_net = 0.0, worst = 0.0, scale = 0.0;
-  double min_pressure = 1e300, max_cavity = 0.0, max_pressure = 0.0;
-  int cavity_starts = 0;
+  HeaveBalance out;
+  double v0 = 0.0, balance = 0.0, previous_net = 0.0;
   bool had_cavity = false;
+  std::vector<double> previous_volume;
+  std::vector<double> previous_jump;
   testing::RunSteps(params, options, drive, 30.0, [&](const RigSimulator& s) {
     const double t = s.time_s();
-    const double dt_s = s.time_step_s();
-    const double v_d = (drive.piston_position_m(t + 0.5 * dt_s) -
-                        drive.piston_position_m(t - 0.5 * dt_s)) / dt_s;
+    const double dt = s.time_step_s();
+    const double v_d =
+        (drive.piston_position_m(t + 0.5 * dt) - drive.piston_position_m(t - 0.5 * dt)) / dt;
     const double net = (t == 0.0 ? 0.0 : piston.InletFlowM3ps(v_d)) - s.Sample()[Channel::kFT1];
     if (t == 0.0) {
       v0 = s.pipe().StoredVolumeM3();
-      dt = dt_s;
     } else {
       balance += 0.5 * dt * (net + previous_net);
     }
     previous_net = net;
     const double cavity = s.pipe().CavityVolumeM3();
-    const double stored = s.pipe().StoredVolumeM3() - v0 + cavity;
-    worst = std::max(worst, std::fabs(stored - balance));
-    scale = std::max(scale, std::fabs(balance));
-    max_cavity = std::max(max_cavity, cavity);
-    if (cavity > 0.0 && !had_cavity) ++cavity_starts;
+    // Collapses: a node's cavity closed in this step; at most one step of the closing flow,
+    // A dt |u_right - u_left| with the jump of the step before, was left unfilled.
+    const auto& solver = static_cast<const CharacteristicsSolver&>(s.pipe());
+    const std::vector<double>& volumes = solver.cavity_volumes_m3();
+    if (!previous_volume.empty()) {
+      for (std::size_t i = 0; i < volumes.size(); ++i) {
+        if (previous_volume[i] > 0.0 && volumes[i] == 0.0) {
+          ++out.node_collapses;
+          out.collapse_bound_m3 += params.PipeAreaM2() * dt * std::fabs(previous_jump[i]);
+        }
+      }
+    }
+    previous_volume = volumes;
+    previous_jump = solver.velocity_jumps_mps();
+    const double imbalance = s.pipe().StoredVolumeM3() - v0 - cavity - balance;
+    out.worst_imbalance_m3 = std::max(out.worst_imbalance_m3, std::fabs(imbalance));
+    out.exchanged_m3 = std::max(out.exchanged_m3, std::fabs(balance));
+    out.largest_cavity_m3 = std::max(out.largest_cavity_m3, cavity);
+    if (cavity > 0.0 && !had_cavity) ++out.cavity_openings;
     had_cavity = cavity > 0.0;
     for (int k = 0; k <= 10; ++k) {
-      const double p = s.PressureAtPa(90.0 * k);
-      min_pressure = std::min(min_pressure, p);
-      max_pressure = std::max(max_pressure, p);
+      out.min_pressure_pa = std::min(out.min_pressure_pa, s.PressureAtPa(90.0 * k));
     }
   });
-  EXPECT_GE(min_pressure, 3000.0 - 1e-6);
-  EXPECT_GE(cavity_starts, 5) << "the heave should open a cavity in most periods";
-  EXPECT_GT(max_cavity, 1e-6);
-  // 1% of the exchanged volume, as the base model's mass balance (rig_validation_test): the
-  // stored volume is a trapezoid over the nodes, the scheme is not conservative.
-  EXPECT_LT(worst, 1e-2 * scale) << "imbalance " << worst << " m^3 of " << scale
-                                 << ", largest cavity " << max_cavity;
-  std::printf("cavities opened %d times, largest %.3e m^3, imbalance %.2e of %.2e m^3, "
-              "pressure %.3f..%.3f bar(a)\n",
-              cavity_starts, max_cavity, worst, scale, min_pressure / 1e5, max_pressure / 1e5);
+  std::printf(
+      "elevation %+.1f m: cavities opened %d times, %d node collapses (bound %.2e m^3), "
+      "largest %.3e m^3, imbalance %.2e m^3 (exchanged %.2e m^3), min pressure %.0f Pa\n",
+      elevation_gain_m, out.cavity_openings, out.node_collapses, out.collapse_bound_m3,
+      out.largest_cavity_m3, out.worst_imbalance_m3, out.exchanged_m3, out.min_pressure_pa);
+  return out;
+}
+
+TEST(ColumnSeparation, HeaveBeyondTheRangeKeepsPressuresAtOrAboveVapourPressure) {
+  // The rig's rising coil, and the coil upside down (inlet on top). Behind a suction front the
+  // column reaches p_v over a stretch of the pipe (vaporous cavitation at many adjacent nodes),
+  // where the DVCM's cavities open and close node by node. Every pressure stays >= p_v and the
+  // run goes on where the base model stops. The liquid balances to what the collapses leave:
+  // a cavity collapses within a step, and the liquid solution takes over from its start, when at
+  // most one step of the closing flow, A dt |u_right - u_left|, was left to fill. A sign error
+  // or a missing cavity term would exceed that sum (e.g. counting the cavities with the other
+  // sign: 2.1e-5 m^3 against 1.4e-5 m^3 on the rig's coil).
+  for (double elevation_gain_m : {2.3, -2.3}) {
+    SCOPED_TRACE(elevation_gain_m);
+    const HeaveBalance run = RunHeave(RigParams(), elevation_gain_m);
+    EXPECT_GE(run.min_pressure_pa, 3000.0 - 1e-6);
+    EXPECT_GE(run.cavity_openings, 10) << "the heave should open cavities in most periods";
+    EXPECT_GT(run.largest_cavity_m3, 1e-6);
+    EXPECT_LT(run.worst_imbalance_m3, run.collapse_bound_m3);
+  }
 }
 
 }  // namespace
