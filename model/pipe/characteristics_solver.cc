@@ -260,8 +260,10 @@ class PressureFunction {
   double DW(double p) const {
     return mixture_ ? mixture_->DW(p) : -1.0 / law_.DPressureDVelocityAtPressure(p);
   }
-  double WaveSpeed(double p) const {
-    return mixture_ ? mixture_->WaveSpeed(p) : law_.wave_speed_mps();
+  double WAndWaveSpeed(double p, double* c) const {
+    if (mixture_) return mixture_->WAndWaveSpeed(p, c);
+    *c = law_.wave_speed_mps();
+    return law_.PressureTerm(p);
   }
 
  private:
@@ -394,8 +396,8 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeVio
   for (int i = 0; i <= n; ++i) {
     const double p = law_.Pressure(alpha_[i], beta_[i]);
     const double u = 0.5 * (alpha_[i] + beta_[i]);
-    const double w = fn.W(p);
-    const double c = fn.WaveSpeed(p);
+    double c = 0.0;
+    const double w = fn.WAndWaveSpeed(p, &c);
     pressure_[i] = p;
     velocity_[i] = u;
     w_[i] = w;

@@ -87,6 +87,20 @@ double MixtureLaw::W(double pressure_pa) const {
   return Interpolate(std::min(static_cast<int>(s), kIntervals - 1), x, nullptr);
 }
 
+double MixtureLaw::WAndWaveSpeed(double pressure_pa, double* wave_speed_mps) const {
+  const double p = std::max(pressure_pa, 1e-300);
+  const double x = std::log(p);
+  const double s = (x - x_lo_) / step_;
+  if (s <= 0.0 || s >= kIntervals) {
+    *wave_speed_mps = WaveSpeed(p);
+    return W(p);
+  }
+  double slope = 0.0;
+  const double w = Interpolate(std::min(static_cast<int>(s), kIntervals - 1), x, &slope);
+  *wave_speed_mps = p / (LiquidDensity(p) * slope);  // c = 1 / (rho dW/dp), dW/dp = slope / p
+  return w;
+}
+
 double MixtureLaw::DW(double pressure_pa) const {
   const double p = std::max(pressure_pa, 1e-300);
   return Slope(std::log(p)) / p;
