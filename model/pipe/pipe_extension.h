@@ -70,6 +70,22 @@ class PipeExtension {
     return inputs.displaced_flow_m3ps / inputs.area_m2;
   }
 
+  // --- Extra compressibility of the pipe's contents (e.g. entrained gas) ------------------------
+  // Adds C_x(p) >= 0 [1/Pa] to the liquid's compressibility 1/(rho c^2) at absolute pressure p, so
+  // the local wave speed falls to c(p) = 1 / sqrt(rho (1/(rho c^2) + C_x(p))) <= c (thesis 8.3.5,
+  // 8.3.6; the density stays the liquid's: small fractions). Must be >= 0: the grid is built for
+  // the rig's wave speed c, which is the upper bound. A function of p only, called when the
+  // solver tabulates the invariants (once per run).
+  virtual bool changes_compressibility() const { return false; }
+  virtual double ExtraCompressibilityPerPa(double /*pressure_pa*/) const { return 0.0; }
+
+  // --- Column separation at the vapour pressure -------------------------------------------------
+  // Where the pressure would fall below p_v [Pa abs], the liquid column separates: the pressure
+  // is held at p_v and a vapour cavity opens (the discrete vapour cavity model, see
+  // characteristics_solver.h). The cavity volumes are the solver's state.
+  virtual bool has_vapour_pressure() const { return false; }
+  virtual double VapourPressurePa() const { return 0.0; }
+
   // --- The outlet x = L -------------------------------------------------------------------------
   // By default the steady orifice equation (5.3.2) through ChokeBoundary.
   virtual bool closes_outlet() const { return false; }

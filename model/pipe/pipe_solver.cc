@@ -58,6 +58,8 @@ Status PipeSolver::SetExtensions(std::vector<const PipeExtension*> extensions) {
   source_extensions_.clear();
   inlet_closure_ = nullptr;
   outlet_closure_ = nullptr;
+  compressibility_extensions_.clear();
+  vapour_pressure_extension_ = nullptr;
   for (const PipeExtension* extension : extensions) {
     if (extension->adds_momentum_source()) {
       if (!supports_momentum_sources()) {
@@ -78,9 +80,29 @@ Status PipeSolver::SetExtensions(std::vector<const PipeExtension*> extensions) {
       if (outlet_closure_ != nullptr) return Status::Error("two effects close the pipe outlet");
       outlet_closure_ = extension;
     }
+    if (extension->changes_compressibility()) {
+      if (!supports_compressibility()) {
+        return Status::Error(
+            "this pipe scheme takes no pressure-dependent wave speed (use characteristics)");
+      }
+      compressibility_extensions_.push_back(extension);
+    }
+    if (extension->has_vapour_pressure()) {
+      if (!supports_column_separation()) {
+        return Status::Error("this pipe scheme takes no column separation (use characteristics)");
+      }
+      if (vapour_pressure_extension_ != nullptr) {
+        return Status::Error("two effects set a vapour pressure");
+      }
+      if (!(extension->VapourPressurePa() > 0.0)) {
+        return Status::Error("the vapour pressure must be above zero absolute");
+      }
+      vapour_pressure_extension_ = extension;
+    }
   }
   source_explicit_.assign(source_extensions_.empty() ? 0 : config_.cells + 1, 0.0);
   source_implicit_.assign(source_explicit_.size(), 0.0);
+  OnExtensionsChanged();
   return Status::Ok();
 }
 
