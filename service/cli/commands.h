@@ -15,5 +15,6 @@ void AddCompareCommand(CLI::App* app, int* exit_code);
 void AddObserveCommand(CLI::App* app, int* exit_code);
 void AddGainsCommand(CLI::App* app, int* exit_code);
 void AddEffectsCommand(CLI::App* app, int* exit_code);  // issue 4
+void AddFitCommand(CLI::App* app, int* exit_code);      // issue 4
 
 }  // namespace mpdrig::cli
