@@ -87,8 +87,8 @@ Result<FitParameter> ParseBounds(const std::string& spec) {
 Status ParseWindow(const std::string& spec, FitOptions* options) {
   const std::size_t colon = spec.find(':');
   if (colon == std::string::npos) {
-    return Status::Error("--window-s expects T0:T1 in seconds (either may be empty), got '" +
-                         spec + "'");
+    return Status::Error("--window-s expects T0:T1 in seconds (either may be empty), got '" + spec +
+                         "'");
   }
   const std::string begin = spec.substr(0, colon), end = spec.substr(colon + 1);
   if (!begin.empty()) {
@@ -144,7 +144,8 @@ std::string FitJson(const FitResult& fit, const std::vector<FitParameter>& param
         << ", \"upper\": " << JsonNumber(parameters[j].upper) << "}";
   }
   out << "\n  },\n  \"correlation\": {\"keys\": [";
-  for (std::size_t j = 0; j < fit.keys.size(); ++j) out << (j ? ", " : "") << JsonString(fit.keys[j]);
+  for (std::size_t j = 0; j < fit.keys.size(); ++j)
+    out << (j ? ", " : "") << JsonString(fit.keys[j]);
   out << "], \"matrix\": [";
   for (std::size_t i = 0; i < fit.correlation.size(); ++i) {
     out << (i ? ", " : "") << "[";
@@ -174,8 +175,8 @@ void PrintSummary(const FitResult& fit, const std::vector<FitParameter>& paramet
   std::printf("%-*s  %12s  %12s  %11s  %s\n", w, "parameter", "initial", "estimate", "std error",
               "bounds");
   for (std::size_t j = 0; j < fit.keys.size(); ++j) {
-    const bool at_bound = fit.estimates[j] <= parameters[j].lower ||
-                          fit.estimates[j] >= parameters[j].upper;
+    const bool at_bound =
+        fit.estimates[j] <= parameters[j].lower || fit.estimates[j] >= parameters[j].upper;
     std::printf("%-*s  %12.6g  %12.6g  +- %8.3g  [%g, %g]%s\n", w, fit.keys[j].c_str(),
                 fit.initial[j], fit.estimates[j], fit.standard_errors[j], parameters[j].lower,
                 parameters[j].upper, at_bound ? "  at a bound" : "");
@@ -188,13 +189,13 @@ void PrintSummary(const FitResult& fit, const std::vector<FitParameter>& paramet
       std::printf("\n");
     }
   }
-  std::printf("error (mean NRMSE): %.4g -> %.4g; %d iterations, %d replays, %s\n",
-              fit.error_before, fit.error_after, fit.iterations, fit.replays,
+  std::printf("error (mean NRMSE): %.4g -> %.4g; %d iterations, %d replays, %s\n", fit.error_before,
+              fit.error_after, fit.iterations, fit.replays,
               fit.converged ? "converged" : "NOT converged");
   if (!args.out_config_path.empty()) {
     std::printf("fitted config: %s (check: mpdrig compare %s --config %s --cells %d)\n",
-                args.out_config_path.c_str(), args.log_path.c_str(),
-                args.out_config_path.c_str(), args.model.cells);
+                args.out_config_path.c_str(), args.log_path.c_str(), args.out_config_path.c_str(),
+                args.model.cells);
   }
 }
 
@@ -247,8 +248,7 @@ int RunFit(const FitArgs& args) {
   if (!log.ok()) return Fail(name, log.status());
   if (!args.quiet) {
     std::fprintf(stderr, "mpdrig fit: %zu samples, %zu compared channels; %s\n",
-                 log->time_s().size(), log->channels.size(),
-                 args.model.Describe(*start).c_str());
+                 log->time_s().size(), log->channels.size(), args.model.Describe(*start).c_str());
   }
   auto fit = FitParameters(*log, *start, parameters, options);
   if (!fit.ok()) return Fail(name, fit.status().Within(args.log_path));

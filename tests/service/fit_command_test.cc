@@ -97,9 +97,9 @@ TEST_F(FitCommandTest, WritesTheDocumentedJsonAndAConfigThatCompareAccepts) {
   const std::string json = ReadFile(Path("fit.json"));
   for (const char* field :
        {"\"params\"", "\"wave_speed_mps\"", "\"friction_f1_per_s\"", "\"choke_leak_m2\"",
-        "\"initial\"", "\"estimate\"", "\"std_error\"", "\"lower\"", "\"upper\"",
-        "\"correlation\"", "\"keys\"", "\"matrix\"", "\"error_before\"", "\"error_after\"",
-        "\"iterations\"", "\"replays\"", "\"converged\": true"}) {
+        "\"initial\"", "\"estimate\"", "\"std_error\"", "\"lower\"", "\"upper\"", "\"correlation\"",
+        "\"keys\"", "\"matrix\"", "\"error_before\"", "\"error_after\"", "\"iterations\"",
+        "\"replays\"", "\"converged\": true"}) {
     EXPECT_TRUE(Contains(json, field)) << field << "\n" << json;
   }
   EXPECT_TRUE(Contains(json, "\"lower\": 600, \"upper\": 1400")) << json;
