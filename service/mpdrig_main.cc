@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   mpdrig::cli::AddGainsCommand(&app, &exit_code);
   mpdrig::cli::AddEffectsCommand(&app, &exit_code);
   mpdrig::cli::AddDiagnoseCommand(&app, &exit_code);
+  mpdrig::cli::AddFitCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }

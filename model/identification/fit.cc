@@ -340,8 +340,8 @@ Result<FitParameter> DefaultFitParameter(std::string_view key) {
   }
   const ParamInfo* info = FindParam(key);
   if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " +
-                         BaseKeys() + ", or EFFECT.KEY of an effect (`mpdrig effects`)");
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
+                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
   double lower = info->min_value, upper = info->max_value;
   bool tabled = false;
@@ -376,8 +376,8 @@ Result<double> GetParamValue(const RigParams& params, std::string_view key) {
   }
   const ParamInfo* info = FindParam(key);
   if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " +
-                         BaseKeys() + ", or EFFECT.KEY of an effect (`mpdrig effects`)");
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
+                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
   return params.*(info->member);
 }
@@ -413,13 +413,13 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
   }
   const ParamInfo* info = FindParam(key);
   if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " +
-                         BaseKeys() + ", or EFFECT.KEY of an effect (`mpdrig effects`)");
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
+                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
   if (value < info->min_value || value > info->max_value) {
     std::ostringstream out;
-    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value
-        << ", " << info->max_value << "]";
+    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
+        << info->max_value << "]";
     return Status::Error(out.str());
   }
   params->*(info->member) = value;
@@ -524,7 +524,8 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   // Ceres owns the cost function (default ownership) and reads/writes z in place.
   ceres::Problem problem;
   problem.AddResidualBlock(new ReplayCost(&residuals, lower_z, upper_z, options.relative_step,
-                                              options.central_differences), nullptr, z.data());
+                                          options.central_differences),
+                           nullptr, z.data());
   for (std::size_t j = 0; j < p; ++j) {
     problem.SetParameterLowerBound(z.data(), static_cast<int>(j), lower_z[j]);
     problem.SetParameterUpperBound(z.data(), static_cast<int>(j), upper_z[j]);
@@ -612,7 +613,8 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
         }
       }
     }
-    const Eigen::MatrixXd cov_z = s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
+    const Eigen::MatrixXd cov_z =
+        s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
     for (std::size_t i = 0; i < p; ++i) {
       if (!identifiable[i]) continue;
       result.standard_errors[i] = std::sqrt(cov_z(i, i)) * scales[i];

@@ -16,5 +16,6 @@ void AddObserveCommand(CLI::App* app, int* exit_code);
 void AddGainsCommand(CLI::App* app, int* exit_code);
 void AddEffectsCommand(CLI::App* app, int* exit_code);  // issue 4
 void AddDiagnoseCommand(CLI::App* app, int* exit_code);  // issue 4 (and synth)
+void AddFitCommand(CLI::App* app, int* exit_code);      // issue 4
 
 }  // namespace mpdrig::cli

@@ -90,7 +90,8 @@ MeasuredLog MakeLog(const RigParams& truth, double noise_scale, unsigned seed = 
   for (Channel channel : ComparedChannels()) {
     const double sigma = noise_scale * (IsFlow(channel) ? kFlowNoiseM3ps : kPressureNoisePa);
     std::vector<double> values;
-    for (const RigSample& sample : run->samples) values.push_back(sample[channel] + sigma * normal(random));
+    for (const RigSample& sample : run->samples)
+      values.push_back(sample[channel] + sigma * normal(random));
     EXPECT_TRUE(log.AddColumn(riglog::LabColumn(channel), values).ok());
   }
   auto measured = MeasuredLogFromRigLog(log, "generated.csv");
@@ -144,9 +145,9 @@ TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
     ++progress_calls;
     EXPECT_TRUE(std::isfinite(error));
   };
-  auto fit = FitParameters(log, RigParams{},
-                           Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}),
-                           options);
+  auto fit =
+      FitParameters(log, RigParams{},
+                    Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}), options);
   ASSERT_TRUE(fit.ok()) << fit.status().message();
   SCOPED_TRACE(fit->solver_report);
   const double expected[] = {1000.0, 0.3, 1.0e-6};
@@ -203,14 +204,15 @@ TEST(FitTest, RecoversAnEffectParameter) {
 
 TEST(FitTest, AnExactLogAtTheStartValuesDoesNotMove) {
   const MeasuredLog log = MakeLog(RigParams{}, 0.0);
-  auto fit = FitParameters(log, RigParams{},
-                           Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}),
-                           Options());
+  auto fit =
+      FitParameters(log, RigParams{},
+                    Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}), Options());
   ASSERT_TRUE(fit.ok()) << fit.status().message();
   EXPECT_LT(fit->error_before, 1e-9);
   EXPECT_LT(fit->error_after, 1e-9);
   for (std::size_t j = 0; j < fit->keys.size(); ++j) {
-    EXPECT_NEAR(fit->estimates[j], fit->initial[j], 1e-6 * std::abs(fit->initial[j])) << fit->keys[j];
+    EXPECT_NEAR(fit->estimates[j], fit->initial[j], 1e-6 * std::abs(fit->initial[j]))
+        << fit->keys[j];
   }
 }
 
@@ -251,8 +253,8 @@ TEST(FitTest, BadInputIsAnErrorThatSaysWhy) {
   auto outside = FitParameters(log, RigParams{}, {{"wave_speed_mps", 1.0, 800.0}}, Options());
   ASSERT_FALSE(outside.ok());
   EXPECT_NE(outside.status().message().find("outside"), std::string::npos);
-  auto twice = FitParameters(log, RigParams{}, Defaults({"wave_speed_mps", "wave_speed_mps"}),
-                             Options());
+  auto twice =
+      FitParameters(log, RigParams{}, Defaults({"wave_speed_mps", "wave_speed_mps"}), Options());
   ASSERT_FALSE(twice.ok());
 }
 
