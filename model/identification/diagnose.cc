@@ -369,7 +369,32 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
                      return a.penalised_error < b.penalised_error;
                    });
   if (!diagnosis.candidates.empty() && diagnosis.candidates.front().significant) {
-    const CandidateResult& winner = diagnosis.candidates.front();
+    CandidateResult& winner = diagnosis.candidates.front();
+    // The winner's fit ran on the candidates' short budget: polish it with the baseline's.
+    report("polish", steps - 0.75);
+    std::vector<FitParameter> winner_parameters;
+    for (const NamedValue& value : winner.params) {
+      auto parameter = DefaultFitParameter(value.key);
+      if (parameter.ok()) winner_parameters.push_back(*parameter);
+    }
+    auto polished = FitParameters(log, winner.fitted, winner_parameters, fit_options);
+    if (polished.ok()) {
+      diagnosis.replays += polished->replays;
+      auto traces = ReplayModel(log, polished->params, simulation);
+      ++diagnosis.replays;
+      if (traces.ok()) {
+        const Scored score = Score(log, *traces, score_begin, t_end);
+        if (score.error < winner.error) {
+          winner.params = Named(*polished);
+          winner.fit_error = polished->error_after;
+          winner.error = score.error;
+          winner.penalised_error = score.error * (1.0 + kParameterPrice * winner.extra_params);
+          winner.channel_errors = score.channel_errors;
+          winner.fitted = polished->params;
+          winner.improvement = (baseline.error - score.error) / baseline.error;
+        }
+      }
+    }
     diagnosis.verdict = winner.effect;
     report("compare", steps - 0.5);
     auto traces = ReplayModel(log, winner.fitted, simulation);
