@@ -245,6 +245,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
     };
     scan(start.wave_speed_mps, kWaveSpeedScanSpan, kWaveSpeedScanPoints);
     scan(best_c, kFineScanSpan, kFineScanPoints);
+    scan(best_c, kFinestScanSpan, kFineScanPoints);
     base_start.wave_speed_mps = best_c;
   }
   auto base_fit = FitParameters(log, base_start, base_parameters, fit_options);
@@ -292,23 +293,70 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
       candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
       RigParams params = base_fit->params;
       params.effects.push_back({candidate.effect, {}});
-      // The effect may move the best wave speed (it changes how fast or how far waves travel):
-      // the fine scan again, with the effect at its defaults, before the local fit.
-      if (fits_wave_speed) {
+      // Start the local fit from a scan: the effect's strength over its plausible range (the
+      // fitted parameters together, x {1/4, 1/2, 1, 2, 4} of their defaults) and, for each, the
+      // fine wave-speed scan. An effect that slows or delays the waves (added inertia, a lag, a
+      // compliance) moves the best wave speed, and the valley in c is narrow: a local fit from
+      // the baseline's c can trade one for the other and stop short.
+      // Two starting points for the other base parameters: the baseline's estimates, and the
+      // start values (the baseline's may have absorbed the missing effect, e.g. a higher f1
+      // standing in for unsteady friction, and then hold the candidate back).
+      {
+        RigParams from_start = start;
+        from_start.wave_speed_mps = params.wave_speed_mps;
+        from_start.effects = params.effects;
         double best_error = std::numeric_limits<double>::infinity();
+        RigParams best = params;
         const double centre = params.wave_speed_mps;
-        double best_c = centre;
-        for (int k = 0; k < kFineScanPoints; ++k) {
-          RigParams trial = params;
-          trial.wave_speed_mps =
-              centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (kFineScanPoints - 1));
-          auto traces = ReplayModel(log, trial, simulation);
-          ++replays[i];
-          if (!traces.ok()) continue;
-          const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
-          if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
+        for (int origin = 0; origin < 2; ++origin)
+        for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0}) {
+          RigParams strength = origin == 0 ? params : from_start;
+          bool valid = true;
+          for (std::size_t j = base_parameters.size(); j < candidate_parameters[i].size(); ++j) {
+            const FitParameter& parameter = candidate_parameters[i][j];
+            auto value = GetParamValue(strength, parameter.key);
+            if (!value.ok()) {
+              valid = false;
+              break;
+            }
+            const double scaled =
+                *value != 0.0 ? *value * factor
+                              : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
+            valid &= SetParamValue(&strength, parameter.key,
+                                   std::clamp(scaled, parameter.lower, parameter.upper))
+                         .ok();
+          }
+          if (!valid) continue;
+          const int points = fits_wave_speed ? kFineScanPoints : 1;
+          for (int k = 0; k < points; ++k) {
+            RigParams trial = strength;
+            if (fits_wave_speed) {
+              trial.wave_speed_mps =
+                  centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (points - 1));
+            }
+            auto traces = ReplayModel(log, trial, simulation);
+            ++replays[i];
+            if (!traces.ok()) continue;
+            const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
+            if (error < best_error) best_error = error, best = trial;
+          }
         }
-        params.wave_speed_mps = best_c;
+        // The finest wave-speed step around the best point.
+        if (fits_wave_speed) {
+          const RigParams around = best;
+          for (int k = 0; k < kFineScanPoints; ++k) {
+            RigParams trial = around;
+            trial.wave_speed_mps =
+                around.wave_speed_mps *
+                (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
+            auto traces = ReplayModel(log, trial, simulation);
+            ++replays[i];
+            if (!traces.ok()) continue;
+            const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
+            if (error < best_error) best_error = error, best = trial;
+          }
+        }
+        params = best;
       }
       FitOptions candidate_options = fit_options;
       candidate_options.max_iterations = options.candidate_iterations;

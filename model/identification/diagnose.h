@@ -36,12 +36,15 @@ namespace mpdrig {
 inline constexpr double kParameterPrice = 0.01;          // 1% of the error per extra parameter
 inline constexpr double kMinRelativeImprovement = 0.03;  // 3% of the baseline's scoring error
 inline constexpr int kScoreBlocks = 8;
-// The baseline's wave speed starts from the best of a scan over start +-kWaveSpeedScanSpan.
+// The baseline's wave speed starts from the best of a scan over start +-kWaveSpeedScanSpan...
 inline constexpr int kWaveSpeedScanPoints = 25;
 inline constexpr double kWaveSpeedScanSpan = 0.3;
 // ... then of a fine scan over best +-kFineScanSpan (each candidate repeats this one).
 inline constexpr int kFineScanPoints = 11;
 inline constexpr double kFineScanSpan = 0.025;
+// ... and a finest one over +-kFinestScanSpan: the valley in c can be narrower than 0.5% (light
+// damping, many reflections over a long log).
+inline constexpr double kFinestScanSpan = 0.005;
 
 struct DiagnoseOptions {
   SimulationOptions simulation;  // cells: kDiagnoseCells unless set
