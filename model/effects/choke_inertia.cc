@@ -39,8 +39,7 @@ class ChokeInertia final : public Effect {
       const double b = -pipe.DPressureDVelocity(u) / area_m2_ + m;
       const double d = p - in.outlet_pressure_pa + (b - m) * s + m * choke_flow_m3ps_;
       // Root of d - b s - a s|s| = 0.
-      const double magnitude =
-          2.0 * std::fabs(d) / (b + std::sqrt(b * b + 4.0 * a * std::fabs(d)));
+      const double magnitude = 2.0 * std::fabs(d) / (b + std::sqrt(b * b + 4.0 * a * std::fabs(d)));
       const double next = std::copysign(magnitude, d);
       const double change = std::fabs(next - s);
       s = next;
@@ -49,8 +48,8 @@ class ChokeInertia final : public Effect {
     return (s - q_b) / area_m2_;
   }
   void AfterStep(const PipeSolver& pipe, const StepRecord& step) override {
-    choke_flow_m3ps_ = step.boundary.choke.pump_flow_m3ps +
-                       area_m2_ * pipe.VelocityAt(pipe.config().length_m);
+    choke_flow_m3ps_ =
+        step.boundary.choke.pump_flow_m3ps + area_m2_ * pipe.VelocityAt(pipe.config().length_m);
   }
 
  private:
@@ -69,8 +68,8 @@ const EffectInfo& ChokeInertiaEffect() {
       "5.3, (5.3.3); the thesis kept the steady (5.3.2)",
       "removes a phase lag of the choke flow FT3 (and of C2's response to it) that grows with "
       "frequency",
-      {{"b1_per_m", "1/m", "inertance of the choke flow path b1 = length / area", 5.0e5, 0.0,
-        2.0e7, true}},
+      {{"b1_per_m", "1/m", "inertance of the choke flow path b1 = length / area", 5.0e5, 0.0, 2.0e7,
+        true}},
       [](const EffectContext& context) {
         return std::make_unique<ChokeInertia>(context.Get("b1_per_m"), context.pipe.area_m2,
                                               context.rig.choke_density_kgpm3);

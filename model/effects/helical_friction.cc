@@ -54,16 +54,16 @@ const EffectInfo& HelicalFrictionEffect() {
       "8.6.2, (8.6.4)-(8.6.7), Hasson 1955; coil data Table 8.1.2",
       "adds friction that grows faster than linearly with the flow: removes the model's too-"
       "large response to large heave amplitudes",
-      {{"scale", "-", "multiplier on Hasson's curvature term (1 = the correlation)", 1.0, 0.0,
-        5.0, true},
+      {{"scale", "-", "multiplier on Hasson's curvature term (1 = the correlation)", 1.0, 0.0, 5.0,
+        true},
        {"coil_radius_m", "m", "coil radius r_c (Table 8.1.2)", 1.07, 0.05, 100.0, false},
        {"pitch_m", "m", "coil pitch H (Table 8.1.2)", 0.017, 0.0, 10.0, false},
        {"viscosity_pa_s", "Pa s", "water viscosity mu (Table 8.1.2)", 1.0e-3, 1.0e-4, 1.0e-1,
         false}},
       [](const EffectContext& context) {
         return std::make_unique<HelicalFriction>(
-            context.rig, context.Get("scale"), context.Get("coil_radius_m"),
-            context.Get("pitch_m"), context.Get("viscosity_pa_s"));
+            context.rig, context.Get("scale"), context.Get("coil_radius_m"), context.Get("pitch_m"),
+            context.Get("viscosity_pa_s"));
       }};
   return info;
 }

@@ -11,10 +11,10 @@
 namespace mpdrig {
 namespace {
 
-constexpr Channel kLaggedChannels[] = {
-    Channel::kP1,  Channel::kP2,  Channel::kPT1, Channel::kPT2, Channel::kPT3,
-    Channel::kPT4, Channel::kPT5, Channel::kPT6, Channel::kPT7, Channel::kPT8,
-    Channel::kPT9, Channel::kPT10, Channel::kC2};
+constexpr Channel kLaggedChannels[] = {Channel::kP1,  Channel::kP2,  Channel::kPT1, Channel::kPT2,
+                                       Channel::kPT3, Channel::kPT4, Channel::kPT5, Channel::kPT6,
+                                       Channel::kPT7, Channel::kPT8, Channel::kPT9, Channel::kPT10,
+                                       Channel::kC2};
 
 class SensorLag final : public Effect {
  public:

@@ -43,6 +43,7 @@ class UnsteadyFriction final : public Effect {
       implicit_per_s[i] += k_ * inv_dt;
     }
   }
+
  private:
   double k_;
 };

@@ -224,9 +224,8 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
   // friction, 9.4): the cost is not convex in c. A wrong c puts the resonances in the wrong place,
   // and a local fit from there finds it cheaper to damp the response (raise f1) than to move c.
   RigParams base_start = start;
-  const bool fits_wave_speed =
-      std::find(options.base_params.begin(), options.base_params.end(), "wave_speed_mps") !=
-      options.base_params.end();
+  const bool fits_wave_speed = std::find(options.base_params.begin(), options.base_params.end(),
+                                         "wave_speed_mps") != options.base_params.end();
   if (fits_wave_speed) {
     // Coarse then fine: the valley in c is about 1% wide (the sweep's higher resonances), so a
     // coarse step of 2.5% finds its side and a fine step of 0.25% its floor.
@@ -309,38 +308,39 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
         RigParams best = params;
         const double centre = params.wave_speed_mps;
         for (int origin = 0; origin < 2; ++origin)
-        for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0}) {
-          RigParams strength = origin == 0 ? params : from_start;
-          bool valid = true;
-          for (std::size_t j = base_parameters.size(); j < candidate_parameters[i].size(); ++j) {
-            const FitParameter& parameter = candidate_parameters[i][j];
-            auto value = GetParamValue(strength, parameter.key);
-            if (!value.ok()) {
-              valid = false;
-              break;
+          for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0}) {
+            RigParams strength = origin == 0 ? params : from_start;
+            bool valid = true;
+            for (std::size_t j = base_parameters.size(); j < candidate_parameters[i].size(); ++j) {
+              const FitParameter& parameter = candidate_parameters[i][j];
+              auto value = GetParamValue(strength, parameter.key);
+              if (!value.ok()) {
+                valid = false;
+                break;
+              }
+              const double scaled =
+                  *value != 0.0
+                      ? *value * factor
+                      : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
+              valid &= SetParamValue(&strength, parameter.key,
+                                     std::clamp(scaled, parameter.lower, parameter.upper))
+                           .ok();
             }
-            const double scaled =
-                *value != 0.0 ? *value * factor
-                              : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
-            valid &= SetParamValue(&strength, parameter.key,
-                                   std::clamp(scaled, parameter.lower, parameter.upper))
-                         .ok();
-          }
-          if (!valid) continue;
-          const int points = fits_wave_speed ? kFineScanPoints : 1;
-          for (int k = 0; k < points; ++k) {
-            RigParams trial = strength;
-            if (fits_wave_speed) {
-              trial.wave_speed_mps =
-                  centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (points - 1));
+            if (!valid) continue;
+            const int points = fits_wave_speed ? kFineScanPoints : 1;
+            for (int k = 0; k < points; ++k) {
+              RigParams trial = strength;
+              if (fits_wave_speed) {
+                trial.wave_speed_mps =
+                    centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (points - 1));
+              }
+              auto traces = ReplayModel(log, trial, simulation);
+              ++replays[i];
+              if (!traces.ok()) continue;
+              const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
+              if (error < best_error) best_error = error, best = trial;
             }
-            auto traces = ReplayModel(log, trial, simulation);
-            ++replays[i];
-            if (!traces.ok()) continue;
-            const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
-            if (error < best_error) best_error = error, best = trial;
           }
-        }
         // The finest wave-speed step around the best point.
         if (fits_wave_speed) {
           const RigParams around = best;
@@ -394,8 +394,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
         candidate.improvement_std_error = std::sqrt(variance / blocks);
       }
       const double absolute = baseline.error - candidate.penalised_error;
-      candidate.significant = blocks >= 2 &&
-                              absolute > kMinRelativeImprovement * baseline.error &&
+      candidate.significant = blocks >= 2 && absolute > kMinRelativeImprovement * baseline.error &&
                               absolute > 3.0 * candidate.improvement_std_error;
     });
   }
@@ -449,7 +448,8 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
     if (traces.ok()) {
       ++diagnosis.replays;
       auto winner_comparison = CompareTraces(log, *traces);
-      if (winner_comparison.ok()) diagnosis.winner_comparison = std::move(winner_comparison).value();
+      if (winner_comparison.ok())
+        diagnosis.winner_comparison = std::move(winner_comparison).value();
     }
   }
   report("done", steps);

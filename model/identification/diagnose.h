@@ -48,11 +48,10 @@ inline constexpr double kFinestScanSpan = 0.005;
 
 struct DiagnoseOptions {
   SimulationOptions simulation;  // cells: kDiagnoseCells unless set
-  std::vector<std::string> base_params = {"wave_speed_mps", "friction_f1_per_s",
-                                          "choke_leak_m2"};
+  std::vector<std::string> base_params = {"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"};
   double fit_fraction = 0.6;
-  int max_iterations = 25;        // the baseline's fit
-  int candidate_iterations = 8;   // each candidate's (it starts from the fitted baseline)
+  int max_iterations = 25;       // the baseline's fit
+  int candidate_iterations = 8;  // each candidate's (it starts from the fitted baseline)
   // Only the baseline (fit and score), no candidates.
   bool baseline_only = false;
   // Effects to try; empty: the whole catalogue.
@@ -75,13 +74,13 @@ struct NamedValue {
 
 struct CandidateResult {
   std::string effect;
-  std::string explains;           // EffectInfo::explains
+  std::string explains;            // EffectInfo::explains
   std::vector<NamedValue> params;  // every fitted parameter (base and effect)
   int extra_params = 0;
-  double fit_error = 0.0;       // on the fitting data
-  double error = 0.0;           // on the scoring data (the compare metric)
-  double penalised_error = 0.0;  // ranking score
-  double improvement = 0.0;      // (baseline error - error) / baseline error
+  double fit_error = 0.0;              // on the fitting data
+  double error = 0.0;                  // on the scoring data (the compare metric)
+  double penalised_error = 0.0;        // ranking score
+  double improvement = 0.0;            // (baseline error - error) / baseline error
   double improvement_std_error = 0.0;  // of the absolute improvement, from the blocks
   bool significant = false;
   std::string failure;  // non-empty when the candidate could not be fitted (e.g. range left)
@@ -91,12 +90,12 @@ struct CandidateResult {
 };
 
 struct Diagnosis {
-  double fit_end_s = 0.0;  // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
+  double fit_end_s = 0.0;    // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
   double noise_floor = 0.0;  // estimated measurement noise as a mean NRMSE (second differences)
   CandidateResult baseline;  // effect ""
-  Comparison baseline_comparison;  // fitted baseline over the whole log
-  std::vector<CandidateResult> candidates;  // ranked best first
-  std::optional<std::string> verdict;        // the missing effect, if one is significant
+  Comparison baseline_comparison;               // fitted baseline over the whole log
+  std::vector<CandidateResult> candidates;      // ranked best first
+  std::optional<std::string> verdict;           // the missing effect, if one is significant
   std::optional<Comparison> winner_comparison;  // the verdict's model over the whole log
   int replays = 0;
 };

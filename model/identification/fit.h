@@ -67,11 +67,11 @@ struct FitOptions {
 };
 
 struct FitResult {
-  RigParams params;                    // start params with the estimates written in
-  std::vector<std::string> keys;       // in the order of the parameters given
-  std::vector<double> initial;         // start values
+  RigParams params;               // start params with the estimates written in
+  std::vector<std::string> keys;  // in the order of the parameters given
+  std::vector<double> initial;    // start values
   std::vector<double> estimates;
-  std::vector<double> standard_errors;  // NaN where J^T J is singular (unidentifiable)
+  std::vector<double> standard_errors;           // NaN where J^T J is singular (unidentifiable)
   std::vector<std::vector<double>> correlation;  // keys.size() squared
   double error_before = 0.0;  // mean NRMSE over compared channels on the window (compare's error)
   double error_after = 0.0;

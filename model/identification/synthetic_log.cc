@@ -45,8 +45,8 @@ double PistonAt(const Excitation& e, double duration, double t) {
   const double third = duration / 3.0;
   const double w = 2.0 * std::numbers::pi;
   if (t < third || t >= 2.0 * third) {
-    return e.piston_amp_m * (0.6 * std::sin(w * e.sine_hz[0] * t) +
-                             0.4 * std::sin(w * e.sine_hz[1] * t));
+    return e.piston_amp_m *
+           (0.6 * std::sin(w * e.sine_hz[0] * t) + 0.4 * std::sin(w * e.sine_hz[1] * t));
   }
   const double tau = t - third;
   const double rate = (e.sweep_hi_hz - e.sweep_lo_hz) / third;
@@ -91,7 +91,8 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
     for (const EffectParamInfo& param : info->params) {
       if (!param.fitted) continue;
       double lo = param.default_value / 2.0, hi = param.default_value * 2.0;
-      if (param.default_value == 0.0) lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
+      if (param.default_value == 0.0)
+        lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
       lo = std::max(lo, param.min_value);
       hi = std::min(hi, param.max_value);
       const double value = effect_random.Uniform(lo, hi);
@@ -149,8 +150,7 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
       outlet.push_back(log.atmospheric_pressure_pa);
     }
     riglog::RigLog inputs = log;
-    MPDRIG_RETURN_IF_ERROR(
-        inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
     MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
     MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
     MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
@@ -174,8 +174,8 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
                     noisy(choke, units::ChokeDegToFrac(options.choke_noise_deg))));
   MPDRIG_RETURN_IF_ERROR(
       log.AddColumn(riglog::LabColumn(Channel::kFT2), noisy(pump, options.flow_noise_m3ps)));
-  MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(Channel::kC1),
-                                       noisy(outlet, options.pressure_noise_pa)));
+  MPDRIG_RETURN_IF_ERROR(
+      log.AddColumn(riglog::LabColumn(Channel::kC1), noisy(outlet, options.pressure_noise_pa)));
   for (Channel channel : ComparedChannels()) {
     std::vector<double> values;
     values.reserve(run->samples.size());

@@ -28,9 +28,9 @@ struct SyntheticLogOptions {
   // not the diagnosis. (Noise on the inputs still keeps the replay from being the generator.)
   int cells = 50;
   std::optional<std::string> hidden_effect;  // none: the base model only
-  bool perturb_base = true;     // wave speed +-10%, f1 +-30%, choke leak +-30%
-  double pressure_noise_pa = 300.0;   // 0.003 bar, transmitters of 0.1% of 3-10 bar span
-  double flow_noise_m3ps = 5.0e-7;    // 0.03 L/min
+  bool perturb_base = true;                  // wave speed +-10%, f1 +-30%, choke leak +-30%
+  double pressure_noise_pa = 300.0;          // 0.003 bar, transmitters of 0.1% of 3-10 bar span
+  double flow_noise_m3ps = 5.0e-7;           // 0.03 L/min
   double piston_noise_m = 2.0e-5;
   double choke_noise_deg = 0.01;  // position feedback; near 30 deg G changes 15%/deg, so
                                   // more would swamp C2 with the replay of the noise itself
@@ -38,7 +38,7 @@ struct SyntheticLogOptions {
 
 struct SyntheticLog {
   riglog::RigLog log;
-  RigParams truth;  // what generated it (with the hidden effect, if any)
+  RigParams truth;          // what generated it (with the hidden effect, if any)
   std::string description;  // "unsteady_friction k=0.071; wave speed 912 m/s, ..."
 };
 

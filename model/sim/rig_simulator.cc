@@ -79,8 +79,8 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
   std::vector<const PipeExtension*> extensions;
   for (std::size_t i = 0; i < simulator.effects_.size(); ++i) {
     extensions.push_back(simulator.effects_[i].get());
-    MPDRIG_RETURN_IF_ERROR(simulator.pipe_->SetExtensions(extensions).Within(
-        "effect " + params.effects[i].name));
+    MPDRIG_RETURN_IF_ERROR(
+        simulator.pipe_->SetExtensions(extensions).Within("effect " + params.effects[i].name));
     simulator.filters_sensors_ |= simulator.effects_[i]->filters_sensors();
   }
   // With a pump that answers the choke pressure (pump_curve), the initial pump flow and choke

@@ -78,8 +78,7 @@ int RunDiagnose(DiagnoseArgs args) {
           tasks[i]();
           const std::size_t finished = ++done;
           if (!quiet) {
-            std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished,
-                         tasks.size());
+            std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished, tasks.size());
           }
         }
       });
@@ -99,9 +98,10 @@ int RunDiagnose(DiagnoseArgs args) {
     if (!written.ok()) return Fail(name, written);
   }
   FILE* summary = args.json_path == "-" || args.report_path == "-" ? stderr : stdout;
-  std::fprintf(summary, "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
-               "(noise floor %.3g%%)\n", d.fit_end_s, 100.0 * d.baseline.error,
-               100.0 * d.noise_floor);
+  std::fprintf(summary,
+               "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
+               "(noise floor %.3g%%)\n",
+               d.fit_end_s, 100.0 * d.baseline.error, 100.0 * d.noise_floor);
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     std::fprintf(summary, "%2zu. %s\n", i + 1,
                  DescribeCandidate(d.candidates[i], d.baseline).c_str());
@@ -135,9 +135,9 @@ int RunSynth(const SynthArgs& args) {
 void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
   auto args = std::make_shared<DiagnoseArgs>();
   args->model.cells = kDiagnoseCells;
-  CLI::App* command =
-      app->add_subcommand("diagnose", "Which physical effect is the model missing? Ranks the "
-                                      "effect catalogue on a measured log");
+  CLI::App* command = app->add_subcommand("diagnose",
+                                          "Which physical effect is the model missing? Ranks the "
+                                          "effect catalogue on a measured log");
   command->footer(
       "1. fits the base model (wave speed, pipe friction f1, choke leak) on the first part of\n"
       "   the log, 2. shows where it still fails (compare's metrics), 3. adds each effect of\n"
@@ -154,14 +154,16 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->check(CLI::ExistingFile);
   command->add_option("--json", args->json_path, "diagnosis as JSON ('-' for stdout)");
   command->add_option("--report", args->report_path, "self-contained HTML report");
-  command->add_option("--base-params", args->base_params,
-                      "base parameters to fit (default wave_speed_mps,friction_f1_per_s,"
-                      "choke_leak_m2)")
+  command
+      ->add_option("--base-params", args->base_params,
+                   "base parameters to fit (default wave_speed_mps,friction_f1_per_s,"
+                   "choke_leak_m2)")
       ->delimiter(',');
   command->add_option("--candidates", args->candidates, "effects to try (default: all)")
       ->delimiter(',');
-  command->add_option("--fit-fraction", args->fit_fraction,
-                      "share of the log (from its start) used for fitting; the rest scores")
+  command
+      ->add_option("--fit-fraction", args->fit_fraction,
+                   "share of the log (from its start) used for fitting; the rest scores")
       ->check(CLI::Range(0.2, 0.9))
       ->capture_default_str();
   command->add_option("--max-iterations", args->max_iterations, "solver iterations per fit")

@@ -17,8 +17,8 @@ void Print(std::string_view label, std::string_view text) {
 
 int RunEffects(const std::string& only) {
   if (!only.empty() && FindEffectInfo(only) == nullptr) {
-    return Fail("effects", Status::Error("unknown effect '" + only +
-                                         "'; valid effects: " + EffectNames()));
+    return Fail("effects",
+                Status::Error("unknown effect '" + only + "'; valid effects: " + EffectNames()));
   }
   for (const EffectInfo* info : EffectCatalogue()) {
     if (!only.empty() && info->name != only) continue;

@@ -65,8 +65,8 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
       << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays
       << ",\"baseline\":{\"error\":" << Num(b.error) << ",\"fit_error\":" << Num(b.fit_error)
-      << ",\"params\":" << ParamsJson(b.params) << ",\"channels\":" << ChannelsJson(b.channel_errors)
-      << "},\"candidates\":[";
+      << ",\"params\":" << ParamsJson(b.params)
+      << ",\"channels\":" << ChannelsJson(b.channel_errors) << "},\"candidates\":[";
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     const CandidateResult& c = d.candidates[i];
     if (i) out << ",";
@@ -88,7 +88,8 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   std::vector<const ChannelMetrics*> channels;
   for (const ChannelMetrics& m : cmp.channels) channels.push_back(&m);
   std::sort(channels.begin(), channels.end(), [](auto* a, auto* b) {
-    return (std::isfinite(a->nrmse) ? a->nrmse : -1.0) > (std::isfinite(b->nrmse) ? b->nrmse : -1.0);
+    return (std::isfinite(a->nrmse) ? a->nrmse : -1.0) >
+           (std::isfinite(b->nrmse) ? b->nrmse : -1.0);
   });
   out << ",\"where_baseline_fails\":{\"worst_channels\":[";
   for (std::size_t i = 0; i < channels.size() && i < 5; ++i) {
@@ -102,8 +103,9 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
     for (std::size_t k = 0; k < m.bands.size(); ++k) {
       const BandMetrics& band = m.bands[k];
       if (k) out << ",";
-      out << "{\"freq_hz\":" << Num(band.freq_hz) << ",\"magnitude_ratio\":"
-          << Num(band.magnitude_ratio) << ",\"phase_diff_deg\":" << Num(band.phase_diff_deg)
+      out << "{\"freq_hz\":" << Num(band.freq_hz)
+          << ",\"magnitude_ratio\":" << Num(band.magnitude_ratio)
+          << ",\"phase_diff_deg\":" << Num(band.phase_diff_deg)
           << ",\"band_nrmse\":" << Num(band.band_nrmse) << "}";
     }
     out << "]}";
@@ -180,7 +182,8 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
 
   html << "<h2>Candidates, best first</h2>\n<table><tr><th>#</th><th class=\"l\">effect</th>"
           "<th>error [%]</th><th>penalised [%]</th><th>improvement</th><th>significant</th>"
-          "<th class=\"l\">fitted effect parameters</th><th class=\"l\">what it explains</th></tr>\n";
+          "<th class=\"l\">fitted effect parameters</th><th class=\"l\">what it "
+          "explains</th></tr>\n";
   html << "<tr><td></td><td class=\"l\">(base model)</td><td>" << FormatValue(100.0 * b.error)
        << "</td><td></td><td></td><td></td><td class=\"l\"></td><td class=\"l\"></td></tr>\n";
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {

@@ -43,10 +43,10 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   const fs::path dir = TempDir();
   const std::string log = (dir / "lag.csv").string();
   std::string output;
-  ASSERT_EQ(RunShell(kExe + " synth --effect sensor_lag --seed 3 --duration 30 --rate-hz 50 --out " +
-                         log,
-                     &output),
-            0)
+  ASSERT_EQ(
+      RunShell(kExe + " synth --effect sensor_lag --seed 3 --duration 30 --rate-hz 50 --out " + log,
+               &output),
+      0)
       << output;
   EXPECT_NE(ReadFile(log).find("# hidden: sensor_lag"), std::string::npos);
   const std::string json = (dir / "d.json").string();
@@ -60,9 +60,9 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   EXPECT_NE(output.find("verdict: sensor_lag"), std::string::npos) << output;
   EXPECT_NE(output.find("diagnose: 100% done"), std::string::npos) << "progress on stderr";
   const std::string text = ReadFile(json);
-  for (const char* field :
-       {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"", "\"candidates\":[{\"effect\":",
-        "\"significant\":true", "\"verdict\":\"sensor_lag\"", "\"noise_floor\":"}) {
+  for (const char* field : {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"",
+                            "\"candidates\":[{\"effect\":", "\"significant\":true",
+                            "\"verdict\":\"sensor_lag\"", "\"noise_floor\":"}) {
     EXPECT_NE(text.find(field), std::string::npos) << field << " in " << text.substr(0, 400);
   }
   // Ranked best first: the first candidate is the verdict.
@@ -83,8 +83,8 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   ASSERT_EQ(RunShell("chromium --headless --no-sandbox --disable-gpu "
                      "--disable-background-networking --disable-component-update --disable-sync "
                      "--no-first-run --user-data-dir=" +
-                         (dir / "profile").string() +
-                         " --window-size=1280,1600 --screenshot=" + png.string() + " file://" + html,
+                         (dir / "profile").string() + " --window-size=1280,1600 --screenshot=" +
+                         png.string() + " file://" + html,
                      &output),
             0)
       << output;

@@ -39,7 +39,8 @@ std::array<Complex, kChannelCount> Response(const RigParams& params, const SineR
   const double t_start = std::ceil(run.settle_s * f) / f;
   std::vector<double> times;
   times.push_back(0.0);
-  for (int k = 0; k < run.periods * per_period; ++k) times.push_back(t_start + k / (f * per_period));
+  for (int k = 0; k < run.periods * per_period; ++k)
+    times.push_back(t_start + k / (f * per_period));
   SimulationOptions options;
   options.cells = run.cells;
   auto result = Simulate(params, options, inputs, times);

@@ -95,13 +95,12 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     const Diagnosis& d = c.diagnosis;
     const double without = RunCase(std::nullopt, seed, true).diagnosis.baseline.error;
     const bool is_detectable = d.baseline.error > (1.0 + kDetectableMargin) * without;
-    std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n",
-                effect.c_str(), seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error,
-                100.0 * without, is_detectable ? "" : " not detectable", Ranking(d).c_str());
+    std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n", effect.c_str(),
+                seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * without,
+                is_detectable ? "" : " not detectable", Ranking(d).c_str());
     if (!is_detectable) continue;
     ++detectable;
-    if (!d.candidates.empty() && d.candidates.front().effect == effect &&
-        d.verdict == effect) {
+    if (!d.candidates.empty() && d.candidates.front().effect == effect && d.verdict == effect) {
       ++first;
       const double after = d.candidates.front().error;
       // Half the error, or down to the noise floor: the no-effect log's baseline error (what
