@@ -34,7 +34,7 @@
 namespace mpdrig {
 
 inline constexpr double kParameterPrice = 0.01;          // 1% of the error per extra parameter
-inline constexpr double kMinRelativeImprovement = 0.03;  // 3% of the baseline's scoring error
+inline constexpr double kMinRelativeImprovement = 0.05;  // 5% of the baseline's scoring error
 inline constexpr int kScoreBlocks = 8;
 // The baseline's wave speed starts from the best of a scan over start +-kWaveSpeedScanSpan...
 inline constexpr int kWaveSpeedScanPoints = 25;

@@ -144,7 +144,7 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "   `mpdrig effects` in turn, fits it with the base parameters, and scores it on the rest\n"
       "   of the log (data it was not fitted on), with a price of 1% per extra parameter,\n"
       "4. ranks them and says what each explains. `significant`: better than the base model by\n"
-      "   more than 3% and three standard errors (over 8 blocks of the scoring data).\n"
+      "   more than 5% and three standard errors (over 8 blocks of the scoring data).\n"
       "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
       "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
       "Progress on stderr; a summary on stdout.");

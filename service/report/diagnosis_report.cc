@@ -231,7 +231,7 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
   }
   html << "</table>\n<p>Made by <code>mpdrig diagnose</code>. Ranking: compare's error on the "
           "scoring data times (1 + 1% per extra parameter); significant: better than the base "
-          "model by more than 3% and more than three standard errors over 8 blocks of the "
+          "model by more than 5% and more than three standard errors over 8 blocks of the "
           "scoring data.</p>\n</body></html>\n";
   return html.str();
 }
