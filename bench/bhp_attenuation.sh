@@ -38,12 +38,13 @@ for f in $freqs; do
   serve_pid=$!
   common=(--lockstep --domain "$domain" --duration "$duration" --measure-last "$window" --timeout 60)
   out="$(
+    exec 2>/dev/null
     "$controller" "${common[@]}" --rig fixed --open-loop &
     "$controller" "${common[@]}" --rig pi --no-feedforward &
     "$controller" "${common[@]}" --rig pi-ff &
     "$controller" "${common[@]}" --rig pi-ff-est --use-estimate &
     wait
-  )" 2>/dev/null
+  )"
   kill "$serve_pid"; wait "$serve_pid" 2>/dev/null || true; serve_pid=""
   fixed_amp="$(sed -n 's/^rig=fixed .*PT1_amplitude_bar=\([^ ]*\).*/\1/p' <<<"$out")"
   for rig in fixed pi pi-ff pi-ff-est; do
