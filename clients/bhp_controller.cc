@@ -303,7 +303,10 @@ int Run(const Args& args) {
       if (!e_took.ok()) return Fail(e_took.status().message());
       if (pending.empty()) {
         if (!*ready) idle_s += 0.1;
-        if (idle_s > args.timeout_s) return Fail("no sensor samples from " + rig_id);
+        if (idle_s > args.timeout_s) {
+          if (controller) break;  // the rig stopped: report what was measured
+          return Fail("no sensor samples from " + rig_id);
+        }
         continue;
       }
       idle_s = 0.0;
@@ -327,7 +330,10 @@ int Run(const Args& args) {
     // Lockstep with the estimate: sample k and estimate k, then the next step.
     if (pending.empty()) {
       if (!*ready) idle_s += 0.1;
-      if (idle_s > args.timeout_s) return Fail("no sensor samples from " + rig_id);
+      if (idle_s > args.timeout_s) {
+        if (controller) break;  // the rig stopped: report what was measured
+        return Fail("no sensor samples from " + rig_id);
+      }
       continue;
     }
     idle_s = 0.0;
