@@ -203,6 +203,14 @@ Result<RigSample> RigHost::Tick() {
     return step;
   });
   if (!sample.ok()) return sample.status();
+  // The sampler interpolates between simulator steps, the newer of which may have been computed
+  // (up to one step, l/(N c) = 5.3 ms, ahead) with the commands before this tick's. The pure
+  // inputs, pump flow FT2 and outlet pressure C1, are what the commands say now: the lab's pump
+  // and pressure regulator follow a command at once, and a controller sees its command in the
+  // next sample. FT3 = FT1 + FT2 stays consistent; the pipe answers on the model's next step.
+  sample->values[Index(Channel::kFT2)] = inputs_.pump_flow_m3ps;
+  sample->values[Index(Channel::kFT3)] = (*sample)[Channel::kFT1] + inputs_.pump_flow_m3ps;
+  sample->values[Index(Channel::kC1)] = inputs_.outlet_pressure_pa;
   time_s_ = target;
   ++counters_.samples;
   return sample;
