@@ -416,7 +416,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--ki", c.ki_deg_per_bar_s, "integral gain [deg per bar per s]")
       ->capture_default_str();
-  app.add_flag("!--no-feedforward", c.feedforward,
+  bool no_feedforward = false;
+  app.add_flag("--no-feedforward", no_feedforward,
                "PI only: no adaptive cancellation of the heave (it needs mpdrig_estimate)");
   app.add_option("--adapt", c.adapt_per_s,
                  "adaptation rate gamma of the heave cancellation [1/s]; above about 0.4 the "
@@ -457,8 +458,8 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   app.add_option("--log", args.log_path,
-                 "write time, PT1, BHP_est, choke position and reference, set point (rig-log "
-                 "columns)");
+                 "write a CSV of time, PT1, BHP_est, choke position and reference, set point "
+                 "(rig-log column names)");
   app.add_option("--timeout", args.timeout_s, "give up after this long without samples [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -475,6 +476,7 @@ int main(int argc, char** argv) {
       "  bhp_controller --rig rig-1 --no-feedforward  # PI only: watch it fail at 0.2 Hz\n"
       "Attenuation, fixed choke vs controlled: bench/bhp_attenuation.sh");
   CLI11_PARSE(app, argc, argv);
+  c.feedforward = !no_feedforward;
   if (!(c.choke_min_deg < c.choke_max_deg)) {
     std::fprintf(stderr, "bhp_controller: --choke-min-deg must be below --choke-max-deg\n");
     return 2;
