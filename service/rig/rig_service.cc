@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "service/rig/wire.h"
@@ -260,13 +261,17 @@ struct RigService::Impl {
 };
 
 Status ServeOptions::Validate(double sensor_rate_hz) const {
+  auto out_of_range = [sensor_rate_hz](const char* what, double value, const char* zero) {
+    std::ostringstream out;
+    out << what << " " << value << " Hz must be in [0, " << sensor_rate_hz
+        << "] Hz (the sensor rate; 0: " << zero << ")";
+    return Status::Error(out.str());
+  };
   if (!(estimate_hz >= 0.0 && estimate_hz <= sensor_rate_hz)) {
-    return Status::Error("estimate rate must be in [0, sensor rate " +
-                         std::to_string(sensor_rate_hz) + "] Hz (0: every sample)");
+    return out_of_range("estimate rate", estimate_hz, "with every sample");
   }
   if (!(profile_hz >= 0.0 && profile_hz <= sensor_rate_hz)) {
-    return Status::Error("profile rate must be in [0, sensor rate " +
-                         std::to_string(sensor_rate_hz) + "] Hz (0: off)");
+    return out_of_range("profile rate", profile_hz, "off");
   }
   if (observer) return observer_options.observer.Validate();
   return Status::Ok();
