@@ -12,6 +12,7 @@ packages=(
   cyclonedds-dev cyclonedds-tools  # DDS service: C API, headers and idlc (the IDL compiler)
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libfftw3-dev pkg-config  # spectra for `mpdrig compare` (bands, lag, transfer functions)
+  libceres-dev           # `mpdrig fit`: bounded nonlinear least squares and covariance
   # headless browser for the test that renders the comparison report (tests/service/report_test)
   chromium
 )

@@ -20,6 +20,9 @@ int main(int argc, char** argv) {
   mpdrig::cli::AddCompareCommand(&app, &exit_code);
   mpdrig::cli::AddObserveCommand(&app, &exit_code);
   mpdrig::cli::AddGainsCommand(&app, &exit_code);
+  mpdrig::cli::AddEffectsCommand(&app, &exit_code);
+  mpdrig::cli::AddDiagnoseCommand(&app, &exit_code);
+  mpdrig::cli::AddFitCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }

@@ -1,36 +1,52 @@
 // Comparison of the model with a measured rig log (issue 3): replay the log's inputs through the
 // model, then measure how and where the model departs from every measured channel.
 //
-// Three steps, each reusable on its own (issue 4 fits and screens effects by calling the second
-// and third step many times on one loaded log):
-//   LoadMeasuredLog   streams the file; keeps time, the inputs and the compared channels only.
-//   ReplayModel       runs the model on the log's inputs; returns the compared channels only.
-//   CompareTraces     the metrics below, from measured and model traces on one time base.
-// CompareLog chains the three.
+// Two ways in, one implementation of each metric (compare_accumulator.h):
+//   CompareLog        streams the file twice, in memory that does not grow with its length (an
+//                     hour at 1 kHz with all 16 channels: well under 200 MB, README.md):
+//                     pass 1 reads it for what the metrics need of the whole log up front (length,
+//                     mean interval, each channel's mean, the inputs' means, the piston's dominant
+//                     frequencies); pass 2 reads it again with the model replay in lock step
+//                     (log_stream.h) and accumulates the metrics.
+//   LoadMeasuredLog   keeps time, the inputs and the compared channels in memory;
+//   ReplayModel       runs the model on them (the same replay as pass 2: the same numbers);
+//   CompareTraces     the same two passes over traces in memory. Issue 4 fits and screens
+//                     effects by calling ReplayModel and CompareTraces many times on one log.
 //
 // Metrics per channel y (measured) and yhat (model), over the samples where y is measured:
 //   NRMSE = ||y - yhat|| / ||y - mean(y)||, fit = 100 (1 - NRMSE) %  (System Identification);
 //   rms = sqrt(mean((yhat - y)^2)), bias = mean(yhat - y)  (positive: the model reads high);
+//   Spectral quantities use Welch's method: Hann-windowed segments of L samples, L = the whole
+//     log up to CompareOptions::welch_segment_samples (2^17: 131 s at 1 kHz, 21.8 min at 100 Hz),
+//     beyond that segments of that length overlapping by half (the last one ending at the last
+//     sample), each with its own mean removed; DFT size M = the smallest 7-smooth number >= L.
+//     A log of at most L samples is one segment: the plain periodogram of the whole log.
 //   lag_s: the model's lag behind the measurement: the peak within +-max lag of the cross-
-//     correlation of the Hann-windowed series, divided by the window's own correlation,
-//     r(k) ~ sum_n w[n] y[n] w[n + k] yhat[n + k] / sum_n w[n] w[n + k]  (mean removed),
+//     correlation of the Hann-windowed segments, summed over the segments (through the summed
+//     cross-spectrum), divided by the window's own correlation,
+//     r(k) ~ sum_segments sum_n w[n] y[n] w[n + k] yhat[n + k] / sum_n w[n] w[n + k],
 //     refined by a parabola through the peak and its neighbours. Positive: the model is late
-//     (yhat(t) ~ y(t - lag)); negative: the model leads.
+//     (yhat(t) ~ y(t - lag)); negative: the model leads. The window is at most L / 2.
 //   bands: around the piston's dominant frequencies f0, 2 f0, 3 f0, ... and any further spectral
-//     peak of the piston: Hann-windowed spectra Y, Yhat summed over the band (+-3 bins, the Hann
-//     main lobe plus one bin):
+//     peak of the piston's Welch-averaged power spectrum: the segments' spectra Y, Yhat summed
+//     over the band (+-3 bins, the Hann main lobe plus one bin) and over the segments:
 //       magnitude_ratio = sqrt(sum |Yhat|^2 / sum |Y|^2)            (model / measurement)
 //       phase_diff_deg  = arg(sum Yhat conj(Y))                     (model - measurement;
 //                                                                    negative: model lags)
 //       band_nrmse      = sqrt(sum |Yhat - Y|^2 / sum |Y|^2)        (the error in that band)
-//       amplitudes      = 2 sqrt(sum |Y|^2 / (M sum w^2)), M the DFT size (a sinusoid's
-//                         amplitude, by Parseval)
+//       amplitudes      = 2 sqrt(sum |Y|^2 / (K M sum w^2)), K the segments, M the DFT size (a
+//                         sinusoid's amplitude, by Parseval)
+//   transfer functions piston -> PT1, C2: sum Y conj(U) / sum |U|^2 over the segments, at the
+//     bins where the piston's averaged power is above a fraction of its largest (pooled in
+//     log-spaced groups beyond transfer_points).
 //   residual e = y - yhat as MATLAB's `resid`: normalised autocorrelation r_ee(k), k = 1..M, and
 //     cross-correlation with each input u, r_eu(k) = sum_n e[n] u[n - k] / (N sigma_e sigma_u),
 //     k = -M..M (k > 0: the input leads the residual), with the 99% band +-2.58/sqrt(N). White:
-//     every r_ee(k) inside the band; independent of u: every r_eu(k) inside it.
+//     every r_ee(k) inside the band; independent of u: every r_eu(k) inside it. Exact lagged sums
+//     over the whole log (running sums over a history of M samples).
 // Spectral quantities (lag, bands, transfer functions) treat the log as uniformly sampled at its
-// mean interval; gaps (unmeasured samples) are filled by linear interpolation for them only.
+// mean interval; gaps (unmeasured samples) are filled by linear interpolation within each
+// segment (held at its ends) for them only; a segment without a measured sample is left out.
 //
 // Units: SI with absolute pressure (differences in Pa, m^3/s). The edges (JSON, HTML) convert to
 // each channel's unit in the log.
@@ -56,7 +72,8 @@ std::vector<Channel> ComparedChannels();
 // x [m] of PTk along the lab's pipe (0, 100, ..., 900, rig-log-format.md); nullopt otherwise.
 std::optional<double> PipePositionM(Channel channel);
 
-// "stage" names the part of the work ("read", "simulate", "analyse"); fraction in [0, 1].
+// "stage" names the part of the work ("read", "replay", "simulate", "analyse"); fraction in
+// [0, 1], or minus a sample count where the total is unknown (reading standard input).
 using CompareProgress = std::function<void(std::string_view stage, double fraction)>;
 
 struct MeasuredChannel {
@@ -121,6 +138,9 @@ struct CompareOptions {
   int transfer_points = 300;  // at most this many points of the empirical transfer functions
   double transfer_min_power_fraction = 1.0e-4;  // of the piston's largest bin power
   double piston_smoothing_s = 0.05;  // for the piston velocity used by the residual analysis
+  // Welch segment length (samples, >= 8): longer logs are averaged over segments this long.
+  // Memory per compared channel is about 24 bytes times this (compare_accumulator.h): 3 MB.
+  int welch_segment_samples = 1 << 17;
 };
 
 struct BandMetrics {
@@ -216,6 +236,9 @@ struct Comparison {
   std::vector<ProfilePoint> profile;      // x increasing
   std::vector<TransferFunction> transfer_functions;  // piston -> PT1 and -> C2 when present
   std::optional<RangeEvent> first_range_event;
+  long spectrum_segments = 1;       // Welch segments K
+  double spectrum_segment_s = 0.0;  // their length, L times the mean interval
+  double atmospheric_pressure_pa = units::kStandardAtmospherePa;  // the log's, for the edges
 
   const ChannelMetrics* Find(Channel channel) const;
 };
@@ -225,7 +248,9 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
                                  const CompareOptions& options = {},
                                  const CompareProgress& progress = {});
 
-// LoadMeasuredLog + ReplayModel + CompareTraces.
+// The same numbers as LoadMeasuredLog + ReplayModel + CompareTraces, streaming the file twice
+// (above) in bounded memory. Progress: ("read", fraction of the file) during pass 1, ("replay",
+// fraction of the samples) during pass 2.
 Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
                               const SimulationOptions& sim_options,
                               const CompareOptions& options = {},

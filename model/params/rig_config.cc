@@ -92,6 +92,26 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
           {units::ChokeDegToFrac(point.opening_deg()), point.g_m2()});
     }
   }
+  for (int i = 0; i < message.effect_size(); ++i) {
+    const config::Effect& effect = message.effect(i);
+    const pb::TextFormat::ParseLocation where =
+        locations.GetLocation(descriptor->FindFieldByName("effect"), i);
+    const std::string position =
+        source_name + ":" + std::to_string(where.line + 1) + ":" + std::to_string(where.column + 1);
+    if (effect.name().empty()) return Status::Error(position + ": effect without a name");
+    if (params.FindEffect(effect.name()) != nullptr) {
+      return Status::Error(position + ": effect '" + effect.name() + "' is listed twice");
+    }
+    EffectSetting setting{effect.name(), {}};
+    for (const config::EffectParam& param : effect.param()) {
+      if (!std::isfinite(param.value())) {
+        return Status::Error(position + ": effect " + effect.name() + ": " + param.key() +
+                             " is not a finite number");
+      }
+      setting.values.emplace_back(param.key(), param.value());
+    }
+    params.effects.push_back(std::move(setting));
+  }
   MPDRIG_RETURN_IF_ERROR(params.Validate().Within(source_name));
   return params;
 }
@@ -118,6 +138,16 @@ std::string FormatRigConfig(const RigParams& params) {
   for (const ChokePoint& point : params.choke_characteristic) {
     out << "choke_point { opening_deg: " << ShortestText(units::ChokeFracToDeg(point.opening_frac))
         << " g_m2: " << ShortestText(point.g_m2) << " }\n";
+  }
+  if (!params.effects.empty()) {
+    out << "\n# Physical effects switched on (`mpdrig effects` lists them with units).\n";
+  }
+  for (const EffectSetting& effect : params.effects) {
+    out << "effect { name: \"" << effect.name << "\"";
+    for (const auto& [key, value] : effect.values) {
+      out << " param { key: \"" << key << "\" value: " << ShortestText(value) << " }";
+    }
+    out << " }\n";
   }
   return out.str();
 }

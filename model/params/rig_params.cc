@@ -138,12 +138,29 @@ const ParamInfo* FindParam(std::string_view key) {
   return nullptr;
 }
 
-Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) +
-                         "'; valid keys: " + ValidKeys());
+const double* EffectSetting::Find(std::string_view key) const {
+  for (const auto& [name, value] : values) {
+    if (name == key) return &value;
   }
+  return nullptr;
+}
+
+EffectSetting* RigParams::FindEffect(std::string_view name) {
+  for (EffectSetting& effect : effects) {
+    if (effect.name == name) return &effect;
+  }
+  return nullptr;
+}
+
+const EffectSetting* RigParams::FindEffect(std::string_view name) const {
+  return const_cast<RigParams*>(this)->FindEffect(name);
+}
+
+namespace {
+
+// A finite number, or an error naming `key` and its unit.
+Result<double> ParseNumber(std::string_view key, std::string_view value_text,
+                           std::string_view unit) {
   double value = 0.0;
   // from_chars takes no leading '+'; a user may well write one.
   if (value_text.size() > 1 && value_text.front() == '+' && value_text[1] != '-') {
@@ -154,12 +171,49 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
   const auto [end, error] = std::from_chars(first, last, value);
   if (error != std::errc() || end != last || value_text.empty()) {
     return Status::Error(std::string(key) + ": '" + std::string(value_text) +
-                         "' is not a number (units: " + std::string(info->unit) + ")");
+                         "' is not a number (units: " + std::string(unit) + ")");
   }
   if (!std::isfinite(value)) {
     return Status::Error(std::string(key) + ": value must be finite, got '" +
                          std::string(value_text) + "'");
   }
+  return value;
+}
+
+// "EFFECT.KEY": bounds and key names are the registry's to check (ValidateEffects).
+Status SetEffectParam(RigParams* params, std::string_view key, std::string_view value_text) {
+  const std::size_t dot = key.find('.');
+  const std::string_view effect_name = key.substr(0, dot);
+  const std::string_view param = key.substr(dot + 1);
+  EffectSetting* effect = params->FindEffect(effect_name);
+  if (effect == nullptr) {
+    return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
+                         "' is not switched on (add --effect " + std::string(effect_name) + ")");
+  }
+  auto value = ParseNumber(key, value_text, "see `mpdrig effects`");
+  if (!value.ok()) return value.status();
+  for (auto& [name, existing] : effect->values) {
+    if (name == param) {
+      existing = *value;
+      return Status::Ok();
+    }
+  }
+  effect->values.emplace_back(std::string(param), *value);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
+  if (key.find('.') != std::string_view::npos) return SetEffectParam(params, key, value_text);
+  const ParamInfo* info = FindParam(key);
+  if (info == nullptr) {
+    return Status::Error("unknown parameter '" + std::string(key) +
+                         "'; valid keys: " + ValidKeys());
+  }
+  auto parsed = ParseNumber(key, value_text, info->unit);
+  if (!parsed.ok()) return parsed.status();
+  const double value = *parsed;
   if (value < info->min_value || value > info->max_value) {
     std::ostringstream out;
     out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "

@@ -12,6 +12,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "model/common/status.h"
@@ -22,6 +23,17 @@ namespace mpdrig {
 struct ChokePoint {
   double opening_frac;  // u_c in [0, 1]; 1 = 90 deg, fully open
   double g_m2;          // flow coefficient G [m^2]
+};
+
+// A physical effect switched on (model/effects/, issue 4): its registry name and the parameters
+// given explicitly; the others keep the effect's defaults. The effect registry checks names and
+// bounds (ValidateEffects in model/effects/effect.h) before anything is simulated.
+struct EffectSetting {
+  std::string name;
+  std::vector<std::pair<std::string, double>> values;  // key -> value, in the order given
+
+  // The value set for `key`, or nullptr.
+  const double* Find(std::string_view key) const;
 };
 
 struct RigParams {
@@ -53,6 +65,9 @@ struct RigParams {
   // --- Surroundings ----------------------------------------------------------------------------
   double atmospheric_pressure_pa = 101325.0;  // converts the lab's gauge pressures
 
+  // --- Physical effects beyond the thesis's model, in the order given (model/effects/) ----------
+  std::vector<EffectSetting> effects;
+
   // Derived quantities (thesis symbols).
   double PipeAreaM2() const;                // A = pi r_p^2
   double PistonDisplacementAreaM2() const;  // A_d - A_d2 (5.4.1, 8.6.1)
@@ -64,6 +79,10 @@ struct RigParams {
   Status Validate() const;
 
   static std::vector<ChokePoint> DefaultChokeCharacteristic();
+
+  // The setting of effect `name`, or nullptr when it is not switched on.
+  EffectSetting* FindEffect(std::string_view name);
+  const EffectSetting* FindEffect(std::string_view name) const;
 };
 
 // One scalar parameter: the single place its key, unit, meaning and bounds are written.
@@ -81,6 +100,8 @@ const ParamInfo* FindParam(std::string_view key);
 
 // Sets one parameter from its key and a text value (`--set wave_speed_mps=1100`). An unknown key
 // lists the valid ones; a NaN, an unparsable number or a value outside the bounds is an error.
+// An effect's parameter is "EFFECT.KEY" (`--set unsteady_friction.k=0.02`); the effect must be
+// switched on, and its key and bounds are checked by the effect registry (ValidateEffects).
 Status SetParam(RigParams* params, std::string_view key, std::string_view value_text);
 // Parses "key=value" and calls SetParam.
 Status ApplyOverride(RigParams* params, std::string_view assignment);

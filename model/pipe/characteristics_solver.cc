@@ -124,23 +124,94 @@ MPDRIG_HOT_LOOP void CharacteristicsSolver::StepInteriorQuasiLinear() {
   }
 }
 
+namespace {
+
+// p(0) as a function of u(0) once beta(0) is known: alpha(0) = 2 u - beta(0).
+class InletRelation final : public BoundaryRelation {
+ public:
+  InletRelation(const PipeLaw& law, double beta) : law_(law), beta_(beta) {}
+  double PressurePa(double u) const override {
+    return law_.PressureFromDifference(2.0 * (u - beta_));
+  }
+  double DPressureDVelocity(double u) const override {
+    return -law_.DPressureDVelocityAtPressure(PressurePa(u));
+  }
+
+ private:
+  const PipeLaw& law_;
+  double beta_;
+};
+
+// p(L) as a function of u(L) once alpha(L) is known.
+class OutletRelation final : public BoundaryRelation {
+ public:
+  OutletRelation(const PipeLaw& law, double alpha) : law_(law), alpha_(alpha) {}
+  double PressurePa(double u) const override { return law_.PressureFromAlpha(alpha_, u); }
+  double DPressureDVelocity(double u) const override {
+    return law_.DPressureDVelocityAtPressure(PressurePa(u));
+  }
+
+ private:
+  const PipeLaw& law_;
+  double alpha_;
+};
+
+}  // namespace
+
 Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation* violation) {
+  if (general_) return StepGeneral(inputs, violation);
   const int n = config_.cells;
   const double h = dt_s_;
   const double gs = config_.gravity_slope_mps2;
+  // Extra momentum sources from the state before the step (pipe_extension.h); none by default.
+  const bool has_sources = EvaluateMomentumSources();
+  // S = a + b u at a boundary node whose new velocity is u.
+  const auto source_at = [&](int i, double u) {
+    return has_sources ? source_explicit_[i] + source_implicit_[i] * u : 0.0;
+  };
 
   if (config_.model == PipeModel::kLinear) {
     StepInteriorLinear();
   } else {
     StepInteriorQuasiLinear();
   }
+  if (has_sources) {
+    // The node update without S gave u_P0 with 2 u_P0 D = alpha_A + beta_B - ..., D = 2 + h lambda
+    // (NodeUpdate). With S = a + b u_P in both characteristic equations:
+    //   u_P = (D u_P0 - 2 h a) / (D + 2 h b),
+    //   alpha_P = alpha_P0 - h lambda (u_P - u_P0)/2 - h (a + b u_P), beta_P likewise,
+    // which keeps alpha_P + beta_P = 2 u_P.
+    for (int i = 1; i < n; ++i) {
+      const double u_old = 0.5 * (alpha_[i] + beta_[i]);
+      const double lambda =
+          config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(u_old);
+      const double d = 2.0 + h * lambda;
+      const double u_p0 = 0.5 * (alpha_next_[i] + beta_next_[i]);
+      const double a = source_explicit_[i];
+      const double b = source_implicit_[i];
+      const double u_p = (d * u_p0 - 2.0 * h * a) / (d + 2.0 * h * b);
+      const double change = 0.5 * h * lambda * (u_p - u_p0) + h * (a + b * u_p);
+      alpha_next_[i] -= change;
+      beta_next_[i] -= change;
+    }
+  }
 
-  // Inlet, x = 0 (6.7.1): the beta characteristic arrives from node 1; u(0) is imposed.
+  // Inlet, x = 0 (6.7.1): the beta characteristic arrives from node 1; u(0) is imposed by the
+  // piston, or by an extension's closure. With a closure the friction at the new point needs
+  // u(0), which needs beta(0): two passes settle it, as at the outlet.
   {
     const Foot fb = BetaFoot(0);
-    const double u0 = inputs.end.inlet_velocity_mps;
-    beta_next_[0] =
-        fb.invariant - 0.5 * h * (config_.Friction(fb.velocity) + config_.Friction(u0)) - h * gs;
+    const double f_b = config_.Friction(fb.velocity);
+    double u0 = inputs.end.inlet_velocity_mps;
+    if (inlet_closure_ != nullptr) u0 = 0.5 * (alpha_[0] + beta_[0]);
+    const InletInputs inlet{inputs.end.inlet_velocity_mps * config_.area_m2, config_.area_m2, h};
+    for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
+      beta_next_[0] =
+          fb.invariant - 0.5 * h * (f_b + config_.Friction(u0)) - h * gs - h * source_at(0, u0);
+      if (inlet_closure_ != nullptr) {
+        u0 = inlet_closure_->SolveInletVelocity(InletRelation(law_, beta_next_[0]), inlet);
+      }
+    }
     alpha_next_[0] = 2.0 * u0 - beta_next_[0];
   }
 
@@ -152,11 +223,364 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
     double u_l = 0.5 * (alpha_[n] + beta_[n]);
     double alpha_l = 0.0;
     for (int pass = 0; pass < 2; ++pass) {
-      alpha_l = fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs;
-      u_l = choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
+      alpha_l =
+          fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs - h * source_at(n, u_l);
+      u_l = outlet_closure_ != nullptr
+                ? outlet_closure_->SolveOutletVelocity(OutletRelation(law_, alpha_l),
+                                                       inputs.end.choke, h, u_l)
+                : choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
     }
     alpha_next_[n] = alpha_l;
     beta_next_[n] = 2.0 * u_l - alpha_l;
+  }
+
+  alpha_.swap(alpha_next_);
+  beta_.swap(beta_next_);
+  if (!std::isfinite(alpha_[n]) || !std::isfinite(beta_[0])) {
+    return Status::Error("pipe state is no longer finite (check the inputs for NaN)");
+  }
+  CheckRange(violation);
+  return Status::Ok();
+}
+
+// --- General path: pressure-dependent wave speed and column separation -------------------------
+
+namespace {
+
+// W(p), its inverse and c(p): the tabulated mixture law when an extension adds compressibility,
+// else the model's own (W = PipeLaw::PressureTerm, c constant).
+class PressureFunction {
+ public:
+  PressureFunction(const PipeLaw& law, const MixtureLaw* mixture) : law_(law), mixture_(mixture) {}
+  double W(double p) const { return mixture_ ? mixture_->W(p) : law_.PressureTerm(p); }
+  double Pressure(double w, double guess_pa) const {
+    return mixture_ ? mixture_->Pressure(w, guess_pa) : law_.PressureFromDifference(2.0 * w);
+  }
+  // dW/dp = 1 / (rho c).
+  double DW(double p) const {
+    return mixture_ ? mixture_->DW(p) : -1.0 / law_.DPressureDVelocityAtPressure(p);
+  }
+  double WAndWaveSpeed(double p, double* c) const {
+    if (mixture_) return mixture_->WAndWaveSpeed(p, c);
+    *c = law_.wave_speed_mps();
+    return law_.PressureTerm(p);
+  }
+
+ private:
+  const PipeLaw& law_;
+  const MixtureLaw* mixture_;
+};
+
+// p(0) once beta(0) is known: W(p) = u - beta.
+class GeneralInletRelation final : public BoundaryRelation {
+ public:
+  GeneralInletRelation(const PressureFunction& w, double beta, double guess_pa)
+      : w_(w), beta_(beta), guess_pa_(guess_pa) {}
+  double PressurePa(double u) const override { return w_.Pressure(u - beta_, guess_pa_); }
+  double DPressureDVelocity(double u) const override { return 1.0 / w_.DW(PressurePa(u)); }
+
+ private:
+  const PressureFunction& w_;
+  double beta_;
+  double guess_pa_;
+};
+
+// p(L) once alpha(L) is known: W(p) = alpha - u.
+class GeneralOutletRelation final : public BoundaryRelation {
+ public:
+  GeneralOutletRelation(const PressureFunction& w, double alpha, double guess_pa)
+      : w_(w), alpha_(alpha), guess_pa_(guess_pa) {}
+  double PressurePa(double u) const override { return w_.Pressure(alpha_ - u, guess_pa_); }
+  double DPressureDVelocity(double u) const override { return -1.0 / w_.DW(PressurePa(u)); }
+
+ private:
+  const PressureFunction& w_;
+  double alpha_;
+  double guess_pa_;
+};
+
+// A vapour cavity at a boundary node: the boundary sees p_v whatever its velocity.
+class CavityRelation final : public BoundaryRelation {
+ public:
+  explicit CavityRelation(double vapour_pressure_pa) : p_v_(vapour_pressure_pa) {}
+  double PressurePa(double) const override { return p_v_; }
+  double DPressureDVelocity(double) const override { return 0.0; }
+
+ private:
+  double p_v_;
+};
+
+// The steady orifice (5.3.2) against any pipe relation: as ChokeBoundary::SolveOutletVelocity,
+// with the pipe side linearised around each iterate, p ~ p_k - b (s - s_k), s = q_c.
+double SolveChokeVelocity(const BoundaryRelation& pipe, const ChokeBoundaryInputs& in,
+                          double area_m2, double rho_l, double velocity_guess_mps) {
+  const double q_b = in.pump_flow_m3ps;
+  const double g = in.flow_coefficient_m2;
+  if (g <= 0.0) return -q_b / area_m2;
+  const double a = rho_l / (g * g);
+  double s = q_b + area_m2 * velocity_guess_mps;
+  for (int iteration = 0; iteration < 30; ++iteration) {
+    const double u = (s - q_b) / area_m2;
+    const double b = -pipe.DPressureDVelocity(u) / area_m2;
+    const double d = pipe.PressurePa(u) - in.outlet_pressure_pa + b * s;
+    const double magnitude =
+        d == 0.0 ? 0.0 : 2.0 * std::fabs(d) / (b + std::sqrt(b * b + 4.0 * a * std::fabs(d)));
+    const double next = std::copysign(magnitude, d);
+    const double change = std::fabs(next - s);
+    s = next;
+    if (change <= 1e-13 * (std::fabs(s) + 1e-12)) break;
+  }
+  return (s - q_b) / area_m2;
+}
+
+}  // namespace
+
+void CharacteristicsSolver::OnExtensionsChanged() {
+  mixture_.reset();
+  if (!compressibility_extensions_.empty()) {
+    const std::vector<const PipeExtension*> extensions = compressibility_extensions_;
+    mixture_ = std::make_unique<MixtureLaw>(law_, config_.density_kgpm3, config_.k_pa,
+                                            [extensions](double p) {
+                                              double sum = 0.0;
+                                              for (const PipeExtension* extension : extensions) {
+                                                sum += extension->ExtraCompressibilityPerPa(p);
+                                              }
+                                              return sum;
+                                            });
+  }
+  vapour_pressure_pa_ =
+      vapour_pressure_extension_ != nullptr ? vapour_pressure_extension_->VapourPressurePa() : 0.0;
+  general_ = mixture_ != nullptr || vapour_pressure_pa_ > 0.0;
+  const std::size_t nodes = general_ ? config_.cells + 1 : 0;
+  for (auto* scratch : {&pressure_, &w_, &speed_up_, &speed_down_, &alpha_left_, &alpha_right_,
+                        &beta_left_, &beta_right_, &u_left_, &u_right_}) {
+    scratch->assign(nodes, 0.0);
+  }
+  cavity_volume_.assign(vapour_pressure_pa_ > 0.0 ? nodes : 0, 0.0);
+  velocity_jump_.assign(cavity_volume_.size(), 0.0);
+}
+
+void CharacteristicsSolver::OnStateReset() {
+  std::fill(cavity_volume_.begin(), cavity_volume_.end(), 0.0);
+  std::fill(velocity_jump_.begin(), velocity_jump_.end(), 0.0);
+}
+
+double CharacteristicsSolver::CavityVolumeM3() const {
+  // The cavities are advanced by implicit Euler, half a step ahead of the time level: the
+  // time-centred volume V - A dt (u_right - u_left)/2 is the one the liquid balances (exactly,
+  // for the linear model: the sum of alpha - beta over the nodes changes by the boundary flows
+  // plus the trapezoidal sum of the jumps).
+  double sum = 0.0;
+  for (std::size_t i = 0; i < cavity_volume_.size(); ++i) {
+    sum += std::max(0.0, cavity_volume_[i] - 0.5 * dt_s_ * config_.area_m2 * velocity_jump_[i]);
+  }
+  return sum;
+}
+
+Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation) {
+  const int n = config_.cells;
+  const double h = dt_s_;
+  const double r = dt_s_ / config_.dx_m();  // 1 / c of the grid
+  const double gs = config_.gravity_slope_mps2;
+  const double area = config_.area_m2;
+  const bool linear = config_.model == PipeModel::kLinear;
+  const bool cavitation = vapour_pressure_pa_ > 0.0;
+  const PressureFunction fn(law_, mixture_.get());
+  const double p_v = vapour_pressure_pa_;
+  const double w_v = cavitation ? fn.W(p_v) : 0.0;
+  const bool has_sources = EvaluateMomentumSources();
+  const auto source_explicit = [&](int i) { return has_sources ? source_explicit_[i] : 0.0; };
+  const auto source_implicit = [&](int i) { return has_sources ? source_implicit_[i] : 0.0; };
+
+  // The old level in the mixture's invariants, each side of a cavity node separately.
+  for (int i = 0; i <= n; ++i) {
+    const double p = law_.Pressure(alpha_[i], beta_[i]);
+    const double u = 0.5 * (alpha_[i] + beta_[i]);
+    double c = 0.0;
+    const double w = fn.WAndWaveSpeed(p, &c);
+    pressure_[i] = p;
+    velocity_[i] = u;
+    w_[i] = w;
+    speed_up_[i] = linear ? c : u + c;  // the linear model's characteristics move at +-c (7.0.4)
+    speed_down_[i] = linear ? c : c - u;
+    // An interior cavity node stores the mean of its sides, a boundary node its outer side.
+    const double jump = cavitation ? velocity_jump_[i] : 0.0;
+    const double right_share = i == 0 ? 1.0 : (i == n ? 0.0 : 0.5);
+    u_left_[i] = u - (1.0 - right_share) * jump;
+    u_right_[i] = u + right_share * jump;
+    alpha_left_[i] = w + u_left_[i];
+    alpha_right_[i] = w + u_right_[i];
+    beta_left_[i] = -w + u_left_[i];
+    beta_right_[i] = -w + u_right_[i];
+  }
+
+  // Foot of the C+ characteristic arriving at node i: at x_i - sigma dx with the speed
+  // interpolated there, sigma = s_i / (1 + s_i - s_(i-1)), s = speed dt / dx (<= 1 but for u > 0
+  // at the full wave speed, where the foot lies beyond node i-1, as in AlphaFoot).
+  const auto alpha_foot = [&](int i, double* u_foot) {
+    const double s_here = speed_up_[i] * r;
+    const double s_near = speed_up_[i - 1] * r;
+    const double sigma = s_here / (1.0 + s_here - s_near);
+    if (sigma <= 1.0) {
+      *u_foot = (1.0 - sigma) * u_left_[i] + sigma * u_right_[i - 1];
+      return (1.0 - sigma) * alpha_left_[i] + sigma * alpha_right_[i - 1];
+    }
+    const int j = std::max(i - 2, 0);
+    const double tau = std::min(sigma - 1.0, 1.0);
+    *u_foot = (1.0 - tau) * u_left_[i - 1] + tau * u_right_[j];
+    return (1.0 - tau) * alpha_left_[i - 1] + tau * alpha_right_[j];
+  };
+  const auto beta_foot = [&](int i, double* u_foot) {
+    const double s_here = speed_down_[i] * r;
+    const double s_near = speed_down_[i + 1] * r;
+    const double sigma = s_here / (1.0 + s_here - s_near);
+    if (sigma <= 1.0) {
+      *u_foot = (1.0 - sigma) * u_right_[i] + sigma * u_left_[i + 1];
+      return (1.0 - sigma) * beta_right_[i] + sigma * beta_left_[i + 1];
+    }
+    const int j = std::min(i + 2, n);
+    const double tau = std::min(sigma - 1.0, 1.0);
+    *u_foot = (1.0 - tau) * u_right_[i + 1] + tau * u_left_[j];
+    return (1.0 - tau) * beta_right_[i + 1] + tau * beta_left_[j];
+  };
+  // A cavity's volume after the step with the new jump u_right - u_left (implicit Euler, see the
+  // header); <= 0 means it collapses.
+  const auto cavity_after = [&](int i, double jump) { return cavity_volume_[i] + h * area * jump; };
+  const auto in_cavity = [&](int i, double liquid_pressure_pa) {
+    return liquid_pressure_pa < p_v || cavity_volume_[i] > 0.0;
+  };
+  // Below p_v the node is a cavity whatever the volume (a closure at an end need not make the
+  // jump positive); above it, while the cavity has volume.
+  const auto keeps_cavity = [&](double liquid_pressure_pa, double volume) {
+    return liquid_pressure_pa < p_v || volume > 0.0;
+  };
+
+  // Interior nodes: the trapezoidal rule along both characteristics with the new point's
+  // friction linearised, as NodeUpdate, and the momentum sources semi-implicit.
+  for (int i = 1; i < n; ++i) {
+    double ua, ub;
+    const double a_foot = alpha_foot(i, &ua);
+    const double b_foot = beta_foot(i, &ub);
+    const double fa = config_.Friction(ua);
+    const double fb = config_.Friction(ub);
+    const double lambda =
+        config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(velocity_[i]);
+    const double sa = source_explicit(i);
+    const double sb = source_implicit(i);
+    double u_p = (a_foot + b_foot - 0.5 * h * (fa + fb) - 2.0 * h * gs - 2.0 * h * sa) /
+                 (2.0 + h * lambda + 2.0 * h * sb);
+    double p_p = fn.Pressure(0.5 * (a_foot - b_foot) - 0.25 * h * (fa - fb), pressure_[i]);
+    if (cavitation) {
+      double jump = 0.0;
+      if (in_cavity(i, p_p)) {
+        // Each side at p_v: alpha_P = W(p_v) + u_left, beta_P = -W(p_v) + u_right.
+        const double d = 1.0 + 0.5 * h * lambda + h * sb;
+        const double u_l = (a_foot - 0.5 * h * fa - h * gs - h * sa - w_v) / d;
+        const double u_r = (b_foot - 0.5 * h * fb - h * gs - h * sa + w_v) / d;
+        const double volume = cavity_after(i, u_r - u_l);
+        if (keeps_cavity(p_p, volume)) {
+          p_p = p_v;
+          u_p = 0.5 * (u_l + u_r);
+          jump = u_r - u_l;
+          cavity_volume_[i] = std::max(volume, 0.0);
+        } else {
+          cavity_volume_[i] = 0.0;  // collapse: the liquid solution stands
+        }
+      }
+      velocity_jump_[i] = jump;
+    }
+    alpha_next_[i] = law_.Alpha(p_p, u_p);
+    beta_next_[i] = law_.Beta(p_p, u_p);
+  }
+
+  // Inlet, x = 0: the beta characteristic from the pipe; u(0) from the piston or a closure.
+  {
+    double ub;
+    const double b_foot = beta_foot(0, &ub);
+    const double fb = config_.Friction(ub);
+    const auto beta_at = [&](double u) {
+      return b_foot - 0.5 * h * (fb + config_.Friction(u)) - h * gs -
+             h * (source_explicit(0) + source_implicit(0) * u);
+    };
+    const InletInputs inlet{inputs.end.inlet_velocity_mps * area, area, h};
+    double u0 = inlet_closure_ != nullptr ? velocity_[0] : inputs.end.inlet_velocity_mps;
+    double beta0 = 0.0;
+    for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
+      beta0 = beta_at(u0);
+      if (inlet_closure_ != nullptr) {
+        u0 = inlet_closure_->SolveInletVelocity(GeneralInletRelation(fn, beta0, pressure_[0]),
+                                                inlet);
+      }
+    }
+    double p0 = fn.Pressure(u0 - beta0, pressure_[0]);
+    if (cavitation) {
+      double jump = 0.0;
+      if (in_cavity(0, p0)) {
+        // Pipe side from C- at p_v (friction settled by fixed-point passes, h f' << 1); the
+        // piston side is what the inlet delivers against p_v.
+        double u_pipe = u0;
+        for (int pass = 0; pass < 3; ++pass) u_pipe = beta_at(u_pipe) + w_v;
+        const double u_side = inlet_closure_ != nullptr
+                                  ? inlet_closure_->SolveInletVelocity(CavityRelation(p_v), inlet)
+                                  : inputs.end.inlet_velocity_mps;
+        const double volume = cavity_after(0, u_pipe - u_side);
+        if (keeps_cavity(p0, volume)) {
+          p0 = p_v;
+          u0 = u_side;  // the node keeps the flow at x = 0, the pipe side leaves on alpha
+          jump = u_pipe - u_side;
+          cavity_volume_[0] = std::max(volume, 0.0);
+        } else {
+          cavity_volume_[0] = 0.0;
+        }
+      }
+      velocity_jump_[0] = jump;
+    }
+    alpha_next_[0] = law_.Alpha(p0, u0);
+    beta_next_[0] = law_.Beta(p0, u0);
+  }
+
+  // Outlet, x = L: the alpha characteristic from the pipe; u(L) from the choke or a closure.
+  {
+    double ua;
+    const double a_foot = alpha_foot(n, &ua);
+    const double fa = config_.Friction(ua);
+    const auto alpha_at = [&](double u) {
+      return a_foot - 0.5 * h * (fa + config_.Friction(u)) - h * gs -
+             h * (source_explicit(n) + source_implicit(n) * u);
+    };
+    const auto solve = [&](const BoundaryRelation& relation, double guess) {
+      return outlet_closure_ != nullptr
+                 ? outlet_closure_->SolveOutletVelocity(relation, inputs.end.choke, h, guess)
+                 : SolveChokeVelocity(relation, inputs.end.choke, area, config_.choke_density_kgpm3,
+                                      guess);
+    };
+    double u_l = velocity_[n];
+    double alpha_l = 0.0;
+    for (int pass = 0; pass < 2; ++pass) {
+      alpha_l = alpha_at(u_l);
+      u_l = solve(GeneralOutletRelation(fn, alpha_l, pressure_[n]), u_l);
+    }
+    double p_l = fn.Pressure(alpha_l - u_l, pressure_[n]);
+    if (cavitation) {
+      double jump = 0.0;
+      if (in_cavity(n, p_l)) {
+        double u_pipe = u_l;
+        for (int pass = 0; pass < 3; ++pass) u_pipe = alpha_at(u_pipe) - w_v;
+        const double u_side = solve(CavityRelation(p_v), u_l);
+        const double volume = cavity_after(n, u_side - u_pipe);
+        if (keeps_cavity(p_l, volume)) {
+          p_l = p_v;
+          u_l = u_side;  // the node keeps the flow through the choke, the pipe side leaves on beta
+          jump = u_side - u_pipe;
+          cavity_volume_[n] = std::max(volume, 0.0);
+        } else {
+          cavity_volume_[n] = 0.0;
+        }
+      }
+      velocity_jump_[n] = jump;
+    }
+    alpha_next_[n] = law_.Alpha(p_l, u_l);
+    beta_next_[n] = law_.Beta(p_l, u_l);
   }
 
   alpha_.swap(alpha_next_);

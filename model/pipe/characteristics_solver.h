@@ -10,10 +10,33 @@
 // at the new point is linearised as f(u_P) ~ (f1 + f2 |u_old|) u_P, which closes the two
 // characteristic equations at each node in one explicit formula (second order in dt for the
 // linear friction of the analytic model, 9.2).
+//
+// General path (only when an extension changes the compressibility or sets a vapour pressure;
+// the default path above does not change with it):
+// - Pressure-dependent wave speed c(p) <= c (MixtureLaw): the grid keeps dt = dx / c, the
+//   invariants are alpha = W(p) + u, beta = -W(p) + u with the tabulated W; the feet of the
+//   characteristics (speeds u +- c(p), Courant number <= 1) are found with the speed linearly
+//   interpolated between the nodes, and the invariants are interpolated there (the interpolated
+//   method of characteristics, Wylie & Streeter; it damps where c(p) < c, as interpolation does).
+//   alpha_, beta_ keep the model's own variables (PipeLaw), so pressures read the same everywhere.
+// - Column separation by the discrete vapour cavity model (Wylie & Streeter 1993; Bergant &
+//   Simpson 1999): where a node's pressure would fall below p_v, it is held at p_v and each
+//   characteristic gives its own side's velocity, u_left from C+ and u_right from C-; the cavity
+//   at the node grows as dV/dt = A (u_right - u_left), by implicit Euler (the DVCM weighting
+//   psi = 1: a node whose liquid solution falls below p_v has u_right > u_left, so its cavity
+//   grows and p >= p_v always holds). While V > 0 the node stays at p_v; when V would fall below 0
+//   the cavity collapses (V = 0) and the node takes the liquid solution: the colliding columns
+//   give the Joukowsky jump rho c du. The liquid balances with the time-centred cavity volume
+//   (CavityVolumeM3) up to what each collapse leaves, at most A dt |u_right - u_left|.
+//   An interior cavity node stores the mean of its two velocities and the jump u_right - u_left;
+//   a boundary node stores the velocity of the boundary (piston, choke: FT4 and FT1 stay the
+//   flows at the ends). Characteristics leaving a cavity node carry the velocity of their side.
 #pragma once
 
+#include <memory>
 #include <vector>
 
+#include "model/pipe/mixture_law.h"
 #include "model/pipe/pipe_solver.h"
 
 namespace mpdrig {
@@ -24,6 +47,21 @@ class CharacteristicsSolver final : public PipeSolver {
 
   double time_step_s() const override { return dt_s_; }
   Status Step(const PipeStepInputs& inputs, RangeViolation* violation) override;
+  double CavityVolumeM3() const override;
+  // Cavity volume at each node [m^3] (empty without column separation).
+  const std::vector<double>& cavity_volumes_m3() const { return cavity_volume_; }
+  // u_right - u_left at each node [m/s] (non-zero at cavities).
+  const std::vector<double>& velocity_jumps_mps() const { return velocity_jump_; }
+
+ protected:
+  // Momentum sources are added explicitly along both characteristics; closures replace the
+  // piston's or the choke's relation at the ends (pipe_extension.h).
+  bool supports_momentum_sources() const override { return true; }
+  bool supports_boundary_closures() const override { return true; }
+  bool supports_compressibility() const override { return true; }
+  bool supports_column_separation() const override { return true; }
+  void OnExtensionsChanged() override;
+  void OnStateReset() override;
 
  private:
   // Values at the foot of the characteristics that arrive at node i (the velocity is the
@@ -36,11 +74,23 @@ class CharacteristicsSolver final : public PipeSolver {
   Foot BetaFoot(int i) const;   // beta characteristic arriving at node i (from the right)
   void StepInteriorLinear();
   void StepInteriorQuasiLinear();
+  // The general path (see the header comment).
+  Status StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation);
 
   double dt_s_;
   std::vector<double> alpha_next_;
   std::vector<double> beta_next_;
   std::vector<double> velocity_;  // scratch: u at the nodes, old time level
+
+  // General path.
+  bool general_ = false;
+  std::unique_ptr<MixtureLaw> mixture_;  // null: W is the model's PressureTerm
+  double vapour_pressure_pa_ = 0.0;      // 0: no column separation
+  std::vector<double> cavity_volume_;    // V_i [m^3]
+  std::vector<double> velocity_jump_;    // u_right - u_left at cavity nodes [m/s]
+  // Scratch, old time level: pressure, W, speeds, and the side values of the invariants and u.
+  std::vector<double> pressure_, w_, speed_up_, speed_down_;
+  std::vector<double> alpha_left_, alpha_right_, beta_left_, beta_right_, u_left_, u_right_;
 };
 
 }  // namespace mpdrig

@@ -54,6 +54,69 @@ void PipeSolver::SetRestState(double outlet_pressure_pa) {
   OnStateReset();
 }
 
+Status PipeSolver::SetExtensions(std::vector<const PipeExtension*> extensions) {
+  source_extensions_.clear();
+  inlet_closure_ = nullptr;
+  outlet_closure_ = nullptr;
+  compressibility_extensions_.clear();
+  vapour_pressure_extension_ = nullptr;
+  for (const PipeExtension* extension : extensions) {
+    if (extension->adds_momentum_source()) {
+      if (!supports_momentum_sources()) {
+        return Status::Error("this pipe scheme takes no momentum sources (use characteristics)");
+      }
+      source_extensions_.push_back(extension);
+    }
+    if (extension->closes_inlet() || extension->closes_outlet()) {
+      if (!supports_boundary_closures()) {
+        return Status::Error("this pipe scheme takes no boundary closures (use characteristics)");
+      }
+    }
+    if (extension->closes_inlet()) {
+      if (inlet_closure_ != nullptr) return Status::Error("two effects close the pipe inlet");
+      inlet_closure_ = extension;
+    }
+    if (extension->closes_outlet()) {
+      if (outlet_closure_ != nullptr) return Status::Error("two effects close the pipe outlet");
+      outlet_closure_ = extension;
+    }
+    if (extension->changes_compressibility()) {
+      if (!supports_compressibility()) {
+        return Status::Error(
+            "this pipe scheme takes no pressure-dependent wave speed (use characteristics)");
+      }
+      compressibility_extensions_.push_back(extension);
+    }
+    if (extension->has_vapour_pressure()) {
+      if (!supports_column_separation()) {
+        return Status::Error("this pipe scheme takes no column separation (use characteristics)");
+      }
+      if (vapour_pressure_extension_ != nullptr) {
+        return Status::Error("two effects set a vapour pressure");
+      }
+      if (!(extension->VapourPressurePa() > 0.0)) {
+        return Status::Error("the vapour pressure must be above zero absolute");
+      }
+      vapour_pressure_extension_ = extension;
+    }
+  }
+  source_explicit_.assign(source_extensions_.empty() ? 0 : config_.cells + 1, 0.0);
+  source_implicit_.assign(source_explicit_.size(), 0.0);
+  OnExtensionsChanged();
+  return Status::Ok();
+}
+
+bool PipeSolver::EvaluateMomentumSources() {
+  if (source_extensions_.empty()) return false;
+  std::fill(source_explicit_.begin(), source_explicit_.end(), 0.0);
+  std::fill(source_implicit_.begin(), source_implicit_.end(), 0.0);
+  const PipeSnapshot snapshot{config_, law_, alpha_, beta_, time_step_s()};
+  for (const PipeExtension* extension : source_extensions_) {
+    extension->AddMomentumSource(snapshot, source_explicit_, source_implicit_);
+  }
+  return true;
+}
+
 void PipeSolver::Locate(double x_m, int* index, double* weight) const {
   const double s = std::clamp(x_m / config_.dx_m(), 0.0, static_cast<double>(config_.cells));
   int i = std::min(static_cast<int>(s), config_.cells - 1);

@@ -19,6 +19,7 @@
 #include "model/boundary/choke.h"
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
+#include "model/pipe/pipe_extension.h"
 #include "model/pipe/pipe_law.h"
 
 namespace mpdrig {
@@ -83,6 +84,14 @@ class PipeSolver {
   // profile (6.5.3) for the quasi-linear model, p_l + rho g sin(gamma) (L - x) for the linear one.
   void SetRestState(double outlet_pressure_pa);
 
+  // Physics beyond the thesis's pipe (issue 4), consulted every step; not owned, must outlive
+  // the solver. Refused when the scheme does not support a hook one of them uses, when two
+  // close the same end, or when two set a vapour pressure.
+  Status SetExtensions(std::vector<const PipeExtension*> extensions);
+
+  // Total volume of the vapour cavities [m^3] (column separation; 0 without it).
+  virtual double CavityVolumeM3() const { return 0.0; }
+
   // Advances one time step. A solver failure is an error; leaving the model's range is reported
   // in `violation` (the caller decides whether that stops the run).
   virtual Status Step(const PipeStepInputs& inputs, RangeViolation* violation) = 0;
@@ -96,6 +105,18 @@ class PipeSolver {
 
  protected:
   PipeSolver(const PipeConfig& config, double p_bar_pa);
+  // Which hooks the scheme implements (SetExtensions refuses the others).
+  virtual bool supports_momentum_sources() const { return false; }
+  virtual bool supports_boundary_closures() const { return false; }
+  virtual bool supports_compressibility() const { return false; }
+  virtual bool supports_column_separation() const { return false; }
+  // Called at the end of SetExtensions (e.g. to tabulate what the extensions change).
+  virtual void OnExtensionsChanged() {}
+  // Sum of the extensions' momentum sources at the current state into source_explicit_ and
+  // source_implicit_.
+  // Returns false when no extension adds one.
+  bool EvaluateMomentumSources();
+
   // Called after alpha_/beta_ were overwritten from outside the scheme (SetRestState).
   virtual void OnStateReset() {}
   // Index and weight of the interval holding x.
@@ -109,6 +130,14 @@ class PipeSolver {
   ChokeBoundary choke_;
   std::vector<double> alpha_;
   std::vector<double> beta_;
+  // Extensions, by hook.
+  std::vector<const PipeExtension*> source_extensions_;
+  const PipeExtension* inlet_closure_ = nullptr;
+  const PipeExtension* outlet_closure_ = nullptr;
+  std::vector<const PipeExtension*> compressibility_extensions_;
+  const PipeExtension* vapour_pressure_extension_ = nullptr;
+  std::vector<double> source_explicit_;  // a_i [m/s^2] of S_i = a_i + b_i u_i(new), nodes 0..N
+  std::vector<double> source_implicit_;  // b_i [1/s]
 };
 
 Result<std::unique_ptr<PipeSolver>> MakePipeSolver(PipeScheme scheme, const PipeConfig& config,

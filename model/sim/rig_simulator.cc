@@ -70,16 +70,45 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
   const PipeConfig config = PipeConfig::FromParams(params, options.model, options.cells);
   auto pipe = MakePipeSolver(options.scheme, config, outlet_pressure);
   if (!pipe.ok()) return pipe.status();
-  (*pipe)->SetRestState(outlet_pressure);
+  const double dt = (*pipe)->time_step_s();
+  auto effects = CreateEffects(params, config, dt);
+  if (!effects.ok()) return effects.status();
 
   RigSimulator simulator(params, options, std::move(pipe).value());
+  simulator.effects_ = std::move(effects).value();
+  std::vector<const PipeExtension*> extensions;
+  for (std::size_t i = 0; i < simulator.effects_.size(); ++i) {
+    extensions.push_back(simulator.effects_[i].get());
+    MPDRIG_RETURN_IF_ERROR(simulator.pipe_->SetExtensions(extensions).Within(
+        "effect " + params.effects[i].name));
+    simulator.filters_sensors_ |= simulator.effects_[i]->filters_sensors();
+  }
+  // With a pump that answers the choke pressure (pump_curve), the initial pump flow and choke
+  // pressure settle together: the fixed point of q = pump(p(q)), damped, from the command.
+  double pump_flow = in.pump_flow_m3ps;
+  double outlet_pressure_pa = outlet_pressure;
+  const auto choke_pressure = [&](double q) {
+    return in.outlet_pressure_pa +
+           (g > 0.0 ? params.choke_density_kgpm3 * q * std::fabs(q) / (g * g) : 0.0);
+  };
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    const double next = simulator.DeliveredPumpFlow(in.pump_flow_m3ps, outlet_pressure_pa);
+    if (std::fabs(next - pump_flow) <= 1e-12 * (1.0 + std::fabs(pump_flow))) break;
+    pump_flow = 0.5 * (pump_flow + next);
+    outlet_pressure_pa = choke_pressure(pump_flow);
+  }
+  simulator.pipe_->SetRestState(outlet_pressure_pa);
+
   simulator.start_time_s_ = start_time_s;
   simulator.choke_opening_frac_ = opening;
   simulator.last_inputs_.piston_velocity_mps = 0.0;
   simulator.last_inputs_.piston_position_m = initial_piston_position_m;
   simulator.last_inputs_.rig = in;
   simulator.boundary_.inlet_velocity_mps = 0.0;
-  simulator.boundary_.choke = {g, in.pump_flow_m3ps, in.outlet_pressure_pa};
+  simulator.boundary_.choke = {g, pump_flow, in.outlet_pressure_pa};
+  const ChannelValues initial = simulator.ModelChannels();
+  for (auto& effect : simulator.effects_) effect->Initialize(*simulator.pipe_, initial);
+  simulator.sensor_values_ = initial;
   return simulator;
 }
 
@@ -101,7 +130,8 @@ Status RigSimulator::Step(const StepInputs& inputs) {
   step.start = boundary_;
   step.end.inlet_velocity_mps = piston_.InletVelocityMps(inputs.piston_velocity_mps);
   step.end.choke.flow_coefficient_m2 = characteristic_.FlowCoefficientM2(choke_opening_frac_);
-  step.end.choke.pump_flow_m3ps = in.pump_flow_m3ps;
+  step.end.choke.pump_flow_m3ps =
+      DeliveredPumpFlow(in.pump_flow_m3ps, pipe_->PressureAt(params_.pipe_length_m));
   step.end.choke.outlet_pressure_pa = in.outlet_pressure_pa;
 
   RangeViolation violation;
@@ -109,6 +139,14 @@ Status RigSimulator::Step(const StepInputs& inputs) {
   ++steps_;
   last_inputs_ = inputs;
   boundary_ = step.end;
+  const StepRecord record{boundary_, dt};
+  for (auto& effect : effects_) effect->AfterStep(*pipe_, record);
+  if (filters_sensors_) {
+    sensor_values_ = ModelChannels();
+    for (auto& effect : effects_) {
+      if (effect->filters_sensors()) effect->FilterSensors(&sensor_values_, dt);
+    }
+  }
   if (violation.occurred) {
     RangeEvent event{time_s(), violation.position_m, violation.min_pressure_pa};
     if (options_.stop_on_range_violation) return Status::ModelRangeError(event.Describe());
@@ -117,18 +155,34 @@ Status RigSimulator::Step(const StepInputs& inputs) {
   return Status::Ok();
 }
 
+double RigSimulator::DeliveredPumpFlow(double commanded_m3ps, double choke_pressure_pa) const {
+  double flow = commanded_m3ps;
+  for (const auto& effect : effects_) {
+    if (effect->changes_pump_flow()) flow = effect->PumpFlowM3ps(flow, choke_pressure_pa);
+  }
+  return flow;
+}
+
 RigSample RigSimulator::Sample() const {
   RigSample sample;
   sample.time_s = time_s();
-  auto& v = sample.values;
+  sample.values = filters_sensors_ ? sensor_values_ : ModelChannels();
+  for (double x : options_.pressure_positions_m) {
+    sample.pressure_at_positions_pa.push_back(pipe_->PressureAt(x));
+  }
+  return sample;
+}
+
+ChannelValues RigSimulator::ModelChannels() const {
+  ChannelValues v{};
   const double length = params_.pipe_length_m;
   const double area = params_.PipeAreaM2();
   const double v_d = last_inputs_.piston_velocity_mps;
   const double p_inlet = pipe_->PressureAt(0.0);
   const double u_outlet = pipe_->VelocityAt(length);
-  const double q_b = last_inputs_.rig.pump_flow_m3ps;
+  const double q_b = boundary_.choke.pump_flow_m3ps;  // delivered (pump_curve may change it)
 
-  v[Index(Channel::kTime)] = sample.time_s;
+  v[Index(Channel::kTime)] = time_s();
   v[Index(Channel::kPistonPosition)] = last_inputs_.piston_position_m;
   v[Index(Channel::kChokePosition)] = choke_opening_frac_;
   v[Index(Channel::kP2)] = p_inlet;
@@ -143,10 +197,7 @@ RigSample RigSimulator::Sample() const {
   v[Index(Channel::kFT2)] = q_b;
   v[Index(Channel::kFT3)] = q_b + area * u_outlet;
   v[Index(Channel::kFT4)] = area * pipe_->VelocityAt(0.0);
-  for (double x : options_.pressure_positions_m) {
-    sample.pressure_at_positions_pa.push_back(pipe_->PressureAt(x));
-  }
-  return sample;
+  return v;
 }
 
 namespace {

@@ -21,6 +21,7 @@
 #include "model/boundary/piston.h"
 #include "model/common/status.h"
 #include "model/common/units.h"
+#include "model/effects/effect.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_solver.h"
 #include "model/sim/rig_channels.h"
@@ -100,14 +101,21 @@ class RigSimulator {
   // otherwise the first violation is kept in first_range_event().
   Status Step(const StepInputs& inputs);
 
-  // Every channel at the current time.
+  // Every channel at the current time (as the sensors report them: after the effects' sensor
+  // filters, if any).
   RigSample Sample() const;
+  // The physical effects of this run (RigParams::effects), in their order.
+  const std::vector<std::unique_ptr<Effect>>& effects() const { return effects_; }
   double PressureAtPa(double x_m) const { return pipe_->PressureAt(x_m); }
   const std::optional<RangeEvent>& first_range_event() const { return first_range_event_; }
 
  private:
   RigSimulator(const RigParams& params, const SimulationOptions& options,
                std::unique_ptr<PipeSolver> pipe);
+  // The model's channels at the current time, before any sensor filter.
+  ChannelValues ModelChannels() const;
+  // The pump's delivered flow for its command, through the effects that change it.
+  double DeliveredPumpFlow(double commanded_m3ps, double choke_pressure_pa) const;
 
   RigParams params_;
   SimulationOptions options_;
@@ -120,6 +128,9 @@ class RigSimulator {
   double choke_opening_frac_ = 0.0;
   StepInputs last_inputs_{};
   PipeBoundaryValues boundary_{};  // boundary inputs at the current time
+  std::vector<std::unique_ptr<Effect>> effects_;
+  bool filters_sensors_ = false;
+  ChannelValues sensor_values_{};  // after the sensor filters (when filters_sensors_)
   std::optional<RangeEvent> first_range_event_;
 };
 

@@ -14,5 +14,8 @@ void AddServeCommand(CLI::App* app, int* exit_code);
 void AddCompareCommand(CLI::App* app, int* exit_code);
 void AddObserveCommand(CLI::App* app, int* exit_code);
 void AddGainsCommand(CLI::App* app, int* exit_code);
+void AddEffectsCommand(CLI::App* app, int* exit_code);  // issue 4
+void AddDiagnoseCommand(CLI::App* app, int* exit_code);  // issue 4 (and synth)
+void AddFitCommand(CLI::App* app, int* exit_code);      // issue 4
 
 }  // namespace mpdrig::cli

@@ -18,7 +18,6 @@ namespace {
 struct CompareArgs {
   ModelOptions model;
   std::string log_path;
-  std::vector<std::string> effects;
   std::string json_path;
   std::string report_path;
   double piston_smoothing_s = 0.05;
@@ -41,10 +40,6 @@ Status WriteText(const std::string& path, const std::string& text) {
 
 int RunCompare(const CompareArgs& args) {
   const std::string name = "compare";
-  if (!args.effects.empty()) {
-    return Fail(name, Status::Error("--effect " + args.effects.front() +
-                                    ": effects arrive with issue 4 (not available yet)"));
-  }
   if (args.json_path.empty() && args.report_path.empty()) {
     return Fail(name, Status::Error("give --json OUT.json and/or --report OUT.html"));
   }
@@ -72,13 +67,8 @@ int RunCompare(const CompareArgs& args) {
                  stage.data(), percent);
   };
 
-  auto log = LoadMeasuredLog(args.log_path, progress);
-  if (!log.ok()) return Fail(name, log.status());
-  ReplayOptions replay;
-  replay.piston_smoothing_s = args.piston_smoothing_s;
-  auto model = ReplayModel(*log, *params, *sim_options, replay, progress);
-  if (!model.ok()) return Fail(name, model.status().Within(args.log_path));
-  auto comparison = CompareTraces(*log, *model, options, progress);
+  // Two passes over the file in bounded memory (compare.h): an hour at 1 kHz is fine.
+  auto comparison = CompareLog(args.log_path, *params, *sim_options, options, progress);
   if (!comparison.ok()) return Fail(name, comparison.status());
 
   report::ReportContext context;
@@ -88,7 +78,7 @@ int RunCompare(const CompareArgs& args) {
   for (const std::string& assignment : args.model.overrides) {
     context.config += (context.config.empty() ? "" : " ") + std::string("--set ") + assignment;
   }
-  context.atmospheric_pressure_pa = log->atmospheric_pressure_pa;
+  context.atmospheric_pressure_pa = comparison->atmospheric_pressure_pa;
   if (comparison->first_range_event) {
     std::fprintf(stderr, "mpdrig compare: warning: %s\n",
                  comparison->first_range_event->Describe().c_str());
@@ -128,6 +118,7 @@ void AddCompareCommand(CLI::App* app, int* exit_code) {
       "compares every measured channel present (P1 P2 PT1..PT10 C2 FT1 FT3 FT4): fit %, NRMSE,\n"
       "RMS error and bias (in the log's units), lag, error per frequency band, the error along\n"
       "the pipe and a residual analysis. Field names: README.md, 'Comparing with measurements'.\n"
+      "The log is read twice (a check and a replay pass) in memory that does not grow with it.\n"
       "  mpdrig compare lab.csv --json lab.json --report lab.html\n"
       "  mpdrig compare lab.csv --set wave_speed_mps=1000 --json - | jq .channels.PT1\n"
       "Progress goes to stderr.");
@@ -135,8 +126,6 @@ void AddCompareCommand(CLI::App* app, int* exit_code) {
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
       ->required()
       ->check(CLI::ExistingFile);
-  command->add_option("--effect", args->effects,
-                      "switch a physical effect on (arrives with issue 4; refused for now)");
   command->add_option("--json", args->json_path, "metrics as JSON ('-' for stdout)");
   command->add_option("--report", args->report_path, "self-contained HTML report");
   command

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "model/effects/effect.h"
 #include "model/params/rig_config.h"
 
 namespace mpdrig::cli {
@@ -12,6 +13,11 @@ void ModelOptions::AddParamOptions(CLI::App* command) {
       ->add_option("--config", config_path,
                    "rig configuration, Protobuf text format (see `mpdrig params --format pbtxt`)")
       ->check(CLI::ExistingFile);
+  command
+      ->add_option("--effect", effects,
+                   "switch a physical effect on, e.g. --effect unsteady_friction:k=0.05 "
+                   "(repeatable; `mpdrig effects` lists names, parameters and units)")
+      ->type_name("NAME[:KEY=VALUE,...]");
   command
       ->add_option("--set", overrides,
                    "override a parameter, e.g. --set wave_speed_mps=1100 (repeatable; "
@@ -42,10 +48,14 @@ Result<RigParams> ModelOptions::LoadParams() const {
     if (!loaded.ok()) return loaded.status();
     params = *loaded;
   }
+  for (const std::string& spec : effects) {
+    MPDRIG_RETURN_IF_ERROR(ApplyEffectSpec(&params, spec).Within("--effect"));
+  }
   for (const std::string& assignment : overrides) {
     MPDRIG_RETURN_IF_ERROR(ApplyOverride(&params, assignment).Within("--set"));
   }
   MPDRIG_RETURN_IF_ERROR(params.Validate());
+  MPDRIG_RETURN_IF_ERROR(ValidateEffects(params));
   return params;
 }
 
@@ -63,6 +73,7 @@ std::string ModelOptions::Describe(const RigParams& params) const {
   out.precision(3);
   out << model << ", " << cells << " cells, " << scheme << " (dt "
       << 1e3 * params.pipe_length_m / (cells * params.wave_speed_mps) << " ms)";
+  for (const EffectSetting& effect : params.effects) out << ", + " << effect.name;
   return out.str();
 }
 

@@ -1,6 +1,8 @@
 // Options every model command shares: the rig configuration and how to simulate it.
 //   --config FILE        Protobuf text config (rig_config.proto) on top of the thesis defaults
-//   --set key=value      override one parameter (repeatable; `mpdrig params` lists the keys)
+//   --effect NAME[:k=v]  switch a physical effect on (repeatable; `mpdrig effects` lists them)
+//   --set key=value      override one parameter (repeatable; `mpdrig params` lists the keys;
+//                        an effect's parameter is EFFECT.KEY)
 //   --model quasilinear|linear, --cells N, --scheme characteristics|mol
 #pragma once
 
@@ -17,16 +19,18 @@ namespace mpdrig::cli {
 
 struct ModelOptions {
   std::string config_path;
+  std::vector<std::string> effects;
   std::vector<std::string> overrides;
   std::string model = "quasilinear";
   std::string scheme = "characteristics";
   int cells = kDefaultCells;
 
-  // Registers --config and --set.
+  // Registers --config, --effect and --set.
   void AddParamOptions(CLI::App* command);
   // Registers --model, --cells, --scheme as well.
   void AddAll(CLI::App* command);
 
+  // The config file, then the effects, then the overrides (so --set can reach an effect).
   Result<RigParams> LoadParams() const;
   Result<SimulationOptions> LoadSimulationOptions() const;
   // "quasilinear, 200 cells, characteristics (dt 5.29 ms)"

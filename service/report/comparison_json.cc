@@ -89,6 +89,8 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
   json.Key("error").Number(comparison.error);
   json.Key("dominant_freqs_hz").Numbers(comparison.dominant_freqs_hz);
   json.Key("max_lag_s").Number(comparison.max_lag_s);
+  json.Key("spectrum_segments").Integer(comparison.spectrum_segments);
+  json.Key("spectrum_segment_s").Number(comparison.spectrum_segment_s);
   if (comparison.first_range_event) {
     json.Key("warning").Text(comparison.first_range_event->Describe());
   }

@@ -283,6 +283,11 @@ std::string ComparisonHtml(const Comparison& comparison, const ReportContext& co
     html += (i ? ", " : "") + FormatValue(comparison.dominant_freqs_hz[i]);
   }
   html += comparison.dominant_freqs_hz.empty() ? "(none found)" : " Hz";
+  html += comparison.spectrum_segments > 1
+              ? ". Spectra: Welch average of " + std::to_string(comparison.spectrum_segments) +
+                    " half-overlapping Hann segments of " +
+                    FormatValue(comparison.spectrum_segment_s) + " s"
+              : ". Spectra: one Hann-windowed periodogram of the whole log";
   html += ".</p>";
   if (comparison.first_range_event) {
     html +=

@@ -1,0 +1,168 @@
+// A rig log as a stream of rows for the comparison (compare.h), in memory that does not grow with
+// the log's length: rows come from a file (RigLogReader, one line at a time) or from a log
+// already in memory, go through the piston-position smoothing and, if asked, through the model
+// replay, and leave in order, one at a time, with what the metrics need of each sample.
+//
+// RowPipeline reproduces `Simulate` on a log's inputs exactly (SignalsFromColumns + SimulateEach,
+// model/sim): the same smoothing (SmoothLocalQuadratic, model/signal, run on blocks that hold
+// every sample of each smoothed sample's window, so each value is the same double), the same
+// linear interpolation of the inputs between samples, the same piston velocity at each step end
+// (centred difference over one solver step, one-sided at the log's ends) and the same RigSampler.
+// It keeps only a lookahead window: the smoothing window and two solver steps beyond the sample
+// it hands out, plus one smoothing block (4096 samples).
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "model/analysis/compare.h"
+#include "model/common/status.h"
+#include "model/riglog/rig_log_reader.h"
+#include "model/sim/rig_simulator.h"
+
+namespace mpdrig {
+
+// P1 P2 PT1..PT10 C2 FT1 FT3 FT4 (ComparedChannels()).
+inline constexpr std::size_t kComparedChannelCount = 16;
+
+// One sample of a log: the inputs in SI (absolute pressure) and the compared channels the source
+// has (LogRowSource::channels(), in that order; NaN where not measured).
+struct LogRow {
+  double time_s = 0.0;
+  double piston_position_m = 0.0;  // as measured (not smoothed)
+  double choke_opening_frac = 0.0;
+  double pump_flow_m3ps = 0.0;
+  double outlet_pressure_pa = 0.0;
+  std::array<double, kComparedChannelCount> measured_si{};
+};
+
+struct SourceChannel {
+  Channel channel = Channel::kP1;
+  riglog::Unit unit = riglog::Unit::kBarg;
+};
+
+class LogRowSource {
+ public:
+  virtual ~LogRowSource() = default;
+  // The compared channels each row carries, in the order of ComparedChannels().
+  virtual const std::vector<SourceChannel>& channels() const = 0;
+  // The next row; false at the end. Errors name the file, line and column.
+  virtual Result<bool> Next(LogRow* row) = 0;
+};
+
+// Streams a rig-log file. Open() refuses a header without piston_position or choke_position;
+// Next() a row whose input is not measured (the model cannot run on a gap). FT2 absent is 0,
+// C1 absent is atmospheric. `progress` gets ("read", fraction of the file's bytes) every percent,
+// or ("read", -samples) every 100 000 samples from standard input ("-").
+class FileRowSource final : public LogRowSource {
+ public:
+  static Result<std::unique_ptr<FileRowSource>> Open(const std::string& path,
+                                                     const CompareProgress& progress = {});
+  const std::vector<SourceChannel>& channels() const override { return channels_; }
+  Result<bool> Next(LogRow* row) override;
+  const riglog::Metadata& metadata() const { return reader_.metadata(); }
+  double atmospheric_pressure_pa() const { return reader_.atmospheric_pressure_pa(); }
+
+ private:
+  explicit FileRowSource(riglog::RigLogReader reader) : reader_(std::move(reader)) {}
+  void ReportProgress();
+  riglog::RigLogReader reader_;
+  std::istream* stream_ = nullptr;  // owned by reader_; null when reading standard input
+  double file_size_ = 0.0;
+  std::string path_;
+  CompareProgress progress_;
+  std::size_t piston_ = 0, choke_ = 0;
+  std::optional<std::size_t> pump_, outlet_;
+  std::vector<std::size_t> compared_columns_;  // reader column of each channels_ entry
+  std::vector<SourceChannel> channels_;
+  std::vector<double> values_;
+  double next_report_ = 0.0;
+};
+
+// Rows of a log in memory (a MeasuredLog; it must outlive the source).
+class MemoryRowSource final : public LogRowSource {
+ public:
+  explicit MemoryRowSource(const MeasuredLog& log);
+  const std::vector<SourceChannel>& channels() const override { return channels_; }
+  Result<bool> Next(LogRow* row) override;
+
+ private:
+  const MeasuredLog& log_;
+  std::vector<SourceChannel> channels_;
+  std::size_t next_ = 0;
+};
+
+// What the pipeline hands out for each row, in order.
+struct PipelineSample {
+  long index = 0;
+  const LogRow* row = nullptr;
+  double piston_position_m = 0.0;    // smoothed, as the model is fed
+  double piston_velocity_mps = 0.0;  // centred difference of the smoothed position (one-sided
+                                     // at the ends), for the residual analysis
+  const RigSample* model = nullptr;  // the model at row->time_s; null without replay
+};
+
+// The model side of a pipeline: what SimulateEach would be given.
+struct ReplaySetup {
+  RigParams params;
+  SimulationOptions options;
+  double end_time_s = 0.0;  // the log's last time: the piston velocity is one-sided there
+};
+
+class RowPipeline {
+ public:
+  using Sink = std::function<void(const PipelineSample&)>;
+  // smoothing_s: the piston smoothing window (ReplayOptions::piston_smoothing_s). Without
+  // `replay` the rows pass with their smoothed piston only.
+  RowPipeline(double smoothing_s, std::optional<ReplaySetup> replay, Sink sink);
+  RowPipeline(const RowPipeline&) = delete;
+  RowPipeline& operator=(const RowPipeline&) = delete;
+
+  // Rows in order (strictly increasing time). Fails only on a replay failure.
+  Status Push(const LogRow& row);
+  // After the last row: hands out the rest.
+  Status Finish();
+  long rows_pushed() const { return pushed_; }
+  // The replay, once it has started.
+  const RigSampler* sampler() const { return sampler_ ? &*sampler_ : nullptr; }
+
+ private:
+  struct Entry {
+    LogRow row;
+    double smoothed_m = 0.0;
+  };
+  void Smooth(bool last_block);
+  Status Emit();
+  const Entry& At(long index) const { return rows_[static_cast<std::size_t>(index - base_)]; }
+  // The inputs between samples, linear in time, held beyond the ends (SharedInputs::At).
+  double Interpolate(double t, double Entry::*value) const;
+  double InterpolateRow(double t, double LogRow::*value) const;
+  StepInputs StepInputsAt(double step_end_s, double dt_s) const;
+
+  double smoothing_s_;
+  std::optional<ReplaySetup> replay_;
+  Sink sink_;
+  std::deque<Entry> rows_;  // indices base_ .. pushed_ - 1
+  long base_ = 0;
+  long pushed_ = 0;
+  long smoothed_ = 0;  // rows 0 .. smoothed_ - 1 have smoothed_m
+  long emitted_ = 0;
+  long next_smoothing_ = 4096;  // rows pushed at the next block
+  bool finished_ = false;
+  std::vector<double> window_time_s_, window_position_m_;  // raw piston, from window_start_
+  long window_start_ = 0;
+  Entry first_;
+  std::optional<RigSampler> sampler_;
+  mutable std::size_t hint_ = 1;  // bracket search cache (relative to rows_)
+};
+
+// Pulls every row of `source` through `pipeline`.
+Status RunPipeline(LogRowSource* source, RowPipeline* pipeline);
+
+}  // namespace mpdrig

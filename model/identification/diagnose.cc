@@ -1,0 +1,331 @@
+#include "model/identification/diagnose.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "model/effects/effect.h"
+
+namespace mpdrig {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Per-channel error statistics on the samples of [t0, t1]: the residual's sum of squares and the
+// measurement's variation about its mean, so NRMSE = sqrt(ss_res / ss_tot).
+struct ChannelSums {
+  double ss_res = 0.0;
+  double ss_tot = 0.0;
+};
+
+std::vector<ChannelSums> WindowSums(const MeasuredLog& log, const ModelTraces& model, double t0,
+                                    double t1, const std::vector<double>* means = nullptr) {
+  const std::vector<double>& t = log.time_s();
+  std::vector<ChannelSums> sums(log.channels.size());
+  for (std::size_t c = 0; c < log.channels.size(); ++c) {
+    const std::vector<double>& y = log.channels[c].values_si;
+    double mean = 0.0;
+    if (means != nullptr) {
+      mean = (*means)[c];
+    } else {
+      long count = 0;
+      for (std::size_t n = 0; n < t.size(); ++n) {
+        if (t[n] >= t0 && t[n] <= t1 && std::isfinite(y[n])) mean += y[n], ++count;
+      }
+      mean = count > 0 ? mean / count : 0.0;
+    }
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (!(t[n] >= t0 && t[n] <= t1) || !std::isfinite(y[n])) continue;
+      const double e = model.values_si[c][n] - y[n];
+      sums[c].ss_res += e * e;
+      sums[c].ss_tot += (y[n] - mean) * (y[n] - mean);
+    }
+  }
+  return sums;
+}
+
+std::vector<double> WindowMeans(const MeasuredLog& log, double t0, double t1) {
+  const std::vector<double>& t = log.time_s();
+  std::vector<double> means;
+  for (const MeasuredChannel& channel : log.channels) {
+    double sum = 0.0;
+    long count = 0;
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (t[n] >= t0 && t[n] <= t1 && std::isfinite(channel.values_si[n])) {
+        sum += channel.values_si[n], ++count;
+      }
+    }
+    means.push_back(count > 0 ? sum / count : 0.0);
+  }
+  return means;
+}
+
+// Mean NRMSE over channels, with the residual of `block` normalised by the variation of the
+// whole scoring window (`scale`, per channel: ss_tot per sample), so blocks are comparable.
+double BlockError(const std::vector<ChannelSums>& block, const std::vector<long>& counts,
+                  const std::vector<double>& variance_per_sample) {
+  double sum = 0.0;
+  int used = 0;
+  for (std::size_t c = 0; c < block.size(); ++c) {
+    if (counts[c] == 0 || !(variance_per_sample[c] > 0.0)) continue;
+    sum += std::sqrt(block[c].ss_res / (counts[c] * variance_per_sample[c]));
+    ++used;
+  }
+  return used > 0 ? sum / used : kNaN;
+}
+
+struct Scored {
+  double error = kNaN;
+  std::vector<double> block_errors;
+  std::vector<std::pair<Channel, double>> channel_errors;
+};
+
+Scored Score(const MeasuredLog& log, const ModelTraces& model, double t0, double t1) {
+  Scored scored;
+  const std::vector<double> means = WindowMeans(log, t0, t1);
+  const auto whole = WindowSums(log, model, t0, t1, &means);
+  const std::vector<double>& t = log.time_s();
+  std::vector<long> counts(log.channels.size(), 0);
+  for (std::size_t c = 0; c < log.channels.size(); ++c) {
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (t[n] >= t0 && t[n] <= t1 && std::isfinite(log.channels[c].values_si[n])) ++counts[c];
+    }
+  }
+  std::vector<double> variance(log.channels.size(), 0.0);
+  double sum = 0.0;
+  int used = 0;
+  for (std::size_t c = 0; c < whole.size(); ++c) {
+    if (counts[c] == 0 || !(whole[c].ss_tot > 0.0)) continue;
+    variance[c] = whole[c].ss_tot / counts[c];
+    const double nrmse = std::sqrt(whole[c].ss_res / whole[c].ss_tot);
+    scored.channel_errors.emplace_back(log.channels[c].channel, nrmse);
+    sum += nrmse;
+    ++used;
+  }
+  scored.error = used > 0 ? sum / used : kNaN;
+  const double width = (t1 - t0) / kScoreBlocks;
+  for (int k = 0; k < kScoreBlocks; ++k) {
+    const double b0 = t0 + k * width;
+    const double b1 = k + 1 == kScoreBlocks ? t1 : b0 + width;
+    const auto block = WindowSums(log, model, b0, std::nextafter(b1, b0), &means);
+    std::vector<long> block_counts(log.channels.size(), 0);
+    for (std::size_t c = 0; c < log.channels.size(); ++c) {
+      for (std::size_t n = 0; n < t.size(); ++n) {
+        if (t[n] >= b0 && t[n] < b1 && std::isfinite(log.channels[c].values_si[n])) {
+          ++block_counts[c];
+        }
+      }
+    }
+    scored.block_errors.push_back(BlockError(block, block_counts, variance));
+  }
+  return scored;
+}
+
+std::vector<NamedValue> Named(const FitResult& fit) {
+  std::vector<NamedValue> values;
+  for (std::size_t i = 0; i < fit.keys.size(); ++i) {
+    values.push_back({fit.keys[i], fit.estimates[i], fit.standard_errors[i]});
+  }
+  return values;
+}
+
+}  // namespace
+
+double EstimateNoiseFloor(const MeasuredLog& log) {
+  double sum = 0.0;
+  int used = 0;
+  for (const MeasuredChannel& channel : log.channels) {
+    const std::vector<double>& y = channel.values_si;
+    double s1 = 0.0, s2 = 0.0, d1 = 0.0, d2 = 0.0;
+    long n_y = 0, n_d = 0;
+    for (std::size_t n = 0; n < y.size(); ++n) {
+      if (!std::isfinite(y[n])) continue;
+      s1 += y[n], s2 += y[n] * y[n], ++n_y;
+      if (n >= 2 && std::isfinite(y[n - 1]) && std::isfinite(y[n - 2])) {
+        const double d = y[n] - 2.0 * y[n - 1] + y[n - 2];
+        d1 += d, d2 += d * d, ++n_d;
+      }
+    }
+    if (n_y < 3 || n_d < 3) continue;
+    const double var_y = s2 / n_y - (s1 / n_y) * (s1 / n_y);
+    if (!(var_y > 0.0)) continue;
+    // d2 of white noise of variance s^2 has variance 6 s^2; the signal's own d2 is tiny when the
+    // log oversamples it (100 Hz against waves below a few Hz).
+    const double var_noise = (d2 / n_d - (d1 / n_d) * (d1 / n_d)) / 6.0;
+    sum += std::sqrt(std::max(var_noise, 0.0) / var_y);
+    ++used;
+  }
+  return used > 0 ? sum / used : 0.0;
+}
+
+Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
+                           const DiagnoseOptions& options) {
+  if (!(options.fit_fraction > 0.1 && options.fit_fraction < 0.95)) {
+    return Status::Error("fit fraction must be in (0.1, 0.95)");
+  }
+  std::vector<const EffectInfo*> candidates;
+  if (options.candidates.empty()) {
+    for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
+  } else {
+    for (const std::string& name : options.candidates) {
+      const EffectInfo* info = FindEffectInfo(name);
+      if (info == nullptr) {
+        return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
+      }
+      candidates.push_back(info);
+    }
+  }
+  if (!start.effects.empty()) {
+    return Status::Error(
+        "diagnose starts from the base model: remove the effects from the configuration (it "
+        "tries each of them itself)");
+  }
+  const std::vector<double>& t = log.time_s();
+  const double t_begin = t.front();
+  const double t_end = t.back();
+  Diagnosis diagnosis;
+  diagnosis.fit_end_s = t_begin + options.fit_fraction * (t_end - t_begin);
+  diagnosis.noise_floor = EstimateNoiseFloor(log);
+  const double score_begin = diagnosis.fit_end_s;
+
+  SimulationOptions simulation = options.simulation;
+  FitOptions fit_options;
+  fit_options.simulation = simulation;
+  fit_options.window_end_s = diagnosis.fit_end_s;
+  fit_options.max_iterations = options.max_iterations;
+  const double steps = 1.0 + candidates.size();
+  auto report = [&](std::string_view stage, double done) {
+    if (options.progress) options.progress(stage, done / steps);
+  };
+
+  // --- Baseline ----------------------------------------------------------------------------------
+  std::vector<FitParameter> base_parameters;
+  for (const std::string& key : options.base_params) {
+    auto parameter = DefaultFitParameter(key);
+    if (!parameter.ok()) return parameter.status();
+    base_parameters.push_back(*parameter);
+  }
+  report("baseline", 0.0);
+  auto base_fit = FitParameters(log, start, base_parameters, fit_options);
+  if (!base_fit.ok()) return base_fit.status().Within("fitting the base model");
+  diagnosis.replays += base_fit->replays;
+  auto base_traces = ReplayModel(log, base_fit->params, simulation);
+  if (!base_traces.ok()) return base_traces.status();
+  ++diagnosis.replays;
+  const Scored base_score = Score(log, *base_traces, score_begin, t_end);
+  CandidateResult& baseline = diagnosis.baseline;
+  baseline.params = Named(*base_fit);
+  baseline.fit_error = base_fit->error_after;
+  baseline.error = base_score.error;
+  baseline.penalised_error = base_score.error;
+  baseline.channel_errors = base_score.channel_errors;
+  baseline.fitted = base_fit->params;
+  auto comparison = CompareTraces(log, *base_traces);
+  if (!comparison.ok()) return comparison.status();
+  diagnosis.baseline_comparison = std::move(comparison).value();
+
+  // --- Candidates --------------------------------------------------------------------------------
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const EffectInfo& info = *candidates[i];
+    report(info.name, 1.0 + i);
+    CandidateResult candidate;
+    candidate.effect = std::string(info.name);
+    candidate.explains = std::string(info.explains);
+    RigParams params = base_fit->params;
+    params.effects.push_back({candidate.effect, {}});
+    std::vector<FitParameter> parameters = base_parameters;
+    for (const EffectParamInfo& param : info.params) {
+      if (!param.fitted) continue;
+      auto parameter = DefaultFitParameter(candidate.effect + "." + std::string(param.key));
+      if (!parameter.ok()) return parameter.status();
+      parameters.push_back(*parameter);
+      ++candidate.extra_params;
+    }
+    auto fit = FitParameters(log, params, parameters, fit_options);
+    if (!fit.ok()) {
+      candidate.failure = fit.status().message();
+      candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
+      diagnosis.candidates.push_back(std::move(candidate));
+      continue;
+    }
+    diagnosis.replays += fit->replays;
+    auto traces = ReplayModel(log, fit->params, simulation);
+    ++diagnosis.replays;
+    if (!traces.ok()) {
+      candidate.failure = traces.status().message();
+      candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
+      diagnosis.candidates.push_back(std::move(candidate));
+      continue;
+    }
+    const Scored score = Score(log, *traces, score_begin, t_end);
+    candidate.params = Named(*fit);
+    candidate.fit_error = fit->error_after;
+    candidate.error = score.error;
+    candidate.penalised_error = score.error * (1.0 + kParameterPrice * candidate.extra_params);
+    candidate.channel_errors = score.channel_errors;
+    candidate.fitted = fit->params;
+    candidate.improvement = (baseline.error - score.error) / baseline.error;
+    // Spread of the block improvements: their standard error.
+    double mean = 0.0, squares = 0.0;
+    int blocks = 0;
+    for (int k = 0; k < kScoreBlocks; ++k) {
+      const double d = base_score.block_errors[k] - score.block_errors[k];
+      if (!std::isfinite(d)) continue;
+      mean += d, squares += d * d, ++blocks;
+    }
+    if (blocks >= 2) {
+      mean /= blocks;
+      const double variance = std::max(0.0, (squares - blocks * mean * mean) / (blocks - 1));
+      candidate.improvement_std_error = std::sqrt(variance / blocks);
+    }
+    const double absolute = baseline.error - candidate.penalised_error;
+    candidate.significant = blocks >= 2 && absolute > kMinRelativeImprovement * baseline.error &&
+                            absolute > 3.0 * candidate.improvement_std_error;
+    diagnosis.candidates.push_back(std::move(candidate));
+  }
+  std::stable_sort(diagnosis.candidates.begin(), diagnosis.candidates.end(),
+                   [](const CandidateResult& a, const CandidateResult& b) {
+                     return a.penalised_error < b.penalised_error;
+                   });
+  if (!diagnosis.candidates.empty() && diagnosis.candidates.front().significant) {
+    const CandidateResult& winner = diagnosis.candidates.front();
+    diagnosis.verdict = winner.effect;
+    report("compare", steps - 0.5);
+    auto traces = ReplayModel(log, winner.fitted, simulation);
+    if (traces.ok()) {
+      ++diagnosis.replays;
+      auto winner_comparison = CompareTraces(log, *traces);
+      if (winner_comparison.ok()) diagnosis.winner_comparison = std::move(winner_comparison).value();
+    }
+  }
+  report("done", steps);
+  return diagnosis;
+}
+
+std::string DescribeCandidate(const CandidateResult& candidate, const CandidateResult& baseline) {
+  std::ostringstream out;
+  out.precision(3);
+  if (!candidate.failure.empty()) {
+    out << candidate.effect << ": could not be fitted (" << candidate.failure << ")";
+    return out.str();
+  }
+  out << candidate.effect << (candidate.significant ? " " : " (not significant) ")
+      << candidate.explains << ": error " << 100.0 * baseline.error << "% -> "
+      << 100.0 * candidate.error << "% on the scoring data";
+  // The channel it helps most.
+  double best = 0.0;
+  Channel best_channel = Channel::kPT1;
+  for (const auto& [channel, error] : candidate.channel_errors) {
+    for (const auto& [base_channel, base_error] : baseline.channel_errors) {
+      if (base_channel == channel && base_error - error > best) {
+        best = base_error - error;
+        best_channel = channel;
+      }
+    }
+  }
+  if (best > 0.0) out << ", most on " << riglog::ChannelName(best_channel);
+  return out.str();
+}
+
+}  // namespace mpdrig

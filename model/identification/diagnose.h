@@ -1,0 +1,99 @@
+// "Which physical effect is missing?" (issue 4): fit the base model to a log, show where it still
+// fails, try every effect of the catalogue, and rank them on data they were not fitted on.
+//
+// 1. Split the log in time: the first `fit_fraction` is the fitting data, the rest the scoring
+//    data (the replay always runs over the whole log, so the scoring part starts from the state
+//    the fitting part left).
+// 2. Baseline: fit the base parameters (wave speed, pipe friction f1, choke leak by default) on
+//    the fitting data; its error on the scoring data is the number to beat. The compare metrics
+//    of the fitted baseline over the whole log (channels, bands, profile, lag, residual
+//    correlation) show where it fails.
+// 3. Each candidate effect: switched on, its fitted parameters (EffectParamInfo::fitted) fitted
+//    together with the base ones, from the baseline's estimates and the effect's defaults.
+// 4. Score: the compare error (mean NRMSE over the compared channels) on the scoring data, with a
+//    price for freedom: penalised = error (1 + kParameterPrice extra parameters). Ranked by the
+//    penalised score. A candidate is `significant` when it beats the baseline on the scoring
+//    data by more than (a) kMinRelativeImprovement of the baseline error and (b) three standard
+//    errors of the improvement, estimated from its spread over kScoreBlocks consecutive blocks
+//    of the scoring data (blocks, because residuals are correlated in time and noise of one
+//    sample says little about the next). The verdict is the best significant candidate, or none.
+#pragma once
+
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include "model/analysis/compare.h"
+#include "model/common/status.h"
+#include "model/identification/fit.h"
+#include "model/params/rig_params.h"
+
+namespace mpdrig {
+
+inline constexpr double kParameterPrice = 0.01;          // 1% of the error per extra parameter
+inline constexpr double kMinRelativeImprovement = 0.03;  // 3% of the baseline's scoring error
+inline constexpr int kScoreBlocks = 8;
+
+struct DiagnoseOptions {
+  SimulationOptions simulation;  // cells: kDiagnoseCells unless set
+  std::vector<std::string> base_params = {"wave_speed_mps", "friction_f1_per_s",
+                                          "choke_leak_m2"};
+  double fit_fraction = 0.6;
+  int max_iterations = 25;
+  // Effects to try; empty: the whole catalogue.
+  std::vector<std::string> candidates;
+  // "baseline", "<effect>", "compare"; fraction of the whole diagnosis done.
+  std::function<void(std::string_view stage, double fraction)> progress;
+};
+
+inline constexpr int kDiagnoseCells = 50;
+
+struct NamedValue {
+  std::string key;
+  double value = 0.0;
+  double standard_error = 0.0;
+};
+
+struct CandidateResult {
+  std::string effect;
+  std::string explains;           // EffectInfo::explains
+  std::vector<NamedValue> params;  // every fitted parameter (base and effect)
+  int extra_params = 0;
+  double fit_error = 0.0;       // on the fitting data
+  double error = 0.0;           // on the scoring data (the compare metric)
+  double penalised_error = 0.0;  // ranking score
+  double improvement = 0.0;      // (baseline error - error) / baseline error
+  double improvement_std_error = 0.0;  // of the absolute improvement, from the blocks
+  bool significant = false;
+  std::string failure;  // non-empty when the candidate could not be fitted (e.g. range left)
+  // Per channel: error (NRMSE) on the scoring data, baseline and this candidate.
+  std::vector<std::pair<Channel, double>> channel_errors;
+  RigParams fitted;
+};
+
+struct Diagnosis {
+  double fit_end_s = 0.0;  // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
+  double noise_floor = 0.0;  // estimated measurement noise as a mean NRMSE (second differences)
+  CandidateResult baseline;  // effect ""
+  Comparison baseline_comparison;  // fitted baseline over the whole log
+  std::vector<CandidateResult> candidates;  // ranked best first
+  std::optional<std::string> verdict;        // the missing effect, if one is significant
+  std::optional<Comparison> winner_comparison;  // the verdict's model over the whole log
+  int replays = 0;
+};
+
+Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
+                           const DiagnoseOptions& options = {});
+
+// A sentence on what the candidate explains, with its numbers ("removes ...: error 4.1% -> 1.2%
+// on the scoring data").
+std::string DescribeCandidate(const CandidateResult& candidate, const CandidateResult& baseline);
+
+// Mean over the compared channels of sigma_noise / std(y), sigma_noise from second differences
+// (std(d2 y) / sqrt(6)): the error a perfect model would have on this log.
+double EstimateNoiseFloor(const MeasuredLog& log);
+
+}  // namespace mpdrig

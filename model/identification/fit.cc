@@ -1,0 +1,631 @@
+// Bounded nonlinear least squares of rig parameters against a rig log (fit.h).
+//
+// Problem: minimise 1/2 sum r(x)^2 over x in [lower, upper], r the window's normalised residuals
+// (fit.h), x the parameters. The model is a black box: every residual vector is one full replay
+// of the log (ReplayModel), cut to the window.
+// Numerics:
+//   - the solver sees z = x / s, s a typical scale per parameter (|initial|, or the bound range
+//     when the start is 0), so wave speed (~1e3 m/s) and choke leak (~1e-7 m^2) are both O(1);
+//   - Jacobian by forward differences (p replays) inside Ceres, central differences (2p) at the
+//     optimum for the covariance; the step is FitOptions::relative_step of max(|z|, 1% of the
+//     range), flipped inwards at a bound;
+//   - the residuals of the last few points are cached: Ceres evaluates a trial point's cost, then
+//     (once accepted) its Jacobian, and the replay at the centre is not repeated;
+//   - a replay that fails (e.g. leaves the model's range) returns false: Ceres treats the step as
+//     infeasible and shrinks the trust region.
+// Single threaded (num_threads = 1), no wall clock: Ceres's time limit is left at its default.
+#include "model/identification/fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <sstream>
+
+#include <ceres/ceres.h>
+#include <Eigen/Dense>
+
+#include "model/effects/effect.h"
+
+namespace mpdrig {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// Condition limit of the column-scaled J^T J: directions below it are unidentifiable.
+constexpr double kSingularRatio = 1.0e-12;
+
+struct TuningRange {
+  std::string_view key;
+  double lower;
+  double upper;
+};
+
+// Plausible tuning ranges around the thesis values (Table 9.4.1, 8.2.1, 8.3.2).
+constexpr TuningRange kTuningRanges[] = {
+    {"wave_speed_mps", 300.0, 1500.0},
+    {"friction_f1_per_s", 0.0, 5.0},
+    {"friction_f2_per_m", 0.0, 10.0},
+    {"choke_leak_m2", 0.0, 1.0e-5},
+    {"density_kgpm3", 900.0, 1100.0},
+    {"choke_density_kgpm3", 900.0, 1100.0},
+    {"piston_friction_fd1_pa_s_per_m", -5.0e5, 5.0e5},
+    {"piston_friction_fd2_pa_s2_per_m2", -5.0e6, 5.0e6},
+};
+
+// Splits "EFFECT.KEY"; nullopt-like empty effect name when there is no dot.
+std::pair<std::string_view, std::string_view> SplitEffectKey(std::string_view key) {
+  const std::size_t dot = key.find('.');
+  if (dot == std::string_view::npos) return {{}, key};
+  return {key.substr(0, dot), key.substr(dot + 1)};
+}
+
+std::string BaseKeys() {
+  std::string keys;
+  for (const ParamInfo& info : ParamTable()) {
+    if (!keys.empty()) keys += ", ";
+    keys += info.key;
+  }
+  return keys;
+}
+
+std::string EffectKeys(const EffectInfo& info) {
+  std::string keys;
+  for (const EffectParamInfo& param : info.params) {
+    if (!keys.empty()) keys += ", ";
+    keys += std::string(info.name) + "." + std::string(param.key);
+  }
+  return keys;
+}
+
+// The effect's info and parameter info for "EFFECT.KEY", or an error listing the valid ones.
+Result<std::pair<const EffectInfo*, const EffectParamInfo*>> FindEffectParam(std::string_view key) {
+  const auto [effect_name, param_key] = SplitEffectKey(key);
+  const EffectInfo* info = FindEffectInfo(effect_name);
+  if (info == nullptr) {
+    return Status::Error("unknown effect '" + std::string(effect_name) + "' in '" +
+                         std::string(key) + "'; effects: " + EffectNames());
+  }
+  const EffectParamInfo* param = info->FindParam(param_key);
+  if (param == nullptr) {
+    return Status::Error("unknown parameter '" + std::string(key) +
+                         "'; valid keys: " + EffectKeys(*info));
+  }
+  return std::make_pair(info, param);
+}
+
+// One compared channel's samples inside the window and its normalisation.
+struct WindowChannel {
+  std::size_t index = 0;             // into log.channels
+  std::vector<std::size_t> samples;  // measured samples in the window
+  double scale = 0.0;                // ||y - mean(y)|| sqrt(C) over those samples
+};
+
+std::vector<WindowChannel> WindowChannels(const MeasuredLog& log, double begin_s, double end_s) {
+  const std::vector<double>& time = log.time_s();
+  std::vector<WindowChannel> channels;
+  for (std::size_t c = 0; c < log.channels.size(); ++c) {
+    const std::vector<double>& y = log.channels[c].values_si;
+    WindowChannel channel;
+    channel.index = c;
+    double sum = 0.0;
+    for (std::size_t n = 0; n < time.size(); ++n) {
+      if (time[n] < begin_s || time[n] > end_s || !std::isfinite(y[n])) continue;
+      channel.samples.push_back(n);
+      sum += y[n];
+    }
+    if (channel.samples.empty()) continue;
+    const double mean = sum / static_cast<double>(channel.samples.size());
+    double sst = 0.0;
+    for (std::size_t n : channel.samples) sst += (y[n] - mean) * (y[n] - mean);
+    if (!(sst > 0.0)) continue;  // constant: NRMSE undefined, nothing to fit
+    channel.scale = std::sqrt(sst);
+    channels.push_back(std::move(channel));
+  }
+  const double root_count = std::sqrt(static_cast<double>(channels.size()));
+  for (WindowChannel& channel : channels) channel.scale *= root_count;
+  return channels;
+}
+
+// The residual function r(z): parameters in scaled form, one replay per new point.
+class ReplayResiduals {
+ public:
+  ReplayResiduals(const MeasuredLog& log, const RigParams& start, std::vector<std::string> keys,
+                  std::vector<double> scales, const FitOptions& options,
+                  std::vector<WindowChannel> channels)
+      : log_(log),
+        start_(start),
+        keys_(std::move(keys)),
+        scales_(std::move(scales)),
+        options_(options),
+        channels_(std::move(channels)) {
+    for (const WindowChannel& channel : channels_) residual_count_ += channel.samples.size();
+  }
+
+  int residual_count() const { return static_cast<int>(residual_count_); }
+  int parameter_count() const { return static_cast<int>(keys_.size()); }
+  int replays() const { return replays_; }
+  const std::string& last_failure() const { return last_failure_; }
+
+  // The rig parameters at scaled point z.
+  Result<RigParams> ParamsAt(const double* z) const {
+    RigParams params = start_;
+    for (std::size_t j = 0; j < keys_.size(); ++j) {
+      MPDRIG_RETURN_IF_ERROR(SetParamValue(&params, keys_[j], z[j] * scales_[j]));
+    }
+    return params;
+  }
+
+  // r(z) into `residuals` (residual_count() values); false if the replay fails.
+  bool Evaluate(const double* z, double* residuals) {
+    const std::vector<double> point(z, z + keys_.size());
+    for (const CacheEntry& entry : cache_) {
+      if (entry.z == point) {
+        if (!entry.ok) return false;
+        std::copy(entry.residuals.begin(), entry.residuals.end(), residuals);
+        return true;
+      }
+    }
+    CacheEntry entry;
+    entry.z = point;
+    entry.ok = Replay(z, &entry.residuals);
+    if (entry.ok) std::copy(entry.residuals.begin(), entry.residuals.end(), residuals);
+    const bool ok = entry.ok;
+    cache_.push_front(std::move(entry));
+    if (cache_.size() > 2 * keys_.size() + 4) cache_.pop_back();
+    return ok;
+  }
+
+  // Mean NRMSE over the channels from a residual vector: NRMSE_c = sqrt(C sum_n r_cn^2).
+  double Error(const double* residuals) const {
+    if (channels_.empty()) return kNaN;
+    const double count = static_cast<double>(channels_.size());
+    double total = 0.0;
+    std::size_t offset = 0;
+    for (const WindowChannel& channel : channels_) {
+      double sum = 0.0;
+      for (std::size_t n = 0; n < channel.samples.size(); ++n) {
+        sum += residuals[offset + n] * residuals[offset + n];
+      }
+      offset += channel.samples.size();
+      total += std::sqrt(count * sum);
+    }
+    return total / count;
+  }
+
+  // The solver's current point is where it last asked for a Jacobian: remember its error.
+  void MarkCurrent(const double* residuals) { current_error_ = Error(residuals); }
+  double current_error() const { return current_error_; }
+
+ private:
+  struct CacheEntry {
+    std::vector<double> z;
+    std::vector<double> residuals;
+    bool ok = false;
+  };
+
+  bool Replay(const double* z, std::vector<double>* residuals) {
+    auto params = ParamsAt(z);
+    if (!params.ok()) {
+      last_failure_ = params.status().message();
+      return false;
+    }
+    ++replays_;
+    auto traces = ReplayModel(log_, *params, options_.simulation, options_.replay);
+    if (!traces.ok()) {
+      last_failure_ = traces.status().message();
+      return false;
+    }
+    residuals->resize(residual_count_);
+    std::size_t offset = 0;
+    for (const WindowChannel& channel : channels_) {
+      const std::vector<double>& y = log_.channels[channel.index].values_si;
+      const std::vector<double>& yhat = traces->values_si[channel.index];
+      for (std::size_t n : channel.samples) {
+        const double r = (yhat[n] - y[n]) / channel.scale;
+        if (!std::isfinite(r)) {
+          last_failure_ = "the model gave a non-finite value";
+          return false;
+        }
+        (*residuals)[offset++] = r;
+      }
+    }
+    return true;
+  }
+
+  const MeasuredLog& log_;
+  RigParams start_;
+  std::vector<std::string> keys_;
+  std::vector<double> scales_;
+  const FitOptions& options_;
+  std::vector<WindowChannel> channels_;
+  std::size_t residual_count_ = 0;
+  int replays_ = 0;
+  std::deque<CacheEntry> cache_;
+  std::string last_failure_;
+  double current_error_ = kNaN;
+};
+
+// Finite-difference step for scaled parameter j at z (sign: inwards at the upper bound).
+double Step(double relative_step, double z, double lower, double upper) {
+  const double h = relative_step * std::max(std::abs(z), 0.01 * (upper - lower));
+  return z + h <= upper ? h : -h;
+}
+
+// Ceres's view of the residuals: one parameter block of size p, m residuals, Jacobian by forward
+// or central differences (row-major m x p).
+class ReplayCost final : public ceres::CostFunction {
+ public:
+  ReplayCost(ReplayResiduals* residuals, std::vector<double> lower, std::vector<double> upper,
+             double relative_step, bool central)
+      : residuals_(residuals),
+        lower_(std::move(lower)),
+        upper_(std::move(upper)),
+        relative_step_(relative_step),
+        central_(central) {
+    set_num_residuals(residuals->residual_count());
+    mutable_parameter_block_sizes()->push_back(residuals->parameter_count());
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const double* z = parameters[0];
+    if (!residuals_->Evaluate(z, residuals)) return false;
+    if (jacobians == nullptr || jacobians[0] == nullptr) return true;
+    residuals_->MarkCurrent(residuals);
+    const int m = num_residuals();
+    const int p = residuals_->parameter_count();
+    std::vector<double> shifted(z, z + p);
+    std::vector<double> plus(m), minus(m);
+    for (int j = 0; j < p; ++j) {
+      const double h = Step(relative_step_, z[j], lower_[j], upper_[j]);
+      if (central_) {
+        // Central where both sides are inside the bounds, else one-sided (inwards).
+        const double hc = std::abs(h);
+        const double up = std::min(z[j] + hc, upper_[j]);
+        const double down = std::max(z[j] - hc, lower_[j]);
+        shifted[j] = up;
+        if (up == z[j]) {
+          std::copy(residuals, residuals + m, plus.begin());
+        } else if (!residuals_->Evaluate(shifted.data(), plus.data())) {
+          return false;
+        }
+        shifted[j] = down;
+        if (down == z[j]) {
+          std::copy(residuals, residuals + m, minus.begin());
+        } else if (!residuals_->Evaluate(shifted.data(), minus.data())) {
+          return false;
+        }
+        const double width = up - down;
+        for (int i = 0; i < m; ++i) jacobians[0][i * p + j] = (plus[i] - minus[i]) / width;
+      } else {
+        shifted[j] = z[j] + h;
+        if (!residuals_->Evaluate(shifted.data(), plus.data())) return false;
+        const double step = shifted[j] - z[j];  // the representable step
+        for (int i = 0; i < m; ++i) jacobians[0][i * p + j] = (plus[i] - residuals[i]) / step;
+      }
+      shifted[j] = z[j];
+    }
+    return true;
+  }
+
+ private:
+  ReplayResiduals* residuals_;
+  std::vector<double> lower_, upper_;
+  double relative_step_;
+  bool central_;
+};
+
+class ProgressCallback final : public ceres::IterationCallback {
+ public:
+  ProgressCallback(const ReplayResiduals& residuals,
+                   const std::function<void(int, double)>& progress)
+      : residuals_(residuals), progress_(progress) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (progress_) progress_(summary.iteration, residuals_.current_error());
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const ReplayResiduals& residuals_;
+  const std::function<void(int, double)>& progress_;
+};
+
+}  // namespace
+
+Result<FitParameter> DefaultFitParameter(std::string_view key) {
+  if (key.find('.') != std::string_view::npos) {
+    auto found = FindEffectParam(key);
+    if (!found.ok()) return found.status();
+    const EffectParamInfo& param = *found->second;
+    return FitParameter{std::string(key), param.min_value, param.max_value};
+  }
+  const ParamInfo* info = FindParam(key);
+  if (info == nullptr) {
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
+                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
+  }
+  double lower = info->min_value, upper = info->max_value;
+  bool tabled = false;
+  for (const TuningRange& range : kTuningRanges) {
+    if (range.key == key) lower = range.lower, upper = range.upper, tabled = true;
+  }
+  if (!tabled) {
+    // A factor of 3 either way around the thesis value (the sign kept), or the table's bounds.
+    const double value = RigParams{}.*(info->member);
+    if (value != 0.0) {
+      lower = value > 0.0 ? value / 3.0 : value * 3.0;
+      upper = value > 0.0 ? value * 3.0 : value / 3.0;
+    }
+  }
+  lower = std::max(lower, info->min_value);
+  upper = std::min(upper, info->max_value);
+  return FitParameter{std::string(key), lower, upper};
+}
+
+Result<double> GetParamValue(const RigParams& params, std::string_view key) {
+  if (key.find('.') != std::string_view::npos) {
+    auto found = FindEffectParam(key);
+    if (!found.ok()) return found.status();
+    const auto [effect_name, param_key] = SplitEffectKey(key);
+    const EffectSetting* setting = params.FindEffect(effect_name);
+    if (setting == nullptr) {
+      return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
+                           "' is not switched on (add --effect " + std::string(effect_name) + ")");
+    }
+    const double* value = setting->Find(param_key);
+    return value != nullptr ? *value : found->second->default_value;
+  }
+  const ParamInfo* info = FindParam(key);
+  if (info == nullptr) {
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
+                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
+  }
+  return params.*(info->member);
+}
+
+Status SetParamValue(RigParams* params, std::string_view key, double value) {
+  if (!std::isfinite(value)) {
+    return Status::Error(std::string(key) + ": value must be finite");
+  }
+  if (key.find('.') != std::string_view::npos) {
+    auto found = FindEffectParam(key);
+    if (!found.ok()) return found.status();
+    const EffectParamInfo& param = *found->second;
+    const auto [effect_name, param_key] = SplitEffectKey(key);
+    EffectSetting* setting = params->FindEffect(effect_name);
+    if (setting == nullptr) {
+      return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
+                           "' is not switched on (add --effect " + std::string(effect_name) + ")");
+    }
+    if (value < param.min_value || value > param.max_value) {
+      std::ostringstream out;
+      out << key << " = " << value << " " << param.unit << " is outside [" << param.min_value
+          << ", " << param.max_value << "]";
+      return Status::Error(out.str());
+    }
+    for (auto& [name, existing] : setting->values) {
+      if (name == param_key) {
+        existing = value;
+        return Status::Ok();
+      }
+    }
+    setting->values.emplace_back(std::string(param_key), value);
+    return Status::Ok();
+  }
+  const ParamInfo* info = FindParam(key);
+  if (info == nullptr) {
+    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
+                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
+  }
+  if (value < info->min_value || value > info->max_value) {
+    std::ostringstream out;
+    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
+        << info->max_value << "]";
+    return Status::Error(out.str());
+  }
+  params->*(info->member) = value;
+  return Status::Ok();
+}
+
+double WindowError(const MeasuredLog& log, const ModelTraces& model, double window_begin_s,
+                   double window_end_s) {
+  MPDRIG_CHECK(model.values_si.size() == log.channels.size());
+  const std::vector<double>& time = log.time_s();
+  double total = 0.0;
+  int count = 0;
+  for (std::size_t c = 0; c < log.channels.size(); ++c) {
+    const std::vector<double>& y = log.channels[c].values_si;
+    const std::vector<double>& yhat = model.values_si[c];
+    double sum = 0.0;
+    long samples = 0;
+    for (std::size_t n = 0; n < time.size(); ++n) {
+      if (time[n] < window_begin_s || time[n] > window_end_s || !std::isfinite(y[n])) continue;
+      sum += y[n];
+      ++samples;
+    }
+    if (samples == 0) continue;
+    const double mean = sum / static_cast<double>(samples);
+    double sse = 0.0, sst = 0.0;
+    for (std::size_t n = 0; n < time.size(); ++n) {
+      if (time[n] < window_begin_s || time[n] > window_end_s || !std::isfinite(y[n])) continue;
+      sse += (yhat[n] - y[n]) * (yhat[n] - y[n]);
+      sst += (y[n] - mean) * (y[n] - mean);
+    }
+    const double nrmse = sst > 0.0 ? std::sqrt(sse / sst) : kNaN;
+    if (std::isfinite(nrmse)) total += nrmse, ++count;
+  }
+  return count > 0 ? total / count : kNaN;
+}
+
+Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
+                                const std::vector<FitParameter>& parameters,
+                                const FitOptions& options) {
+  if (parameters.empty()) return Status::Error("no parameter to fit");
+  if (!(options.window_begin_s < options.window_end_s)) {
+    return Status::Error("fit window is empty: begin must be before end");
+  }
+  if (options.max_iterations < 0) return Status::Error("max_iterations must be >= 0");
+  if (!(options.relative_step > 0.0 && options.relative_step < 0.1)) {
+    return Status::Error("relative_step must be in (0, 0.1)");
+  }
+  MPDRIG_RETURN_IF_ERROR(options.simulation.Validate());
+  MPDRIG_RETURN_IF_ERROR(ValidateEffects(start));
+
+  const std::size_t p = parameters.size();
+  FitResult result;
+  result.params = start;
+  std::vector<double> scales(p), z(p), lower_z(p), upper_z(p);
+  for (std::size_t j = 0; j < p; ++j) {
+    const FitParameter& parameter = parameters[j];
+    for (std::size_t k = 0; k < j; ++k) {
+      if (parameters[k].key == parameter.key) {
+        return Status::Error("parameter '" + parameter.key + "' is given twice");
+      }
+    }
+    auto value = GetParamValue(start, parameter.key);
+    if (!value.ok()) return value.status();
+    if (!std::isfinite(parameter.lower) || !std::isfinite(parameter.upper) ||
+        !(parameter.lower < parameter.upper)) {
+      std::ostringstream out;
+      out << parameter.key << ": bounds [" << parameter.lower << ", " << parameter.upper
+          << "] must be finite with lower < upper";
+      return Status::Error(out.str());
+    }
+    // The bounds must be settable: inside the parameter tables' bounds.
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, parameter.lower));
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, parameter.upper));
+    const double initial = std::clamp(*value, parameter.lower, parameter.upper);
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, initial));
+    result.keys.push_back(parameter.key);
+    result.initial.push_back(initial);
+    scales[j] = initial != 0.0 ? std::abs(initial) : parameter.upper - parameter.lower;
+    z[j] = initial / scales[j];
+    lower_z[j] = parameter.lower / scales[j];
+    upper_z[j] = parameter.upper / scales[j];
+  }
+
+  std::vector<WindowChannel> channels =
+      WindowChannels(log, options.window_begin_s, options.window_end_s);
+  if (channels.empty()) {
+    return Status::Error("no measured channel varies inside the fit window: nothing to fit");
+  }
+  ReplayResiduals residuals(log, result.params, result.keys, scales, options, std::move(channels));
+  const int m = residuals.residual_count();
+  if (m <= static_cast<int>(p)) {
+    return Status::Error("the fit window has " + std::to_string(m) + " measured samples for " +
+                         std::to_string(p) + " parameters");
+  }
+
+  std::vector<double> r0(m);
+  if (!residuals.Evaluate(z.data(), r0.data())) {
+    return Status::Error("the model fails at the start values: " + residuals.last_failure());
+  }
+  result.error_before = residuals.Error(r0.data());
+
+  // Ceres owns the cost function (default ownership) and reads/writes z in place.
+  ceres::Problem problem;
+  problem.AddResidualBlock(new ReplayCost(&residuals, lower_z, upper_z, options.relative_step,
+                                          options.central_differences),
+                           nullptr, z.data());
+  for (std::size_t j = 0; j < p; ++j) {
+    problem.SetParameterLowerBound(z.data(), static_cast<int>(j), lower_z[j]);
+    problem.SetParameterUpperBound(z.data(), static_cast<int>(j), upper_z[j]);
+  }
+  ceres::Solver::Options solver;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  // Steps below a tenth of the difference step are below what the derivatives resolve.
+  solver.parameter_tolerance = 0.1 * options.relative_step;
+  solver.num_threads = 1;
+  solver.logging_type = ceres::SILENT;
+  solver.minimizer_progress_to_stdout = false;
+  ProgressCallback callback(residuals, options.progress);
+  solver.callbacks.push_back(&callback);
+  std::string options_error;
+  if (!solver.IsValid(&options_error)) return Status::Error("solver options: " + options_error);
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  result.solver_report = summary.BriefReport();
+  if (summary.termination_type == ceres::FAILURE) {
+    return Status::Error("the solver failed: " + summary.message +
+                         (residuals.last_failure().empty()
+                              ? std::string()
+                              : " (last model failure: " + residuals.last_failure() + ")"));
+  }
+  result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+
+  std::vector<double> r(m);
+  if (!residuals.Evaluate(z.data(), r.data())) {
+    return Status::Error("the model fails at the estimate: " + residuals.last_failure());
+  }
+  result.error_after = residuals.Error(r.data());
+  for (std::size_t j = 0; j < p; ++j) {
+    const double estimate = std::clamp(z[j] * scales[j], parameters[j].lower, parameters[j].upper);
+    result.estimates.push_back(estimate);
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, result.keys[j], estimate));
+  }
+
+  // Covariance from the central-difference Jacobian at the optimum (scaled parameters):
+  // cov_z = s^2 (J^T J)^-1, s^2 = ||r||^2 / (m - p); cov_x = S cov_z S, S = diag(scales).
+  Eigen::MatrixXd jacobian(m, p);
+  bool jacobian_ok = true;
+  std::vector<double> plus(m), minus(m);
+  for (std::size_t j = 0; j < p && jacobian_ok; ++j) {
+    double h = std::abs(Step(options.relative_step, z[j], lower_z[j], upper_z[j]));
+    std::vector<double> z_plus = z, z_minus = z;
+    z_plus[j] = std::min(z[j] + h, upper_z[j]);
+    z_minus[j] = std::max(z[j] - h, lower_z[j]);
+    jacobian_ok = residuals.Evaluate(z_plus.data(), plus.data()) &&
+                  residuals.Evaluate(z_minus.data(), minus.data());
+    const double width = z_plus[j] - z_minus[j];
+    for (int i = 0; i < m && jacobian_ok; ++i) jacobian(i, j) = (plus[i] - minus[i]) / width;
+  }
+  result.standard_errors.assign(p, kNaN);
+  result.correlation.assign(p, std::vector<double>(p, kNaN));
+  for (std::size_t j = 0; j < p; ++j) result.correlation[j][j] = 1.0;
+  if (jacobian_ok) {
+    const double s2 = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm() /
+                      static_cast<double>(m - static_cast<int>(p));
+    const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
+    // Column scaling to unit diagonal, so the condition test sees the shape, not the units.
+    Eigen::VectorXd d = jtj.diagonal().cwiseSqrt();
+    std::vector<bool> identifiable(p, true);
+    for (std::size_t j = 0; j < p; ++j) identifiable[j] = d(j) > 0.0;
+    for (std::size_t j = 0; j < p; ++j) {
+      if (!identifiable[j]) d(j) = 1.0;
+    }
+    const Eigen::MatrixXd normalised = d.asDiagonal().inverse() * jtj * d.asDiagonal().inverse();
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalised);
+    const Eigen::VectorXd& values = eigen.eigenvalues();
+    const double largest = values.maxCoeff();
+    Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
+    for (std::size_t k = 0; k < p; ++k) {
+      const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+      if (values(k) > kSingularRatio * largest) {
+        inverse += v * v.transpose() / values(k);
+      } else {
+        // A null direction: every parameter it involves is not identifiable on its own.
+        for (std::size_t j = 0; j < p; ++j) {
+          if (std::abs(v(j)) > 1.0e-3) identifiable[j] = false;
+        }
+      }
+    }
+    const Eigen::MatrixXd cov_z =
+        s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
+    for (std::size_t i = 0; i < p; ++i) {
+      if (!identifiable[i]) continue;
+      result.standard_errors[i] = std::sqrt(cov_z(i, i)) * scales[i];
+      for (std::size_t j = 0; j < p; ++j) {
+        if (i == j || !identifiable[j]) continue;
+        result.correlation[i][j] = cov_z(i, j) / std::sqrt(cov_z(i, i) * cov_z(j, j));
+      }
+    }
+  }
+  result.replays = residuals.replays();
+  return result;
+}
+
+}  // namespace mpdrig

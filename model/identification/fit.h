@@ -1,0 +1,95 @@
+// Parameter identification against a rig log (issue 4; the thesis's chapter 8-9 tuning,
+// automated): bounded nonlinear least squares of any base or effect parameter.
+//
+// Residuals: for every compared channel c present in the log (ComparedChannels(), P1 P2
+// PT1..PT10 C2 FT1 FT3 FT4) and every measured sample n inside the fit window,
+//   r_cn = (yhat_cn - y_cn) / ||y_c - mean(y_c)|| / sqrt(C)
+// (norms and mean over the channel's measured samples in the window, C the channels with a
+// non-constant measurement there), i.e. each channel's residual normalised by its own variation,
+// so that sum_n r_cn^2 = NRMSE_c^2 / C and every channel weighs the same whatever its unit (the
+// compare metric, compare.h): the cost is the mean squared NRMSE.
+// Solved by Ceres (trust region, Levenberg-Marquardt) with box bounds, on parameters scaled by
+// their start values; derivatives by finite differences of full replays (the model is a black box
+// to the solver): forward inside the solver, central at the optimum for the covariance.
+// Standard errors: from the Jacobian J at the optimum, cov = s^2 (J^T J)^-1 with
+// s^2 = ||r||^2 / (m - p) rescaled to the unnormalised residuals (Gauss-Newton / Ceres
+// Covariance); correlation = cov_ij / sqrt(cov_ii cov_jj).
+#pragma once
+
+#include <functional>
+#include <limits>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "model/analysis/compare.h"
+#include "model/common/status.h"
+#include "model/params/rig_params.h"
+#include "model/sim/rig_simulator.h"
+
+namespace mpdrig {
+
+// One parameter to fit: a base key of ParamTable() ("wave_speed_mps") or an effect's
+// "EFFECT.KEY" ("unsteady_friction.k"; the effect must be switched on in the start params).
+struct FitParameter {
+  std::string key;
+  double lower = 0.0;  // bounds; DefaultFitParameter() takes them from the parameter tables
+  double upper = 0.0;
+};
+
+// The parameter `key` with search bounds: the effect registry's bounds for an effect parameter;
+// for a base parameter a plausible tuning range around the thesis value (e.g. wave speed
+// 300..1500 m/s, f1 0..5 1/s, choke leak 0..1e-5 m^2), never wider than ParamTable()'s bounds.
+Result<FitParameter> DefaultFitParameter(std::string_view key);
+// The value of `key` in `params` (base or "EFFECT.KEY", effect default if not set).
+Result<double> GetParamValue(const RigParams& params, std::string_view key);
+// Sets `key` in `params` (SetParam semantics, numbers not text).
+Status SetParamValue(RigParams* params, std::string_view key, double value);
+
+struct FitOptions {
+  SimulationOptions simulation;  // cells etc.; choke input is forced to kMeasured (ReplayModel)
+  ReplayOptions replay;
+  // Only samples with time in [window_begin_s, window_end_s] enter the residuals (the replay
+  // always starts at the log's start). diagnose fits on the first part and scores on the rest.
+  double window_begin_s = -std::numeric_limits<double>::infinity();
+  double window_end_s = std::numeric_limits<double>::infinity();
+  int max_iterations = 30;
+  double function_tolerance = 1e-6;  // relative change of the cost that stops the solver
+  // Finite-difference step, relative to max(|x|, 1% of the bound range). Larger than the usual
+  // sqrt(eps): the replay is piecewise smooth in the parameters (its time step dt = dx / c moves
+  // against the log's sample times), and a step below ~1e-4 sees that texture, not the slope.
+  double relative_step = 1.0e-3;
+  // false: forward differences inside the solver (p replays per Jacobian); true: central (2p).
+  // The covariance at the optimum always uses central differences.
+  bool central_differences = false;
+  // Called after each solver iteration: iteration number and current error (mean NRMSE).
+  std::function<void(int iteration, double error)> progress;
+};
+
+struct FitResult {
+  RigParams params;                    // start params with the estimates written in
+  std::vector<std::string> keys;       // in the order of the parameters given
+  std::vector<double> initial;         // start values
+  std::vector<double> estimates;
+  std::vector<double> standard_errors;  // NaN where J^T J is singular (unidentifiable)
+  std::vector<std::vector<double>> correlation;  // keys.size() squared
+  double error_before = 0.0;  // mean NRMSE over compared channels on the window (compare's error)
+  double error_after = 0.0;
+  int iterations = 0;
+  int replays = 0;  // model runs spent
+  bool converged = false;
+  std::string solver_report;  // Ceres's brief report
+};
+
+// Mean NRMSE over the compared channels with a defined NRMSE, on the window: the metric of
+// compare's `error` restricted to [window_begin_s, window_end_s].
+double WindowError(const MeasuredLog& log, const ModelTraces& model, double window_begin_s,
+                   double window_end_s);
+
+// Fits `parameters` starting from `start` (its values are the initial guesses, clamped into the
+// bounds). A replay that fails (e.g. leaves the model's range) counts as an infeasible step.
+Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
+                                const std::vector<FitParameter>& parameters,
+                                const FitOptions& options = {});
+
+}  // namespace mpdrig

@@ -1,0 +1,173 @@
+#include "model/identification/synthetic_log.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <sstream>
+
+#include "model/analysis/compare.h"
+#include "model/effects/effect.h"
+#include "model/sim/rig_simulator.h"
+
+namespace mpdrig {
+namespace {
+
+// Portable uniform and normal draws (the standard distributions differ between libraries).
+class Random {
+ public:
+  explicit Random(std::uint64_t seed) : engine_(seed) {}
+  double Uniform(double lo, double hi) {
+    const double u = static_cast<double>(engine_() >> 11) * 0x1.0p-53;
+    return lo + (hi - lo) * u;
+  }
+  double Normal() {  // Box-Muller
+    const double u1 = std::max(Uniform(0.0, 1.0), 1e-300);
+    const double u2 = Uniform(0.0, 1.0);
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+  }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+struct Excitation {
+  double piston_amp_m = 0.05;
+  double sine_hz[2] = {0.15, 0.35};
+  double sweep_lo_hz = 0.05, sweep_hi_hz = 0.8;
+  std::vector<std::pair<double, double>> choke_steps;  // (time, deg)
+  std::vector<std::pair<double, double>> pump_steps;   // (time, lpm)
+};
+
+double PistonAt(const Excitation& e, double duration, double t) {
+  // First third: two sines; second third: a linear sweep; last third: the sines again, so the
+  // scoring part of a diagnosis sees what the fitting part saw.
+  const double third = duration / 3.0;
+  const double w = 2.0 * std::numbers::pi;
+  if (t < third || t >= 2.0 * third) {
+    return e.piston_amp_m * (0.6 * std::sin(w * e.sine_hz[0] * t) +
+                             0.4 * std::sin(w * e.sine_hz[1] * t));
+  }
+  const double tau = t - third;
+  const double rate = (e.sweep_hi_hz - e.sweep_lo_hz) / third;
+  const double phase = w * (e.sweep_lo_hz * tau + 0.5 * rate * tau * tau);
+  // Continuous at the joins: a smooth window on the sweep.
+  const double window = std::sin(std::numbers::pi * tau / third);
+  return e.piston_amp_m * 0.8 * window * std::sin(phase);
+}
+
+double Held(const std::vector<std::pair<double, double>>& steps, double t) {
+  double value = steps.front().second;
+  for (const auto& [time, v] : steps) {
+    if (t >= time) value = v;
+  }
+  return value;
+}
+
+}  // namespace
+
+Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
+  if (!(options.duration_s >= 10.0) || !(options.rate_hz >= 10.0)) {
+    return Status::Error("synthetic log: duration >= 10 s and rate >= 10 Hz");
+  }
+  Random random(options.seed);
+  SyntheticLog result;
+  RigParams& truth = result.truth;
+  std::ostringstream description;
+  description.precision(4);
+
+  // Hidden effect.
+  if (options.hidden_effect) {
+    const EffectInfo* info = FindEffectInfo(*options.hidden_effect);
+    if (info == nullptr) {
+      return Status::Error("unknown effect '" + *options.hidden_effect +
+                           "'; valid effects: " + EffectNames());
+    }
+    EffectSetting setting{std::string(info->name), {}};
+    description << info->name;
+    for (const EffectParamInfo& param : info->params) {
+      if (!param.fitted) continue;
+      double lo = param.default_value / 2.0, hi = param.default_value * 2.0;
+      if (param.default_value == 0.0) lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
+      lo = std::max(lo, param.min_value);
+      hi = std::min(hi, param.max_value);
+      const double value = random.Uniform(lo, hi);
+      setting.values.emplace_back(std::string(param.key), value);
+      description << " " << param.key << "=" << value;
+    }
+    truth.effects.push_back(std::move(setting));
+  } else {
+    description << "no hidden effect";
+  }
+  if (options.perturb_base) {
+    truth.wave_speed_mps *= random.Uniform(0.9, 1.1);
+    truth.friction_f1_per_s *= random.Uniform(0.7, 1.3);
+    truth.choke_leak_m2 *= random.Uniform(0.7, 1.3);
+  }
+  description << "; wave speed " << truth.wave_speed_mps << " m/s, f1 " << truth.friction_f1_per_s
+              << " 1/s, choke leak " << truth.choke_leak_m2 << " m^2";
+  result.description = description.str();
+
+  // Excitation.
+  Excitation excitation;
+  excitation.piston_amp_m = random.Uniform(0.03, 0.06);
+  excitation.sine_hz[0] = random.Uniform(0.1, 0.2);
+  excitation.sine_hz[1] = random.Uniform(0.3, 0.5);
+  for (double t = 0.0; t < options.duration_s; t += random.Uniform(10.0, 20.0)) {
+    excitation.choke_steps.emplace_back(t, random.Uniform(29.0, 34.0));
+    excitation.pump_steps.emplace_back(t + random.Uniform(3.0, 7.0), random.Uniform(4.0, 7.0));
+  }
+  excitation.pump_steps.insert(excitation.pump_steps.begin(), {0.0, 5.0});
+
+  riglog::RigLog& log = result.log;
+  log.metadata.push_back({"source", "mpdrig synthetic log, seed " + std::to_string(options.seed)});
+  const long count = std::lround(options.duration_s * options.rate_hz);
+  for (long i = 0; i <= count; ++i) log.time_s.push_back(i / options.rate_hz);
+  // The inputs as commanded (noise-free: the model sees the true inputs)...
+  std::vector<double> position, choke, pump, outlet;
+  for (double t : log.time_s) {
+    position.push_back(PistonAt(excitation, options.duration_s, t));
+    choke.push_back(units::ChokeDegToFrac(Held(excitation.choke_steps, t)));
+    pump.push_back(units::LpmToM3ps(Held(excitation.pump_steps, t)));
+    outlet.push_back(log.atmospheric_pressure_pa);
+  }
+  riglog::RigLog inputs = log;
+  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
+  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
+  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
+  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
+  auto signals = SignalsFromLog(inputs, "synthetic", ReplayOptions{}.piston_smoothing_s);
+  if (!signals.ok()) return signals.status();
+  SimulationOptions simulation;
+  simulation.cells = options.cells;
+  simulation.choke_input = ChokeInput::kMeasured;
+  auto run = Simulate(truth, simulation, *signals, log.time_s);
+  if (!run.ok()) return run.status().Within("synthetic log (" + result.description + ")");
+
+  // ...and measured with noise (inputs too: the lab measures them).
+  auto noisy = [&](std::vector<double> values, double sigma) {
+    for (double& v : values) v += sigma * random.Normal();
+    return values;
+  };
+  MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(Channel::kPistonPosition),
+                                       noisy(position, options.piston_noise_m)));
+  MPDRIG_RETURN_IF_ERROR(
+      log.AddColumn(riglog::LabColumn(Channel::kChokePosition),
+                    noisy(choke, units::ChokeDegToFrac(options.choke_noise_deg))));
+  MPDRIG_RETURN_IF_ERROR(
+      log.AddColumn(riglog::LabColumn(Channel::kFT2), noisy(pump, options.flow_noise_m3ps)));
+  MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(Channel::kC1),
+                                       noisy(outlet, options.pressure_noise_pa)));
+  for (Channel channel : ComparedChannels()) {
+    std::vector<double> values;
+    values.reserve(run->samples.size());
+    for (const RigSample& sample : run->samples) values.push_back(sample[channel]);
+    const bool is_flow = riglog::QuantityOf(channel) == riglog::Quantity::kFlow;
+    MPDRIG_RETURN_IF_ERROR(log.AddColumn(
+        riglog::LabColumn(channel),
+        noisy(std::move(values), is_flow ? options.flow_noise_m3ps : options.pressure_noise_pa)));
+  }
+  return result;
+}
+
+}  // namespace mpdrig

@@ -1,0 +1,44 @@
+// Synthetic lab logs with a hidden effect (issue 4's test data, and a way for a user to try
+// `diagnose` on data whose answer is known): the model with one catalogue effect switched on at
+// a random strength, perturbed base parameters, the lab's kind of excitation and sensor noise.
+//
+// Excitation (what the lab runs): piston sines at a few frequencies and a sweep, choke steps,
+// pump flow steps (on/off between two levels). Noise: white, Gaussian, per channel kind.
+// Deterministic for a seed (std::mt19937_64 with explicit distributions written out here, so the
+// same seed gives the same log with any standard library).
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "model/common/status.h"
+#include "model/params/rig_params.h"
+#include "model/riglog/rig_log.h"
+
+namespace mpdrig {
+
+struct SyntheticLogOptions {
+  std::uint64_t seed = 1;
+  double duration_s = 120.0;
+  double rate_hz = 100.0;
+  int cells = 100;  // finer than diagnose's 50: the model that made the data is not the one fitted
+  std::optional<std::string> hidden_effect;  // none: the base model only
+  bool perturb_base = true;     // wave speed +-10%, f1 +-30%, choke leak +-30%
+  double pressure_noise_pa = 300.0;   // 0.003 bar, transmitters of 0.1% of 3-10 bar span
+  double flow_noise_m3ps = 5.0e-7;    // 0.03 L/min
+  double piston_noise_m = 2.0e-5;
+  double choke_noise_deg = 0.05;
+};
+
+struct SyntheticLog {
+  riglog::RigLog log;
+  RigParams truth;  // what generated it (with the hidden effect, if any)
+  std::string description;  // "unsteady_friction k=0.071; wave speed 912 m/s, ..."
+};
+
+// The hidden effect's fitted parameters are drawn uniformly in [default / 2, 2 default] (within
+// the effect's bounds); an effect with default 0 draws in the lower fifth of its range.
+Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options);
+
+}  // namespace mpdrig

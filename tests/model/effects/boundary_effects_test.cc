@@ -1,0 +1,440 @@
+// The boundary effects (pump_curve, hose_compliance, piston_compressibility) change the response
+// the way their physics says: closed-form fixed points, mass balances of the added volumes, and
+// the linearised transfer functions of the added states measured on the periodic response to a
+// piston sine.
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "model/boundary/choke.h"
+#include "model/effects/effect.h"
+#include "model/sim/rig_simulator.h"
+#include "tests/model/rig_test_util.h"
+
+namespace mpdrig {
+namespace {
+
+using Complex = std::complex<double>;
+constexpr Complex kI(0.0, 1.0);
+
+RigParams With(RigParams params, std::string_view spec) {
+  const Status status = ApplyEffectSpec(&params, spec);
+  EXPECT_TRUE(status.ok()) << status.message();
+  return params;
+}
+RigParams With(std::string_view spec) { return With(RigParams(), spec); }
+
+double PhaseDeg(Complex z) { return std::arg(z) * 180.0 / std::numbers::pi; }
+
+struct SineRun {
+  double freq_hz = 0.15;
+  double amplitude_m = 0.002;  // small: the linearised closed forms hold
+  double choke_deg = 31.0;
+  double pump_lpm = 5.0;
+  double outlet_barg = 5.0;
+  int cells = 60;
+  double settle_s = 60.0;  // f1/2 = 0.075/s: e^-4.5 of the start-up transient is left
+  int periods = 4;
+};
+
+// Complex amplitude of each channel at the drive frequency (SI), relative to the piston
+// position's, on the linear model with linear pipe and piston friction (the closed forms below
+// are linear).
+std::array<Complex, kChannelCount> Response(RigParams params, const SineRun& run) {
+  params.friction_f2_per_m = 0.0;
+  params.piston_friction_fd2_pa_s2_per_m2 = 0.0;
+  const double f = run.freq_hz;
+  InputSignals inputs;
+  inputs.piston_position_m = [&](double t) {
+    return run.amplitude_m * std::sin(2.0 * std::numbers::pi * f * t);
+  };
+  inputs.rig = [&](double) { return testing::Held(run.choke_deg, run.pump_lpm, run.outlet_barg); };
+  const int per_period = 64;
+  const double t_start = std::ceil(run.settle_s * f) / f;
+  std::vector<double> times;
+  times.push_back(0.0);
+  for (int k = 0; k < run.periods * per_period; ++k)
+    times.push_back(t_start + k / (f * per_period));
+  SimulationOptions options;
+  options.cells = run.cells;
+  options.model = PipeModel::kLinear;
+  auto result = Simulate(params, options, inputs, times);
+  EXPECT_TRUE(result.ok()) << result.status().message();
+  std::array<Complex, kChannelCount> out{};
+  if (!result.ok()) return out;
+  const Complex piston(0.0, -run.amplitude_m / 2.0);  // A sin = (A/2i) e^{iwt} + c.c.
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    Complex sum = 0.0;
+    for (std::size_t k = 1; k < times.size(); ++k) {
+      const double t = times[k];
+      sum += result->samples[k].values[c] * std::exp(Complex(0.0, -2.0 * std::numbers::pi * f * t));
+    }
+    out[c] = sum / static_cast<double>(times.size() - 1) / piston;
+  }
+  return out;
+}
+
+// The time step of a run with `cells` cells (characteristics scheme: dt = dx / c).
+double TimeStep(const RigParams& params, int cells) {
+  return params.pipe_length_m / cells / params.wave_speed_mps;
+}
+
+// i w as implicit Euler sees it: (1 - e^{-i w dt}) / dt.
+Complex EulerIw(double w, double dt) { return (1.0 - std::exp(Complex(0.0, -w * dt))) / dt; }
+
+// --- pump_curve ---------------------------------------------------------------------------------
+
+// (8.5.1) normalised, as the effect's header writes it (defaults a, b, c; p_ref = 0 gauge).
+double PumpCurveFlow(double q_cmd, double scale, double choke_pressure_pa) {
+  const double a = -2.4050e-6, b = -2.5070e-6, c = 4.7967e-4;
+  const double gauge = choke_pressure_pa - units::kStandardAtmospherePa;
+  return q_cmd * (1.0 + scale * (a / c) * (std::exp(-b * gauge) - 1.0));
+}
+
+// Steady state of pump + choke with the pipe at rest: q_c = q_b and (5.3.2),
+//   q = q_b(p_c(q)),  p_c(q) = p_0 + rho q^2 / G^2,
+// q - q_b(p_c(q)) increases with q: bisection.
+double SteadyPumpFlow(const RigParams& params, double q_cmd, double scale, double g_m2,
+                      double outlet_pa) {
+  const auto choke_pressure = [&](double q) {
+    return outlet_pa + params.choke_density_kgpm3 * q * q / (g_m2 * g_m2);
+  };
+  double lo = 0.0, hi = 2.0 * q_cmd;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (mid - PumpCurveFlow(q_cmd, scale, choke_pressure(mid)) > 0.0 ? hi : lo) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+TEST(PumpCurve, SteadyChokePressureAfterAChokeStepIsTheOrificeFixedPoint) {
+  // Choke 40 -> 31 deg with the piston at rest: C2 settles where the orifice law (5.3.2) meets
+  // the pump curve, q_b(p_c) < q_cmd, so C2 rises less than with the thesis's constant pump.
+  const double scale = 2.0;
+  const RigParams params = With("pump_curve:scale=2");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(t < 1.0 ? 40.0 : 31.0, 10.0, 1.0); };
+  const RigSimulator before = testing::RunSteps(params, options, drive, 0.5);
+  const RigSimulator with = testing::RunSteps(params, options, drive, 150.0);
+  const RigSimulator base = testing::RunSteps(RigParams(), options, drive, 150.0);
+
+  const RigInputs start = drive.rig(0.0), end = drive.rig(10.0);
+  const ChokeCharacteristic characteristic(params);
+  for (const auto& [sim, in] : {std::pair{&before, start}, std::pair{&with, end}}) {
+    const double g = characteristic.FlowCoefficientM2(in.choke_opening_frac);
+    const double q = SteadyPumpFlow(params, in.pump_flow_m3ps, scale, g, in.outlet_pressure_pa);
+    const double p_c = in.outlet_pressure_pa + params.choke_density_kgpm3 * q * q / (g * g);
+    const RigSample s = sim->Sample();
+    EXPECT_LT(q, in.pump_flow_m3ps * 0.99);      // the curve matters at this pressure
+    EXPECT_NEAR(s[Channel::kFT2], q, 1e-6 * q);  // the model's FT2 is the delivered flow
+    EXPECT_NEAR(s[Channel::kFT3], q, 1e-4 * q);
+    EXPECT_NEAR(s[Channel::kC2], p_c, 2e-4 * (p_c - in.outlet_pressure_pa));
+  }
+  const double rise_with = with.Sample()[Channel::kC2] - before.Sample()[Channel::kC2];
+  const double rise_base =
+      base.Sample()[Channel::kC2] -
+      testing::RunSteps(RigParams(), options, drive, 0.5).Sample()[Channel::kC2];
+  EXPECT_LT(rise_with, 0.9 * rise_base) << rise_with << " " << rise_base;
+}
+
+TEST(PumpCurve, CommandIsTheFlowAtTheReferencePressure) {
+  // Wide-open choke and outlet at p_ref: the pump delivers its command.
+  const RigParams params = With("pump_curve:scale=5,reference_pressure_pa=2e5");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double) { return testing::Held(90.0, 1e-3, 2.0); };  // tiny flow: p_c ~ p_0
+  const RigSample s = testing::RunSteps(params, options, drive, 1.0).Sample();
+  EXPECT_NEAR(s[Channel::kFT2], units::LpmToM3ps(1e-3), 1e-9 * units::LpmToM3ps(1e-3));
+}
+
+// --- hose_compliance ----------------------------------------------------------------------------
+
+TEST(HoseCompliance, MassBalanceOfTheHose) {
+  // C dp(0)/dt = q_0 - A u(0), summed over the steps (implicit Euler: exact up to the solver's
+  // tolerance): C (P2(T) - P2(0)) = sum dt (q_0 - FT4).
+  const double compliance = 5e-11;
+  const RigParams params = With("hose_compliance:compliance_m3_per_pa=5e-11");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.piston_position_m = [](double t) {
+    return 0.02 * std::sin(2.0 * std::numbers::pi * 0.3 * t);
+  };
+  drive.rig = [](double t) { return testing::Held(t < 3.0 ? 31.0 : 20.0, 5.0, 3.0); };
+  const double dt = TimeStep(params, options.cells);
+  double p_start = 0.0, p_end = 0.0, net_inflow = 0.0;
+  bool first = true;
+  testing::RunSteps(params, options, drive, 10.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    if (first) {
+      p_start = s[Channel::kP2];
+      first = false;
+      return;
+    }
+    const double t = sim.time_s();
+    const double v_d =
+        (drive.piston_position_m(t + 0.5 * dt) - drive.piston_position_m(t - 0.5 * dt)) / dt;
+    const double q_0 = -v_d * params.PistonDisplacementAreaM2();
+    net_inflow += dt * (q_0 - s[Channel::kFT4]);
+    p_end = s[Channel::kP2];
+  });
+  EXPECT_GT(std::fabs(p_end - p_start), 1e4);  // the choke step moved the hose pressure
+  EXPECT_NEAR(compliance * (p_end - p_start), net_inflow,
+              1e-9 * compliance * std::fabs(p_end - p_start) + 1e-16);
+}
+
+TEST(HoseCompliance, InletFlowFollowsTheCapacitanceAgainstThePipesInputImpedance) {
+  // The pipe's input impedance Z_in = P2/FT4 belongs to the pipe and choke, not to the inlet:
+  // measure it on the rigid inlet and predict the hose's FT4/q_0 = 1 / (1 + i w C Z_in).
+  const double compliance = 1e-10;
+  SineRun run;
+  const RigParams base;
+  const auto b = Response(base, run);
+  const auto h = Response(With("hose_compliance:compliance_m3_per_pa=1e-10"), run);
+  const double w = 2.0 * std::numbers::pi * run.freq_hz;
+  const Complex q_0 = -kI * w * base.PistonDisplacementAreaM2();  // per metre of piston position
+  EXPECT_NEAR(std::abs(b[Index(Channel::kFT4)] / q_0 - 1.0), 0.0, 2e-3);  // rigid: FT4 = q_0
+  const Complex z_in = b[Index(Channel::kP2)] / b[Index(Channel::kFT4)];
+  const Complex predicted = 1.0 / (1.0 + EulerIw(w, TimeStep(base, run.cells)) * compliance * z_in);
+  const Complex measured = h[Index(Channel::kFT4)] / q_0;
+  EXPECT_LT(std::abs(measured), 0.95);  // the hose matters at this compliance
+  EXPECT_NEAR(std::abs(measured), std::abs(predicted), 0.01 * std::abs(predicted));
+  EXPECT_NEAR(PhaseDeg(measured), PhaseDeg(predicted), 1.0);
+  EXPECT_LT(PhaseDeg(measured), -3.0);  // a lag behind the piston
+}
+
+// The frequency [in units of `unit_hz`] of the largest PT1 response in [from, to], scanned at
+// steps of 0.01 and refined by a parabola through the largest three.
+double PeakFactor(const RigParams& params, SineRun run, double unit_hz, double from, double to) {
+  std::vector<double> factors, gains;
+  for (double f = from; f <= to + 1e-9; f += 0.01) {
+    run.freq_hz = f * unit_hz;
+    factors.push_back(f);
+    gains.push_back(std::abs(Response(params, run)[Index(Channel::kPT1)]));
+  }
+  const std::size_t k = std::max_element(gains.begin(), gains.end()) - gains.begin();
+  EXPECT_TRUE(k > 0 && k + 1 < gains.size()) << "peak at the end of the scan";
+  if (k == 0 || k + 1 == gains.size()) return factors[k];
+  const double curvature = gains[k - 1] - 2.0 * gains[k] + gains[k + 1];
+  return factors[k] + 0.01 * 0.5 * (gains[k - 1] - gains[k + 1]) / curvature;
+}
+
+TEST(HoseCompliance, LowersTheOpenChokeResonance) {
+  // Open outlet (no flow through the choke: its linearised impedance is zero): the pipe seen
+  // from the inlet is Z_in = i Z_c tan(w L / c), Z_c = rho c / A, first resonance c/4L (9.3.2).
+  // The hose in parallel with it,
+  //   P2 / q_0 = 1 / (i w C - i cot(w L / c) / Z_c),
+  // peaks where cot(theta) = theta (c / L) C Z_c, theta = w L / c: below c/4L (theta < pi/2).
+  // Friction moves both peaks a little; their ratio is the closed form's theta / (pi/2).
+  const double compliance = 3e-11;
+  const RigParams base;
+  const RigParams hose = With("hose_compliance:compliance_m3_per_pa=3e-11");
+  const double c = base.wave_speed_mps, length = base.pipe_length_m;
+  const double z_c = base.density_kgpm3 * c / base.PipeAreaM2();
+  double lo = 1e-9, hi = 0.5 * std::numbers::pi;  // cot(theta) - x theta decreases on (0, pi/2)
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (1.0 / std::tan(mid) - mid * c / length * compliance * z_c > 0.0 ? lo : hi) = mid;
+  }
+  const double predicted = 0.5 * (lo + hi) / (0.5 * std::numbers::pi);  // in units of c/4L
+  SineRun run;
+  run.choke_deg = 90.0;
+  run.pump_lpm = 0.0;
+  const double c4l = c / (4.0 * length);
+  const double peak_base = PeakFactor(base, run, c4l, 0.9, 1.15);
+  const double peak_hose = PeakFactor(hose, run, c4l, 0.75, 1.0);
+  EXPECT_LT(predicted, 0.92);
+  EXPECT_NEAR(peak_hose / peak_base, predicted, 0.01) << peak_base << " " << peak_hose;
+}
+
+TEST(HoseCompliance, LeavesPressureBelowTheBhaAlgebraic) {
+  // With the piston at rest P1 - P2 = rho g h (5.4.2) at every step, also during a choke step.
+  const RigParams params = With("hose_compliance:compliance_m3_per_pa=1e-10");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(t < 1.0 ? 40.0 : 31.0, 10.0, 2.0); };
+  const double rho_g_h = params.density_kgpm3 * params.gravity_mps2 * params.compartment_height_m;
+  double worst = 0.0;
+  testing::RunSteps(params, options, drive, 5.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    worst = std::max(worst, std::fabs(s[Channel::kP1] - s[Channel::kP2] - rho_g_h));
+  });
+  EXPECT_LT(worst, 1e-6);
+}
+
+// --- piston_compressibility ----------------------------------------------------------------------
+
+constexpr double kVolumeAboveM3 = 6.28e-4;  // the effect's defaults (Table 8.1.1)
+constexpr double kVolumeBelowM3 = 7.02e-4;
+constexpr double kInertanceKgPerM4 = 3.27e6;
+constexpr double kBhaDiameterM = 0.0409;
+
+TEST(PistonCompressibility, LeavesTheSteadyStateAlone) {
+  // At rest the three states reduce to (5.4.1)-(5.4.2): after a pump step has settled every
+  // channel is the rigid model's, and P1 - P2 = rho g h.
+  const RigParams params = With("piston_compressibility:bulk_modulus_pa=5e6");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(31.0, t < 1.0 ? 5.0 : 8.0, 2.0); };
+  const RigSample base = testing::RunSteps(RigParams(), options, drive, 150.0).Sample();
+  const RigSample with = testing::RunSteps(params, options, drive, 150.0).Sample();
+  for (Channel channel : {Channel::kP1, Channel::kP2, Channel::kPT1, Channel::kPT5, Channel::kC2}) {
+    EXPECT_NEAR(with[channel], base[channel], 5.0) << riglog::ChannelName(channel);  // Pa
+  }
+  EXPECT_NEAR(with[Channel::kFT4], 0.0, 1e-10);
+  EXPECT_NEAR(with[Channel::kFT3], base[Channel::kFT3], 1e-9);
+}
+
+TEST(PistonCompressibility, MassBalanceOfTheCompartment) {
+  // (5.4.3) + (5.4.4): (V_p dp_p + V_b dp_b) / K = (q_0 - A u(0)) dt, the clearance flow
+  // cancels; implicit Euler keeps it exactly. P2 = p_p and P1 = p_b are the effect's states.
+  const double k = 5e6;
+  const RigParams params = With("piston_compressibility:bulk_modulus_pa=5e6");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.piston_position_m = [](double t) {
+    return 0.02 * std::sin(2.0 * std::numbers::pi * 0.3 * t);
+  };
+  drive.rig = [](double t) { return testing::Held(t < 3.0 ? 31.0 : 20.0, 5.0, 3.0); };
+  const double dt = TimeStep(params, options.cells);
+  double stored_start = 0.0, stored_end = 0.0, net_inflow = 0.0;
+  bool first = true;
+  testing::RunSteps(params, options, drive, 10.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    const double stored = (kVolumeAboveM3 * s[Channel::kP2] + kVolumeBelowM3 * s[Channel::kP1]) / k;
+    if (first) {
+      stored_start = stored;
+      first = false;
+      return;
+    }
+    const double t = sim.time_s();
+    const double v_d =
+        (drive.piston_position_m(t + 0.5 * dt) - drive.piston_position_m(t - 0.5 * dt)) / dt;
+    net_inflow += dt * (-v_d * params.PistonDisplacementAreaM2() - s[Channel::kFT4]);
+    stored_end = stored;
+  });
+  EXPECT_GT(std::fabs(stored_end - stored_start), 1e-6);
+  EXPECT_NEAR(stored_end - stored_start, net_inflow, 1e-8 * std::fabs(stored_end - stored_start));
+}
+
+TEST(PistonCompressibility, StiffCompartmentIsTheRigidModel) {
+  // The thesis's finding (5.4.1, 11.3): with the compartment's liquid stiff, the inlet flow and
+  // the pressures are those of (5.4.1)-(5.4.2).
+  SineRun run;
+  run.freq_hz = 0.2;
+  const auto b = Response(RigParams(), run);
+  const auto w = Response(With("piston_compressibility:bulk_modulus_pa=2.2e9"), run);
+  for (Channel channel : {Channel::kFT4, Channel::kP1, Channel::kP2, Channel::kPT5, Channel::kC2}) {
+    const Complex ratio = w[Index(channel)] / b[Index(channel)];
+    EXPECT_NEAR(std::abs(ratio - 1.0), 0.0, 0.01) << riglog::ChannelName(channel);
+  }
+  // P1 - P2 is (5.4.2) plus the clearance liquid's inertia: (r_1 + i w M) (A_b - A_d2) v_d
+  // (8.2.1 written for the clearance flow; the compression term i w C_b P1 is 1e-4 of it here).
+  const double w_rad = 2.0 * std::numbers::pi * run.freq_hz;
+  const Complex velocity = kI * w_rad;
+  const Complex drop_base = b[Index(Channel::kP1)] - b[Index(Channel::kP2)];
+  const Complex drop_with = w[Index(Channel::kP1)] - w[Index(Channel::kP2)];
+  const RigParams rig;
+  EXPECT_NEAR(std::abs(drop_base / (rig.piston_friction_fd1_pa_s_per_m * velocity) - 1.0), 0.0,
+              1e-3);
+  const double face_below =
+      0.25 * std::numbers::pi *
+      (kBhaDiameterM * kBhaDiameterM - rig.lower_rod_diameter_m * rig.lower_rod_diameter_m);
+  const Complex predicted = drop_base - kI * w_rad * kInertanceKgPerM4 * face_below * velocity;
+  EXPECT_NEAR(std::abs(drop_with / predicted - 1.0), 0.0, 0.01);
+}
+
+TEST(PistonCompressibility, SoftCompartmentLagsTheInletFlowAndCouplesP1ToPressure) {
+  // Linearised (5.4.3)-(5.4.5) at the drive frequency, with V the piston velocity, Z_in = P2/FT4
+  // the pipe's input impedance (from the rigid run) and C_x = V_x / K:
+  //   (5.4.4)-(5.4.5): P1 - P2 = (r_1 + i w M) Q,  Q = -(A_b - A_d2) V - i w C_b P1,
+  //   (5.4.3): i w C_p P2 = Q + (A_b - A_d) V - P2 / Z_in,
+  // solved for P2 and FT4 = P2 / Z_in with i w as implicit Euler sees it. At low frequency it is
+  // FT4 / q_0 ~ 1 / (1 + i w (C_p + C_b) Z_in): a capacitance like hose_compliance's.
+  const double k = 5e6;
+  SineRun run;
+  const RigParams base;
+  const auto b = Response(base, run);
+  const auto c = Response(With("piston_compressibility:bulk_modulus_pa=5e6"), run);
+  const double w = 2.0 * std::numbers::pi * run.freq_hz;
+  const Complex velocity = kI * w;  // per metre of piston position
+  const Complex q_0 = -velocity * base.PistonDisplacementAreaM2();
+
+  const Complex z_in = b[Index(Channel::kP2)] / b[Index(Channel::kFT4)];
+  const Complex s = EulerIw(w, TimeStep(base, run.cells));
+  const double bha = 0.25 * std::numbers::pi * kBhaDiameterM * kBhaDiameterM;
+  const double face_above =
+      bha - 0.25 * std::numbers::pi * base.upper_rod_diameter_m * base.upper_rod_diameter_m;
+  const double face_below =
+      bha - 0.25 * std::numbers::pi * base.lower_rod_diameter_m * base.lower_rod_diameter_m;
+  const double c_p = kVolumeAboveM3 / k, c_b = kVolumeBelowM3 / k;
+  const double r_1 = -base.piston_friction_fd1_pa_s_per_m / face_below;
+  const Complex z_gap = r_1 + s * kInertanceKgPerM4;
+  const Complex fill = 1.0 + s * c_b * z_gap;
+  const Complex p2 =
+      (face_above - face_below / fill) * velocity / (s * c_p + 1.0 / z_in + s * c_b / fill);
+  const Complex predicted_ft4 = p2 / z_in / q_0;
+  const Complex measured_ft4 = c[Index(Channel::kFT4)] / q_0;
+  EXPECT_LT(PhaseDeg(measured_ft4), -3.0);
+  EXPECT_NEAR(std::abs(measured_ft4 - predicted_ft4), 0.0, 0.01 * std::abs(predicted_ft4));
+  const Complex capacitance_only = 1.0 / (1.0 + s * (c_p + c_b) * z_in);
+  EXPECT_NEAR(std::abs(measured_ft4 - capacitance_only), 0.0, 0.08 * std::abs(predicted_ft4));
+
+  const Complex p1 = c[Index(Channel::kP1)];
+  const Complex gap = -face_below * velocity - s * c_b * p1;
+  const Complex predicted_drop = z_gap * gap;
+  const Complex measured_drop = c[Index(Channel::kP1)] - c[Index(Channel::kP2)];
+  const Complex rigid_drop = b[Index(Channel::kP1)] - b[Index(Channel::kP2)];
+  // The pressure-driven part is visible against (5.4.2) and the linearised law holds.
+  EXPECT_GT(std::abs(measured_drop - rigid_drop), 0.05 * std::abs(rigid_drop));
+  EXPECT_NEAR(std::abs(measured_drop - predicted_drop), 0.0, 0.02 * std::abs(measured_drop));
+}
+
+TEST(PistonCompressibility, PressureBelowTheBhaAnswersAChokeStep) {
+  // Piston at rest, choke closing: the rising pressure must fill the volume below the BHA
+  // through the clearance, so P1 lags P2 (P1 - P2 < rho g h while P2 rises) and returns to
+  // rho g h. The rigid model keeps P1 - P2 = rho g h throughout.
+  const RigParams params = With("piston_compressibility:bulk_modulus_pa=5e6");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.rig = [](double t) { return testing::Held(t < 1.0 ? 40.0 : 31.0, 10.0, 2.0); };
+  const double rho_g_h = params.density_kgpm3 * params.gravity_mps2 * params.compartment_height_m;
+  double most_negative = 0.0;
+  const RigSimulator sim =
+      testing::RunSteps(params, options, drive, 120.0, [&](const RigSimulator& s) {
+        const RigSample sample = s.Sample();
+        most_negative =
+            std::min(most_negative, sample[Channel::kP1] - sample[Channel::kP2] - rho_g_h);
+      });
+  EXPECT_LT(most_negative, -100.0);  // Pa
+  const RigSample end = sim.Sample();
+  EXPECT_NEAR(end[Channel::kP1] - end[Channel::kP2], rho_g_h, 1.0);
+}
+
+TEST(BoundaryEffects, PumpCurveCombinesAndTheInletHasOneClosure) {
+  // pump_curve acts on the pump, hose_compliance on the inlet: they run together. The hose and
+  // the compartment both close the inlet, and the pipe refuses two closures of one end.
+  RigParams params = With("pump_curve");
+  params = With(params, "hose_compliance");
+  SimulationOptions options;
+  options.cells = 30;
+  testing::Drive drive;
+  drive.rig = [](double) { return testing::Held(31.0, 5.0, 2.0); };
+  testing::RunSteps(params, options, drive, 1.0);
+  params = With(params, "piston_compressibility");
+  auto created = RigSimulator::Create(params, options, drive.rig(0.0), 0.0);
+  EXPECT_FALSE(created.ok());  // hose_compliance and piston_compressibility both close the inlet
+}
+
+}  // namespace
+}  // namespace mpdrig

@@ -1,0 +1,284 @@
+// Parameter identification (model/identification/fit.h) on logs the model itself produced with
+// known parameters and known noise: the fit must recover the parameters within what the noise
+// allows (its own standard errors), reach the noise floor, and not move on an exact log.
+// Logs are built in memory (Simulate + MeasuredLogFromRigLog), at 50 cells as `mpdrig fit`.
+#include "model/identification/fit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "model/common/units.h"
+#include "model/riglog/rig_log.h"
+#include "model/sim/log_inputs.h"
+
+namespace mpdrig {
+namespace {
+
+using riglog::Channel;
+
+constexpr double kRateHz = 100.0;
+constexpr double kDurationS = 60.0;
+constexpr int kCells = 50;
+// Transmitter noise of the generated logs: 0.005 bar on pressures, 0.05 L/min on flows.
+constexpr double kPressureNoisePa = 500.0;
+const double kFlowNoiseM3ps = units::LpmToM3ps(0.05);
+
+// Inputs that excite what is fitted: a piston sweep 0.05..0.8 Hz across the pipe's resonances
+// (c/4L, c/2L: wave speed; their damping: friction), choke steps between open (31 deg, 25 deg)
+// and closed-to-the-leak (10 deg, where G = leak) with 1 L/min of pump flow through it (the
+// closed choke's pressure is set by the leak, (5.3.2)).
+// Choke steps 31 -> 10 -> 25 -> 10 deg at 15, 30, 45 s, each a 0.3 s ramp (the actuator's rate
+// limit is 90 deg/s, thesis 8.4).
+double ChokeDeg(double t) {
+  const double times[] = {15.0, 30.0, 45.0};
+  const double levels[] = {31.0, 10.0, 25.0, 10.0};
+  double deg = levels[0];
+  for (int k = 0; k < 3; ++k) {
+    const double fraction = std::clamp((t - times[k]) / 0.3, 0.0, 1.0);
+    deg += fraction * (levels[k + 1] - levels[k]);
+  }
+  return deg;
+}
+
+riglog::RigLog InputLog() {
+  riglog::RigLog log;
+  const long count = std::lround(kDurationS * kRateHz);
+  for (long i = 0; i <= count; ++i) log.time_s.push_back(i / kRateHz);
+  std::vector<double> position, choke, pump, outlet;
+  for (double t : log.time_s) {
+    const double f0 = 0.05, f1 = 0.8;
+    const double phase = 2.0 * std::numbers::pi * (f0 * t + 0.5 * (f1 - f0) * t * t / kDurationS);
+    position.push_back(0.02 * std::sin(phase));
+    const double deg = ChokeDeg(t);
+    choke.push_back(units::ChokeDegToFrac(deg));
+    pump.push_back(units::LpmToM3ps(1.0));
+    outlet.push_back(log.atmospheric_pressure_pa);
+  }
+  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position).ok());
+  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke).ok());
+  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kFT2), pump).ok());
+  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kC1), outlet).ok());
+  return log;
+}
+
+SimulationOptions FitSimulation() {
+  SimulationOptions options;
+  options.cells = kCells;
+  options.choke_input = ChokeInput::kMeasured;
+  return options;
+}
+
+bool IsFlow(Channel channel) {
+  return channel == Channel::kFT1 || channel == Channel::kFT3 || channel == Channel::kFT4;
+}
+
+// A "measured" log: the model with `truth` on InputLog(), every compared channel, plus Gaussian
+// noise (none if noise_scale is 0).
+MeasuredLog MakeLog(const RigParams& truth, double noise_scale, unsigned seed = 7) {
+  const riglog::RigLog inputs = InputLog();
+  auto signals = SignalsFromLog(inputs, "inputs", ReplayOptions{}.piston_smoothing_s);
+  EXPECT_TRUE(signals.ok()) << signals.status().message();
+  auto run = Simulate(truth, FitSimulation(), *signals, inputs.time_s);
+  EXPECT_TRUE(run.ok()) << run.status().message();
+  std::mt19937 random(seed);
+  std::normal_distribution<double> normal;
+  riglog::RigLog log = inputs;
+  for (Channel channel : ComparedChannels()) {
+    const double sigma = noise_scale * (IsFlow(channel) ? kFlowNoiseM3ps : kPressureNoisePa);
+    std::vector<double> values;
+    for (const RigSample& sample : run->samples)
+      values.push_back(sample[channel] + sigma * normal(random));
+    EXPECT_TRUE(log.AddColumn(riglog::LabColumn(channel), values).ok());
+  }
+  auto measured = MeasuredLogFromRigLog(log, "generated.csv");
+  EXPECT_TRUE(measured.ok()) << measured.status().message();
+  return std::move(measured).value();
+}
+
+FitOptions Options() {
+  FitOptions options;
+  options.simulation = FitSimulation();
+  return options;
+}
+
+std::vector<FitParameter> Defaults(const std::vector<std::string>& keys) {
+  std::vector<FitParameter> parameters;
+  for (const std::string& key : keys) {
+    auto parameter = DefaultFitParameter(key);
+    EXPECT_TRUE(parameter.ok()) << parameter.status().message();
+    parameters.push_back(*parameter);
+  }
+  return parameters;
+}
+
+void ExpectValidCorrelation(const FitResult& fit) {
+  const std::size_t p = fit.keys.size();
+  ASSERT_EQ(fit.correlation.size(), p);
+  for (std::size_t i = 0; i < p; ++i) {
+    ASSERT_EQ(fit.correlation[i].size(), p);
+    EXPECT_DOUBLE_EQ(fit.correlation[i][i], 1.0);
+    for (std::size_t j = 0; j < p; ++j) {
+      EXPECT_NEAR(fit.correlation[i][j], fit.correlation[j][i], 1e-12);
+      EXPECT_LE(std::abs(fit.correlation[i][j]), 1.0 + 1e-12);
+    }
+  }
+}
+
+TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
+  RigParams truth;
+  truth.wave_speed_mps = 1000.0;
+  truth.friction_f1_per_s = 0.3;
+  truth.choke_leak_m2 = 1.0e-6;
+  const MeasuredLog log = MakeLog(truth, 1.0);
+  // Noise floor: the error of the true parameters.
+  auto exact = ReplayModel(log, truth, FitSimulation());
+  ASSERT_TRUE(exact.ok());
+  const double noise_floor = WindowError(log, *exact, -INFINITY, INFINITY);
+
+  int progress_calls = 0;
+  FitOptions options = Options();
+  options.progress = [&](int, double error) {
+    ++progress_calls;
+    EXPECT_TRUE(std::isfinite(error));
+  };
+  auto fit =
+      FitParameters(log, RigParams{},
+                    Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}), options);
+  ASSERT_TRUE(fit.ok()) << fit.status().message();
+  SCOPED_TRACE(fit->solver_report);
+  const double expected[] = {1000.0, 0.3, 1.0e-6};
+  const double thesis[] = {850.0, 0.15, 6.0e-7};
+  for (std::size_t j = 0; j < 3; ++j) {
+    SCOPED_TRACE(fit->keys[j]);
+    EXPECT_DOUBLE_EQ(fit->initial[j], thesis[j]);
+    ASSERT_TRUE(std::isfinite(fit->standard_errors[j]));
+    EXPECT_GT(fit->standard_errors[j], 0.0);
+    // Unbiased up to the noise and the fit's resolution: within 3 standard errors (the noise's
+    // spread of the estimate) plus one finite-difference step (the replay is only piecewise
+    // smooth below it: c moves the time grid against the samples, about 0.5 m/s of texture at
+    // 50 cells), and within 1%.
+    EXPECT_NEAR(fit->estimates[j], expected[j],
+                3.0 * fit->standard_errors[j] + options.relative_step * expected[j]);
+    EXPECT_NEAR(fit->estimates[j], expected[j], 0.01 * expected[j]);
+  }
+  EXPECT_TRUE(fit->converged);
+  EXPECT_GT(fit->error_before, 5.0 * noise_floor);
+  // At the noise floor: the error of the true parameters, within that texture (0.5%).
+  EXPECT_NEAR(fit->error_after, noise_floor, 0.005 * noise_floor);
+  ExpectValidCorrelation(*fit);
+  EXPECT_GT(progress_calls, 1);
+  EXPECT_GT(fit->replays, fit->iterations);
+  EXPECT_DOUBLE_EQ(fit->params.wave_speed_mps, fit->estimates[0]);
+  // error_after is compare's metric on the fitted params.
+  auto replay = ReplayModel(log, fit->params, FitSimulation());
+  ASSERT_TRUE(replay.ok());
+  EXPECT_NEAR(WindowError(log, *replay, -INFINITY, INFINITY), fit->error_after, 1e-12);
+  auto comparison = CompareTraces(log, *replay);
+  ASSERT_TRUE(comparison.ok());
+  EXPECT_NEAR(comparison->error, fit->error_after, 1e-12);
+}
+
+TEST(FitTest, RecoversAnEffectParameter) {
+  RigParams truth;
+  truth.effects.push_back({"sensor_lag", {{"time_constant_s", 0.15}}});
+  const MeasuredLog log = MakeLog(truth, 1.0);
+  RigParams start;
+  start.effects.push_back({"sensor_lag", {}});
+  ASSERT_TRUE(SetParamValue(&start, "sensor_lag.time_constant_s", 0.05).ok());
+  auto fit = FitParameters(log, start, Defaults({"sensor_lag.time_constant_s"}), Options());
+  ASSERT_TRUE(fit.ok()) << fit.status().message();
+  SCOPED_TRACE(fit->solver_report);
+  EXPECT_DOUBLE_EQ(fit->initial[0], 0.05);
+  EXPECT_NEAR(fit->estimates[0], 0.15,
+              3.0 * fit->standard_errors[0] + FitOptions{}.relative_step * 0.15);
+  EXPECT_NEAR(fit->estimates[0], 0.15, 0.01 * 0.15);
+  auto value = GetParamValue(fit->params, "sensor_lag.time_constant_s");
+  ASSERT_TRUE(value.ok());
+  EXPECT_DOUBLE_EQ(*value, fit->estimates[0]);
+  EXPECT_LT(fit->error_after, fit->error_before);
+}
+
+TEST(FitTest, AnExactLogAtTheStartValuesDoesNotMove) {
+  const MeasuredLog log = MakeLog(RigParams{}, 0.0);
+  auto fit =
+      FitParameters(log, RigParams{},
+                    Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}), Options());
+  ASSERT_TRUE(fit.ok()) << fit.status().message();
+  EXPECT_LT(fit->error_before, 1e-9);
+  EXPECT_LT(fit->error_after, 1e-9);
+  for (std::size_t j = 0; j < fit->keys.size(); ++j) {
+    EXPECT_NEAR(fit->estimates[j], fit->initial[j], 1e-6 * std::abs(fit->initial[j]))
+        << fit->keys[j];
+  }
+}
+
+TEST(FitTest, TheWindowRestrictsTheResiduals) {
+  const MeasuredLog log = MakeLog(RigParams{}, 1.0);
+  auto replay = ReplayModel(log, RigParams{}, FitSimulation());
+  ASSERT_TRUE(replay.ok());
+  FitOptions options = Options();
+  options.window_begin_s = 30.0;
+  options.window_end_s = 50.0;
+  options.max_iterations = 0;
+  auto fit = FitParameters(log, RigParams{}, Defaults({"friction_f1_per_s"}), options);
+  ASSERT_TRUE(fit.ok()) << fit.status().message();
+  EXPECT_NEAR(fit->error_before, WindowError(log, *replay, 30.0, 50.0), 1e-12);
+  EXPECT_NE(WindowError(log, *replay, 30.0, 50.0), WindowError(log, *replay, 0.0, 60.0));
+}
+
+TEST(FitTest, BadInputIsAnErrorThatSaysWhy) {
+  const MeasuredLog log = MakeLog(RigParams{}, 0.0);
+  auto unknown = DefaultFitParameter("wave_speed");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.status().message().find("wave_speed_mps"), std::string::npos);
+  auto unknown_effect = DefaultFitParameter("no_such_effect.k");
+  ASSERT_FALSE(unknown_effect.ok());
+  EXPECT_NE(unknown_effect.status().message().find("sensor_lag"), std::string::npos);
+  auto unknown_effect_key = DefaultFitParameter("sensor_lag.tau");
+  ASSERT_FALSE(unknown_effect_key.ok());
+  EXPECT_NE(unknown_effect_key.status().message().find("sensor_lag.time_constant_s"),
+            std::string::npos);
+  // The effect is not switched on in the start params.
+  auto off = FitParameters(log, RigParams{}, Defaults({"sensor_lag.time_constant_s"}), Options());
+  ASSERT_FALSE(off.ok());
+  EXPECT_NE(off.status().message().find("not switched on"), std::string::npos);
+  // Bounds: reversed, or outside the parameter table's.
+  auto reversed = FitParameters(log, RigParams{}, {{"wave_speed_mps", 1200.0, 800.0}}, Options());
+  ASSERT_FALSE(reversed.ok());
+  EXPECT_NE(reversed.status().message().find("lower < upper"), std::string::npos);
+  auto outside = FitParameters(log, RigParams{}, {{"wave_speed_mps", 1.0, 800.0}}, Options());
+  ASSERT_FALSE(outside.ok());
+  EXPECT_NE(outside.status().message().find("outside"), std::string::npos);
+  auto twice =
+      FitParameters(log, RigParams{}, Defaults({"wave_speed_mps", "wave_speed_mps"}), Options());
+  ASSERT_FALSE(twice.ok());
+}
+
+TEST(FitTest, DefaultBoundsAreTuningRangesInsideTheTables) {
+  auto c = DefaultFitParameter("wave_speed_mps");
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(c->lower, 300.0);
+  EXPECT_EQ(c->upper, 1500.0);
+  auto leak = DefaultFitParameter("choke_leak_m2");
+  ASSERT_TRUE(leak.ok());
+  EXPECT_EQ(leak->lower, 0.0);
+  EXPECT_EQ(leak->upper, 1.0e-5);
+  auto lag = DefaultFitParameter("sensor_lag.time_constant_s");
+  ASSERT_TRUE(lag.ok());
+  EXPECT_EQ(lag->lower, 0.0);
+  EXPECT_EQ(lag->upper, 1.0);
+  for (const ParamInfo& info : ParamTable()) {
+    auto parameter = DefaultFitParameter(info.key);
+    ASSERT_TRUE(parameter.ok()) << info.key;
+    EXPECT_LT(parameter->lower, parameter->upper) << info.key;
+    EXPECT_GE(parameter->lower, info.min_value) << info.key;
+    EXPECT_LE(parameter->upper, info.max_value) << info.key;
+  }
+}
+
+}  // namespace
+}  // namespace mpdrig
