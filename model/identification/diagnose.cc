@@ -135,25 +135,33 @@ std::vector<NamedValue> Named(const FitResult& fit) {
 double EstimateNoiseFloor(const MeasuredLog& log) {
   double sum = 0.0;
   int used = 0;
+  std::vector<double> d2;
   for (const MeasuredChannel& channel : log.channels) {
     const std::vector<double>& y = channel.values_si;
-    double s1 = 0.0, s2 = 0.0, d1 = 0.0, d2 = 0.0;
-    long n_y = 0, n_d = 0;
+    double s1 = 0.0, s2 = 0.0;
+    long n_y = 0;
+    d2.clear();
     for (std::size_t n = 0; n < y.size(); ++n) {
       if (!std::isfinite(y[n])) continue;
       s1 += y[n], s2 += y[n] * y[n], ++n_y;
       if (n >= 2 && std::isfinite(y[n - 1]) && std::isfinite(y[n - 2])) {
-        const double d = y[n] - 2.0 * y[n - 1] + y[n - 2];
-        d1 += d, d2 += d * d, ++n_d;
+        d2.push_back(y[n] - 2.0 * y[n - 1] + y[n - 2]);
       }
     }
-    if (n_y < 3 || n_d < 3) continue;
+    if (n_y < 3 || d2.size() < 3) continue;
     const double var_y = s2 / n_y - (s1 / n_y) * (s1 / n_y);
     if (!(var_y > 0.0)) continue;
-    // d2 of white noise of variance s^2 has variance 6 s^2; the signal's own d2 is tiny when the
-    // log oversamples it (100 Hz against waves below a few Hz).
-    const double var_noise = (d2 / n_d - (d1 / n_d) * (d1 / n_d)) / 6.0;
-    sum += std::sqrt(std::max(var_noise, 0.0) / var_y);
+    // d2 of white noise of variance s^2 is normal with variance 6 s^2; the signal's own d2 is
+    // small where the log oversamples it, but not at water-hammer fronts or cavity collapses:
+    // the median absolute deviation (x 1.4826 for a normal) ignores those few samples.
+    auto median = [](std::vector<double>& v) {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    const double centre = median(d2);
+    for (double& v : d2) v = std::fabs(v - centre);
+    const double sigma_d2 = 1.4826 * median(d2);
+    sum += sigma_d2 / std::sqrt(6.0) / std::sqrt(var_y);
     ++used;
   }
   return used > 0 ? sum / used : 0.0;
@@ -165,7 +173,9 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
     return Status::Error("fit fraction must be in (0.1, 0.95)");
   }
   std::vector<const EffectInfo*> candidates;
-  if (options.candidates.empty()) {
+  if (options.baseline_only) {
+    // none
+  } else if (options.candidates.empty()) {
     for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
   } else {
     for (const std::string& name : options.candidates) {
@@ -190,6 +200,9 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
   const double score_begin = diagnosis.fit_end_s;
 
   SimulationOptions simulation = options.simulation;
+  // A missing effect may be what drives the base model out of its range (column separation):
+  // then it must still be scored, not stopped.
+  simulation.stop_on_range_violation = false;
   FitOptions fit_options;
   fit_options.simulation = simulation;
   fit_options.window_end_s = diagnosis.fit_end_s;
@@ -207,7 +220,34 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
     base_parameters.push_back(*parameter);
   }
   report("baseline", 0.0);
-  auto base_fit = FitParameters(log, start, base_parameters, fit_options);
+  // Wave speed first, by a coarse scan on the fitting data (the thesis also tuned c before the
+  // friction, 9.4): the cost is not convex in c. A wrong c puts the resonances in the wrong place,
+  // and a local fit from there finds it cheaper to damp the response (raise f1) than to move c.
+  RigParams base_start = start;
+  const bool fits_wave_speed =
+      std::find(options.base_params.begin(), options.base_params.end(), "wave_speed_mps") !=
+      options.base_params.end();
+  if (fits_wave_speed) {
+    // Coarse then fine: the valley in c is about 1% wide (the sweep's higher resonances), so a
+    // coarse step of 2.5% finds its side and a fine step of 0.25% its floor.
+    double best_error = std::numeric_limits<double>::infinity();
+    double best_c = start.wave_speed_mps;
+    auto scan = [&](double centre, double span, int points) {
+      for (int k = 0; k < points; ++k) {
+        RigParams trial = start;
+        trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
+        auto traces = ReplayModel(log, trial, simulation);
+        ++diagnosis.replays;
+        if (!traces.ok()) continue;
+        const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
+        if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
+      }
+    };
+    scan(start.wave_speed_mps, kWaveSpeedScanSpan, kWaveSpeedScanPoints);
+    scan(best_c, kFineScanSpan, kFineScanPoints);
+    base_start.wave_speed_mps = best_c;
+  }
+  auto base_fit = FitParameters(log, base_start, base_parameters, fit_options);
   if (!base_fit.ok()) return base_fit.status().Within("fitting the base model");
   diagnosis.replays += base_fit->replays;
   auto base_traces = ReplayModel(log, base_fit->params, simulation);
@@ -226,70 +266,135 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
   diagnosis.baseline_comparison = std::move(comparison).value();
 
   // --- Candidates --------------------------------------------------------------------------------
+  // One independent task per candidate (each writes only its own slot), run by options.run_tasks:
+  // in turn here, in parallel when the caller (the command line) supplies threads.
+  std::vector<std::vector<FitParameter>> candidate_parameters(candidates.size(), base_parameters);
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    const EffectInfo& info = *candidates[i];
-    report(info.name, 1.0 + i);
-    CandidateResult candidate;
-    candidate.effect = std::string(info.name);
-    candidate.explains = std::string(info.explains);
-    RigParams params = base_fit->params;
-    params.effects.push_back({candidate.effect, {}});
-    std::vector<FitParameter> parameters = base_parameters;
-    for (const EffectParamInfo& param : info.params) {
+    for (const EffectParamInfo& param : candidates[i]->params) {
       if (!param.fitted) continue;
-      auto parameter = DefaultFitParameter(candidate.effect + "." + std::string(param.key));
+      auto parameter =
+          DefaultFitParameter(std::string(candidates[i]->name) + "." + std::string(param.key));
       if (!parameter.ok()) return parameter.status();
-      parameters.push_back(*parameter);
-      ++candidate.extra_params;
+      candidate_parameters[i].push_back(*parameter);
     }
-    auto fit = FitParameters(log, params, parameters, fit_options);
-    if (!fit.ok()) {
-      candidate.failure = fit.status().message();
+  }
+  std::vector<CandidateResult> results(candidates.size());
+  std::vector<int> replays(candidates.size(), 0);
+  std::vector<std::function<void()>> tasks;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    tasks.push_back([&, i] {
+      const EffectInfo& info = *candidates[i];
+      CandidateResult& candidate = results[i];
+      candidate.effect = std::string(info.name);
+      candidate.explains = std::string(info.explains);
+      candidate.extra_params =
+          static_cast<int>(candidate_parameters[i].size() - base_parameters.size());
       candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
-      diagnosis.candidates.push_back(std::move(candidate));
-      continue;
+      RigParams params = base_fit->params;
+      params.effects.push_back({candidate.effect, {}});
+      // The effect may move the best wave speed (it changes how fast or how far waves travel):
+      // the fine scan again, with the effect at its defaults, before the local fit.
+      if (fits_wave_speed) {
+        double best_error = std::numeric_limits<double>::infinity();
+        const double centre = params.wave_speed_mps;
+        double best_c = centre;
+        for (int k = 0; k < kFineScanPoints; ++k) {
+          RigParams trial = params;
+          trial.wave_speed_mps =
+              centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (kFineScanPoints - 1));
+          auto traces = ReplayModel(log, trial, simulation);
+          ++replays[i];
+          if (!traces.ok()) continue;
+          const double error = WindowError(log, *traces, t_begin, diagnosis.fit_end_s);
+          if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
+        }
+        params.wave_speed_mps = best_c;
+      }
+      FitOptions candidate_options = fit_options;
+      candidate_options.max_iterations = options.candidate_iterations;
+      auto fit = FitParameters(log, params, candidate_parameters[i], candidate_options);
+      if (!fit.ok()) {
+        candidate.failure = fit.status().message();
+        return;
+      }
+      replays[i] += fit->replays;
+      auto traces = ReplayModel(log, fit->params, simulation);
+      ++replays[i];
+      if (!traces.ok()) {
+        candidate.failure = traces.status().message();
+        return;
+      }
+      const Scored score = Score(log, *traces, score_begin, t_end);
+      candidate.params = Named(*fit);
+      candidate.fit_error = fit->error_after;
+      candidate.error = score.error;
+      candidate.penalised_error = score.error * (1.0 + kParameterPrice * candidate.extra_params);
+      candidate.channel_errors = score.channel_errors;
+      candidate.fitted = fit->params;
+      candidate.improvement = (baseline.error - score.error) / baseline.error;
+      // Spread of the block improvements: their standard error.
+      double mean = 0.0, squares = 0.0;
+      int blocks = 0;
+      for (int k = 0; k < kScoreBlocks; ++k) {
+        const double d = base_score.block_errors[k] - score.block_errors[k];
+        if (!std::isfinite(d)) continue;
+        mean += d, squares += d * d, ++blocks;
+      }
+      if (blocks >= 2) {
+        mean /= blocks;
+        const double variance = std::max(0.0, (squares - blocks * mean * mean) / (blocks - 1));
+        candidate.improvement_std_error = std::sqrt(variance / blocks);
+      }
+      const double absolute = baseline.error - candidate.penalised_error;
+      candidate.significant = blocks >= 2 &&
+                              absolute > kMinRelativeImprovement * baseline.error &&
+                              absolute > 3.0 * candidate.improvement_std_error;
+    });
+  }
+  report("candidates", 1.0);
+  if (options.run_tasks) {
+    options.run_tasks(tasks);
+  } else {
+    for (std::size_t i = 0; i < tasks.size(); ++i) {
+      report(candidates[i]->name, 1.0 + i);
+      tasks[i]();
     }
-    diagnosis.replays += fit->replays;
-    auto traces = ReplayModel(log, fit->params, simulation);
-    ++diagnosis.replays;
-    if (!traces.ok()) {
-      candidate.failure = traces.status().message();
-      candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
-      diagnosis.candidates.push_back(std::move(candidate));
-      continue;
-    }
-    const Scored score = Score(log, *traces, score_begin, t_end);
-    candidate.params = Named(*fit);
-    candidate.fit_error = fit->error_after;
-    candidate.error = score.error;
-    candidate.penalised_error = score.error * (1.0 + kParameterPrice * candidate.extra_params);
-    candidate.channel_errors = score.channel_errors;
-    candidate.fitted = fit->params;
-    candidate.improvement = (baseline.error - score.error) / baseline.error;
-    // Spread of the block improvements: their standard error.
-    double mean = 0.0, squares = 0.0;
-    int blocks = 0;
-    for (int k = 0; k < kScoreBlocks; ++k) {
-      const double d = base_score.block_errors[k] - score.block_errors[k];
-      if (!std::isfinite(d)) continue;
-      mean += d, squares += d * d, ++blocks;
-    }
-    if (blocks >= 2) {
-      mean /= blocks;
-      const double variance = std::max(0.0, (squares - blocks * mean * mean) / (blocks - 1));
-      candidate.improvement_std_error = std::sqrt(variance / blocks);
-    }
-    const double absolute = baseline.error - candidate.penalised_error;
-    candidate.significant = blocks >= 2 && absolute > kMinRelativeImprovement * baseline.error &&
-                            absolute > 3.0 * candidate.improvement_std_error;
-    diagnosis.candidates.push_back(std::move(candidate));
+  }
+  for (std::size_t i = 0; i < results.size(); ++i) {
+    diagnosis.replays += replays[i];
+    diagnosis.candidates.push_back(std::move(results[i]));
   }
   std::stable_sort(diagnosis.candidates.begin(), diagnosis.candidates.end(),
                    [](const CandidateResult& a, const CandidateResult& b) {
                      return a.penalised_error < b.penalised_error;
                    });
   if (!diagnosis.candidates.empty() && diagnosis.candidates.front().significant) {
-    const CandidateResult& winner = diagnosis.candidates.front();
+    CandidateResult& winner = diagnosis.candidates.front();
+    // The winner's fit ran on the candidates' short budget: polish it with the baseline's.
+    report("polish", steps - 0.75);
+    std::vector<FitParameter> winner_parameters;
+    for (const NamedValue& value : winner.params) {
+      auto parameter = DefaultFitParameter(value.key);
+      if (parameter.ok()) winner_parameters.push_back(*parameter);
+    }
+    auto polished = FitParameters(log, winner.fitted, winner_parameters, fit_options);
+    if (polished.ok()) {
+      diagnosis.replays += polished->replays;
+      auto traces = ReplayModel(log, polished->params, simulation);
+      ++diagnosis.replays;
+      if (traces.ok()) {
+        const Scored score = Score(log, *traces, score_begin, t_end);
+        if (score.error < winner.error) {
+          winner.params = Named(*polished);
+          winner.fit_error = polished->error_after;
+          winner.error = score.error;
+          winner.penalised_error = score.error * (1.0 + kParameterPrice * winner.extra_params);
+          winner.channel_errors = score.channel_errors;
+          winner.fitted = polished->params;
+          winner.improvement = (baseline.error - score.error) / baseline.error;
+        }
+      }
+    }
     diagnosis.verdict = winner.effect;
     report("compare", steps - 0.5);
     auto traces = ReplayModel(log, winner.fitted, simulation);

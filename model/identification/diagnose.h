@@ -36,15 +36,28 @@ namespace mpdrig {
 inline constexpr double kParameterPrice = 0.01;          // 1% of the error per extra parameter
 inline constexpr double kMinRelativeImprovement = 0.03;  // 3% of the baseline's scoring error
 inline constexpr int kScoreBlocks = 8;
+// The baseline's wave speed starts from the best of a scan over start +-kWaveSpeedScanSpan.
+inline constexpr int kWaveSpeedScanPoints = 25;
+inline constexpr double kWaveSpeedScanSpan = 0.3;
+// ... then of a fine scan over best +-kFineScanSpan (each candidate repeats this one).
+inline constexpr int kFineScanPoints = 11;
+inline constexpr double kFineScanSpan = 0.025;
 
 struct DiagnoseOptions {
   SimulationOptions simulation;  // cells: kDiagnoseCells unless set
   std::vector<std::string> base_params = {"wave_speed_mps", "friction_f1_per_s",
                                           "choke_leak_m2"};
   double fit_fraction = 0.6;
-  int max_iterations = 25;
+  int max_iterations = 25;        // the baseline's fit
+  int candidate_iterations = 8;   // each candidate's (it starts from the fitted baseline)
+  // Only the baseline (fit and score), no candidates.
+  bool baseline_only = false;
   // Effects to try; empty: the whole catalogue.
   std::vector<std::string> candidates;
+  // Runs independent tasks (one per candidate) to completion; empty: one after the other. The
+  // model has no threads (design.md); the command line passes a thread pool here. Tasks share
+  // nothing mutable and the model's functions they call are reentrant.
+  std::function<void(const std::vector<std::function<void()>>&)> run_tasks;
   // "baseline", "<effect>", "compare"; fraction of the whole diagnosis done.
   std::function<void(std::string_view stage, double fraction)> progress;
 };

@@ -71,6 +71,9 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
     return Status::Error("synthetic log: duration >= 10 s and rate >= 10 Hz");
   }
   Random random(options.seed);
+  // The effect's strength comes from a stream of its own, so a seed gives the same base
+  // parameters, excitation and noise with and without the hidden effect.
+  Random effect_random(options.seed ^ 0x9e3779b97f4a7c15ULL);
   SyntheticLog result;
   RigParams& truth = result.truth;
   std::ostringstream description;
@@ -91,7 +94,7 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
       if (param.default_value == 0.0) lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
       lo = std::max(lo, param.min_value);
       hi = std::min(hi, param.max_value);
-      const double value = random.Uniform(lo, hi);
+      const double value = effect_random.Uniform(lo, hi);
       setting.values.emplace_back(std::string(param.key), value);
       description << " " << param.key << "=" << value;
     }
@@ -110,38 +113,53 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
 
   // Excitation.
   Excitation excitation;
-  excitation.piston_amp_m = random.Uniform(0.03, 0.06);
+  // Column separation needs low pressure to show: an open choke and little pump flow, as in the
+  // runs where the thesis's model went below zero absolute pressure (11.5).
+  const bool low_pressure = options.hidden_effect && *options.hidden_effect == "column_separation";
+  excitation.piston_amp_m = low_pressure ? random.Uniform(0.06, 0.1) : random.Uniform(0.03, 0.05);
   excitation.sine_hz[0] = random.Uniform(0.1, 0.2);
   excitation.sine_hz[1] = random.Uniform(0.3, 0.5);
   for (double t = 0.0; t < options.duration_s; t += random.Uniform(10.0, 20.0)) {
-    excitation.choke_steps.emplace_back(t, random.Uniform(29.0, 34.0));
-    excitation.pump_steps.emplace_back(t + random.Uniform(3.0, 7.0), random.Uniform(4.0, 7.0));
+    excitation.choke_steps.emplace_back(
+        t, low_pressure ? random.Uniform(40.0, 60.0) : random.Uniform(28.0, 33.0));
+    excitation.pump_steps.emplace_back(
+        t + random.Uniform(3.0, 7.0),
+        low_pressure ? random.Uniform(2.0, 4.0) : random.Uniform(6.0, 10.0));
   }
-  excitation.pump_steps.insert(excitation.pump_steps.begin(), {0.0, 5.0});
+  excitation.pump_steps.insert(excitation.pump_steps.begin(), {0.0, low_pressure ? 3.0 : 8.0});
 
   riglog::RigLog& log = result.log;
   log.metadata.push_back({"source", "mpdrig synthetic log, seed " + std::to_string(options.seed)});
   const long count = std::lround(options.duration_s * options.rate_hz);
   for (long i = 0; i <= count; ++i) log.time_s.push_back(i / options.rate_hz);
-  // The inputs as commanded (noise-free: the model sees the true inputs)...
-  std::vector<double> position, choke, pump, outlet;
-  for (double t : log.time_s) {
-    position.push_back(PistonAt(excitation, options.duration_s, t));
-    choke.push_back(units::ChokeDegToFrac(Held(excitation.choke_steps, t)));
-    pump.push_back(units::LpmToM3ps(Held(excitation.pump_steps, t)));
-    outlet.push_back(log.atmospheric_pressure_pa);
-  }
-  riglog::RigLog inputs = log;
-  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
-  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
-  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
-  MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
-  auto signals = SignalsFromLog(inputs, "synthetic", ReplayOptions{}.piston_smoothing_s);
-  if (!signals.ok()) return signals.status();
   SimulationOptions simulation;
   simulation.cells = options.cells;
   simulation.choke_input = ChokeInput::kMeasured;
-  auto run = Simulate(truth, simulation, *signals, log.time_s);
+  // The inputs as commanded (noise-free: the model sees the true inputs). A heave that would
+  // take the pressure below zero absolute (outside the model's range, thesis 11.5) is scaled
+  // down until it does not, as an operator would (column_separation logs keep the first try).
+  std::vector<double> position, choke, pump, outlet;
+  Result<RunResult> run = Status::Error("not run");
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    position.clear(), choke.clear(), pump.clear(), outlet.clear();
+    for (double t : log.time_s) {
+      position.push_back(PistonAt(excitation, options.duration_s, t));
+      choke.push_back(units::ChokeDegToFrac(Held(excitation.choke_steps, t)));
+      pump.push_back(units::LpmToM3ps(Held(excitation.pump_steps, t)));
+      outlet.push_back(log.atmospheric_pressure_pa);
+    }
+    riglog::RigLog inputs = log;
+    MPDRIG_RETURN_IF_ERROR(
+        inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
+    auto signals = SignalsFromLog(inputs, "synthetic", ReplayOptions{}.piston_smoothing_s);
+    if (!signals.ok()) return signals.status();
+    run = Simulate(truth, simulation, *signals, log.time_s);
+    if (run.ok() || run.status().code() != Status::Code::kModelRange) break;
+    excitation.piston_amp_m *= 0.6;
+  }
   if (!run.ok()) return run.status().Within("synthetic log (" + result.description + ")");
 
   // ...and measured with noise (inputs too: the lab measures them).

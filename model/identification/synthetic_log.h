@@ -28,7 +28,8 @@ struct SyntheticLogOptions {
   double pressure_noise_pa = 300.0;   // 0.003 bar, transmitters of 0.1% of 3-10 bar span
   double flow_noise_m3ps = 5.0e-7;    // 0.03 L/min
   double piston_noise_m = 2.0e-5;
-  double choke_noise_deg = 0.05;
+  double choke_noise_deg = 0.01;  // position feedback; near 30 deg G changes 15%/deg, so
+                                  // more would swamp C2 with the replay of the noise itself
 };
 
 struct SyntheticLog {
@@ -38,7 +39,8 @@ struct SyntheticLog {
 };
 
 // The hidden effect's fitted parameters are drawn uniformly in [default / 2, 2 default] (within
-// the effect's bounds); an effect with default 0 draws in the lower fifth of its range.
+// the effect's bounds); an effect with default 0 draws in the lower fifth of its range. The same
+// seed with and without a hidden effect gives the same base parameters, excitation and noise.
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options);
 
 }  // namespace mpdrig

@@ -1,10 +1,13 @@
 // mpdrig diagnose: which physical effect is the model missing? (issue 4)
 // mpdrig synth: a synthetic lab log with a hidden effect, to try diagnose on a known answer.
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <memory>
 #include <string>
+#include <thread>
 
 #include "model/analysis/compare.h"
 #include "model/identification/diagnose.h"
@@ -63,6 +66,26 @@ int RunDiagnose(DiagnoseArgs args) {
                    static_cast<int>(stage.size()), stage.data());
     };
   }
+  // The candidates are independent: one thread per core works through them.
+  options.run_tasks = [quiet = args.quiet](const std::vector<std::function<void()>>& tasks) {
+    std::atomic<std::size_t> next{0}, done{0};
+    const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(),
+                                                             static_cast<unsigned>(tasks.size())));
+    std::vector<std::thread> threads;
+    for (unsigned w = 0; w < workers; ++w) {
+      threads.emplace_back([&] {
+        for (std::size_t i = next++; i < tasks.size(); i = next++) {
+          tasks[i]();
+          const std::size_t finished = ++done;
+          if (!quiet) {
+            std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished,
+                         tasks.size());
+          }
+        }
+      });
+    }
+    for (std::thread& thread : threads) thread.join();
+  };
   auto diagnosis = Diagnose(*log, *params, options);
   if (!diagnosis.ok()) return Fail(name, diagnosis.status());
   const Diagnosis& d = *diagnosis;

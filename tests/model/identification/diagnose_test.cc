@@ -6,8 +6,10 @@
 // it changes the signals clearly beyond the noise; the error falls by at least half or to the
 // noise floor; on logs without a hidden effect no candidate is significant.
 //
-// "Changes the signals clearly beyond the noise" is judged the way the data allow: after the
-// base model has been refitted, its scoring error still exceeds the noise-only level by
+// "Changes the signals clearly beyond the noise" is judged the way the data allow: the same seed
+// without the hidden effect gives the same log but for the effect (MakeSyntheticLog draws the
+// effect's strength from its own stream); the effect is detectable when the refitted base
+// model's scoring error on the log with the effect exceeds that on the log without it by
 // kDetectableMargin. An effect the base parameters can absorb (e.g. a tiny lag taken up by a
 // slightly lower wave speed) is not detectable from the log, and no method could rank it.
 #include <cmath>
@@ -25,17 +27,18 @@ namespace mpdrig {
 namespace {
 
 constexpr int kCasesPerEffect = 10;
-constexpr double kDurationS = 60.0;
+constexpr double kDurationS = 40.0;
 constexpr double kRateHz = 50.0;
-// Detectable: the refitted base model's scoring error exceeds the noise floor by this share.
-constexpr double kDetectableMargin = 0.5;
+// Detectable: the refitted base model's scoring error with the effect exceeds the one without it
+// by this share (25%: well beyond the seed-to-seed spread of the no-effect baseline).
+constexpr double kDetectableMargin = 0.25;
 
 struct Case {
   SyntheticLog synthetic;
   Diagnosis diagnosis;
 };
 
-Case RunCase(std::optional<std::string> effect, std::uint64_t seed) {
+Case RunCase(std::optional<std::string> effect, std::uint64_t seed, bool baseline_only = false) {
   SyntheticLogOptions options;
   options.seed = seed;
   options.duration_s = kDurationS;
@@ -51,6 +54,7 @@ Case RunCase(std::optional<std::string> effect, std::uint64_t seed) {
   DiagnoseOptions diagnose;
   diagnose.simulation.cells = kDiagnoseCells;
   diagnose.simulation.stop_on_range_violation = false;
+  diagnose.baseline_only = baseline_only;
   auto diagnosis = Diagnose(*log, RigParams(), diagnose);
   EXPECT_TRUE(diagnosis.ok()) << diagnosis.status().message();
   if (diagnosis.ok()) result.diagnosis = *diagnosis;
@@ -70,7 +74,7 @@ std::string Ranking(const Diagnosis& d) {
 
 TEST(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
   for (int seed = 1; seed <= kCasesPerEffect; ++seed) {
-    const Case c = RunCase(std::nullopt, 1000 + seed);
+    const Case c = RunCase(std::nullopt, seed);
     SCOPED_TRACE(c.synthetic.description);
     std::printf("seed %d: base %.4g%% floor %.4g%% |%s\n", seed, 100.0 * c.diagnosis.baseline.error,
                 100.0 * c.diagnosis.noise_floor, Ranking(c.diagnosis).c_str());
@@ -89,17 +93,20 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
   for (int seed = 1; seed <= kCasesPerEffect; ++seed) {
     const Case c = RunCase(effect, seed);
     const Diagnosis& d = c.diagnosis;
-    const bool is_detectable = d.baseline.error > (1.0 + kDetectableMargin) * d.noise_floor;
-    std::printf("%s seed %d: %s | base %.4g%% floor %.4g%% |%s\n", effect.c_str(), seed,
-                c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * d.noise_floor,
-                Ranking(d).c_str());
+    const double without = RunCase(std::nullopt, seed, true).diagnosis.baseline.error;
+    const bool is_detectable = d.baseline.error > (1.0 + kDetectableMargin) * without;
+    std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n",
+                effect.c_str(), seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error,
+                100.0 * without, is_detectable ? "" : " not detectable", Ranking(d).c_str());
     if (!is_detectable) continue;
     ++detectable;
     if (!d.candidates.empty() && d.candidates.front().effect == effect &&
         d.verdict == effect) {
       ++first;
       const double after = d.candidates.front().error;
-      EXPECT_TRUE(after <= 0.5 * d.baseline.error || after <= 1.2 * d.noise_floor)
+      // Half the error, or down to the noise floor: the no-effect log's baseline error (what
+      // noise and the replay of noisy inputs leave), with 10% to spare.
+      EXPECT_TRUE(after <= 0.5 * d.baseline.error || after <= 1.1 * without)
           << "seed " << seed << ": error " << d.baseline.error << " -> " << after;
     }
   }

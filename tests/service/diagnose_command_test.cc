@@ -1,0 +1,115 @@
+// `mpdrig synth` and `mpdrig diagnose` as a user runs them: the JSON names outside checks read,
+// the self-contained HTML report (rendered by headless Chromium), errors for bad input.
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir() {
+  const fs::path dir =
+      fs::temp_directory_path() /
+      ("mpdrig_diagnose_test_" +
+       std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::string ReadFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+int RunShell(const std::string& command, std::string* output) {
+  const fs::path out = TempDir() / "command_output.txt";
+  const int status = std::system((command + " > " + out.string() + " 2>&1").c_str());
+  if (output != nullptr) *output = ReadFile(out);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+const std::string kExe = MPDRIG_EXE;
+
+TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
+  const fs::path dir = TempDir();
+  const std::string log = (dir / "lag.csv").string();
+  std::string output;
+  ASSERT_EQ(RunShell(kExe + " synth --effect sensor_lag --seed 3 --duration 30 --rate-hz 50 --out " +
+                         log,
+                     &output),
+            0)
+      << output;
+  EXPECT_NE(ReadFile(log).find("# hidden: sensor_lag"), std::string::npos);
+  const std::string json = (dir / "d.json").string();
+  const std::string html = (dir / "d.html").string();
+  // Two candidates keep the test short; the full catalogue is diagnose_test's.
+  ASSERT_EQ(RunShell(kExe + " diagnose " + log + " --candidates choke_inertia,sensor_lag --json " +
+                         json + " --report " + html,
+                     &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("verdict: sensor_lag"), std::string::npos) << output;
+  EXPECT_NE(output.find("diagnose: 100% done"), std::string::npos) << "progress on stderr";
+  const std::string text = ReadFile(json);
+  for (const char* field :
+       {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"", "\"candidates\":[{\"effect\":",
+        "\"significant\":true", "\"verdict\":\"sensor_lag\"", "\"noise_floor\":"}) {
+    EXPECT_NE(text.find(field), std::string::npos) << field << " in " << text.substr(0, 400);
+  }
+  // Ranked best first: the first candidate is the verdict.
+  EXPECT_LT(text.find("\"effect\":\"sensor_lag\""), text.find("\"effect\":\"choke_inertia\""));
+
+  const std::string page = ReadFile(html);
+  EXPECT_EQ(page.find("http://"), std::string::npos);
+  EXPECT_EQ(page.find("https://"), std::string::npos);
+  EXPECT_EQ(page.find("<script"), std::string::npos);
+  EXPECT_NE(page.find("Missing effect: <b>sensor_lag</b>"), std::string::npos);
+  EXPECT_NE(page.find("before and after adding sensor_lag"), std::string::npos);
+
+  std::string found;
+  if (RunShell("command -v chromium", &found) != 0) {
+    GTEST_SKIP() << "chromium is not installed (deploy/install-deps.sh installs it)";
+  }
+  const fs::path png = dir / "d.png";
+  ASSERT_EQ(RunShell("chromium --headless --no-sandbox --disable-gpu "
+                     "--disable-background-networking --disable-component-update --disable-sync "
+                     "--no-first-run --user-data-dir=" +
+                         (dir / "profile").string() +
+                         " --window-size=1280,1600 --screenshot=" + png.string() + " file://" + html,
+                     &output),
+            0)
+      << output;
+  // A rendered page of plots and tables does not compress to a few kB as a blank one does.
+  EXPECT_GT(fs::file_size(png), 30000u);
+}
+
+TEST(DiagnoseCommandTest, RefusesBadInput) {
+  std::string output;
+  EXPECT_NE(RunShell(kExe + " diagnose /nonexistent.csv --json -", &output), 0);
+  const fs::path dir = TempDir();
+  const std::string log = (dir / "x.csv").string();
+  ASSERT_EQ(RunShell(kExe + " synth --seed 1 --duration 12 --rate-hz 20 --out " + log, &output), 0)
+      << output;
+  EXPECT_NE(RunShell(kExe + " diagnose " + log + " --candidates gremlins --json -", &output), 0);
+  EXPECT_NE(output.find("unknown effect 'gremlins'; valid effects:"), std::string::npos) << output;
+  EXPECT_NE(RunShell(kExe + " synth --effect gremlins --out " + log, &output), 0);
+  EXPECT_NE(output.find("valid effects"), std::string::npos) << output;
+  {
+    std::ofstream bad(dir / "bad.csv");
+    bad << "# rig-log: 1\ntime_s,piston_position_m,choke_position_deg,PT1_barg\n0,0,31,1\n"
+           "0.01,0,31,abc\n";
+  }
+  EXPECT_NE(RunShell(kExe + " diagnose " + (dir / "bad.csv").string() + " --json -", &output), 0);
+  EXPECT_NE(output.find("bad.csv:4:"), std::string::npos) << output;
+}
+
+}  // namespace
