@@ -30,6 +30,15 @@ struct ServeArgs {
   double pump_lpm = 0.0;
   double outlet_barg = 0.0;
   double safe_choke_deg = std::numeric_limits<double>::quiet_NaN();
+  double heave_amp_m = 0.0;
+  double heave_hz = 0.2;
+  bool no_observer = false;
+  double estimate_hz = 0.0;
+  double profile_hz = 10.0;
+  int profile_points = service::RigHost::kDefaultProfilePoints;
+  double observer_start_hz = 0.2;
+  std::vector<double> observer_pole{-40.0, 20.0};
+  bool observer_linear_friction = false;
 };
 
 int RunServe(const ServeArgs& args) {
@@ -38,12 +47,25 @@ int RunServe(const ServeArgs& args) {
   if (!params.ok()) return Fail(name, params.status());
   auto options = args.model.LoadSimulationOptions();
   if (!options.ok()) return Fail(name, options.status());
+  for (int i = 0; i < args.profile_points; ++i) {
+    options->pressure_positions_m.push_back(params->pipe_length_m * i / (args.profile_points - 1));
+  }
+  service::PistonCommandIn heave;
+  if (args.heave_amp_m != 0.0) {
+    heave.mode = service::PistonCommandIn::Mode::kSine;
+    heave.amplitude_m = args.heave_amp_m;
+    heave.frequency_hz = args.heave_hz;
+  }
 
   std::vector<service::RigHost> rigs;
   for (const std::string& id : args.rigs) {
     auto rig = service::RigHost::Create(id, *params, *options, args.rate_hz,
                                         {args.choke_deg, args.pump_lpm, args.outlet_barg});
     if (!rig.ok()) return Fail(name, rig.status().Within("rig '" + id + "'"));
+    if (args.heave_amp_m != 0.0) {
+      const Status set = rig->SetPiston(heave);
+      if (!set.ok()) return Fail(name, set.Within("--heave-amp-m/--heave-hz"));
+    }
     rigs.push_back(std::move(rig).value());
   }
   service::ServeOptions serve;
@@ -53,6 +75,12 @@ int RunServe(const ServeArgs& args) {
   serve.domain = static_cast<dds_domainid_t>(args.domain);
   serve.duration_s = args.duration_s;
   serve.safe_choke_deg = args.safe_choke_deg;
+  serve.observer = !args.no_observer;
+  serve.estimate_hz = args.estimate_hz;
+  serve.profile_hz = args.profile_hz;
+  serve.observer_options.observer.disturbance_hz = args.observer_start_hz;
+  serve.observer_options.observer.pole = {args.observer_pole[0], args.observer_pole[1]};
+  serve.observer_options.observer.quadratic_friction = !args.observer_linear_friction;
   if (!args.dds_config.empty()) {
     std::ifstream file(args.dds_config);
     if (file) {
@@ -70,14 +98,15 @@ int RunServe(const ServeArgs& args) {
   std::signal(SIGTERM, OnSignal);
   std::string ids;
   for (const std::string& id : args.rigs) ids += (ids.empty() ? "" : ", ") + id;
-  std::fprintf(stderr,
-               "mpdrig serve: rigs %s on DDS domain %d (%s), %s clock, sensors at %g Hz\n"
-               "  topics: mpdrig_sensors, mpdrig_status (out); mpdrig_choke_command, "
-               "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
-               "mpdrig_step_request (in)\n  stop with Ctrl-C\n",
-               ids.c_str(), args.domain,
-               args.dds_config.empty() ? "loopback only" : "configured network", args.clock.c_str(),
-               args.rate_hz);
+  std::fprintf(
+      stderr,
+      "mpdrig serve: rigs %s on DDS domain %d (%s), %s clock, sensors at %g Hz\n"
+      "  topics: mpdrig_sensors, mpdrig_estimate, mpdrig_pressure_profile, mpdrig_status (out); "
+      "mpdrig_choke_command, "
+      "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
+      "mpdrig_step_request (in)\n  stop with Ctrl-C\n",
+      ids.c_str(), args.domain, args.dds_config.empty() ? "loopback only" : "configured network",
+      args.clock.c_str(), args.rate_hz);
   const auto started = std::chrono::steady_clock::now();
   const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
@@ -108,8 +137,14 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       "status on mpdrig_status; takes choke, piston, pump and outlet commands. Commands that are\n"
       "NaN, infinite, out of range or for an unknown rig are refused, counted and reported on\n"
       "status. DDS stays on loopback unless --dds-config says otherwise.\n"
+      "Beside each rig runs the backstepping observer (thesis 10) on the topside channels C2 and\n"
+      "FT1 only: mpdrig_estimate carries the estimated bottom-hole pressure, heave velocity and\n"
+      "the disturbance frequency it assumes (the commanded sine's, else tracked online);\n"
+      "mpdrig_pressure_profile the pressure along the pipe, simulated and estimated.\n"
       "  mpdrig serve --rig rig-1 --rig rig-2 --rate-hz 100 --clock realtime\n"
-      "  mpdrig serve --clock lockstep --domain 7   # advances only on mpdrig_step_request");
+      "  mpdrig serve --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 20 --choke-deg 45\n"
+      "  mpdrig serve --clock lockstep --domain 7   # advances only on mpdrig_step_request\n"
+      "Watch it from another terminal: rig_echo --rig rig-1 --samples 1000 --out -");
   args->model.AddAll(command);
   command->add_option("--rig", args->rigs, "rig id to serve (repeatable)")->capture_default_str();
   command->add_option("--rate-hz", args->rate_hz, "sensor rate [Hz]")
@@ -138,6 +173,48 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
                    "choke opening when a rig's last choke controller goes [deg] (default: keep "
                    "the last command); the piston always holds")
       ->check(CLI::Range(0.0, 90.0));
+  command
+      ->add_option("--heave-amp-m", args->heave_amp_m,
+                   "start each rig's heave generator on a sine of this amplitude [m] (0: hold; "
+                   "a piston command replaces it)")
+      ->check(CLI::Range(-0.6, 0.6))
+      ->capture_default_str();
+  command->add_option("--heave-hz", args->heave_hz, "frequency of that sine [Hz]")
+      ->check(CLI::Range(0.0, 2.0))
+      ->capture_default_str();
+  command->add_flag("--no-observer", args->no_observer,
+                    "do not run the observer (no mpdrig_estimate, profile without estimate)");
+  command
+      ->add_option("--estimate-hz", args->estimate_hz,
+                   "publish mpdrig_estimate at this rate [Hz] (0: with every sensor sample); "
+                   "the observer steps on every sample regardless")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--profile-hz", args->profile_hz,
+                   "publish mpdrig_pressure_profile at this rate [Hz] (0: off)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--profile-points", args->profile_points,
+                   "points of the pressure profile, evenly from the inlet (0 m) to the choke")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  command
+      ->add_option("--observer-start-hz", args->observer_start_hz,
+                   "disturbance frequency the observer assumes until its tracker locks, when the "
+                   "heave is not a commanded sine [Hz]")
+      ->check(CLI::Range(0.02, 2.0))
+      ->capture_default_str();
+  command
+      ->add_option("--observer-pole", args->observer_pole,
+                   "poles of A - LC [rad/s]: RE IM for RE +- IM i (thesis 10.3: -40 20)")
+      ->expected(2)
+      ->capture_default_str();
+  command->add_flag(
+      "--observer-linear-friction", args->observer_linear_friction,
+      "the thesis's observer: linear friction only in its pipe copy (default: also "
+      "the quadratic friction f2 u|u|, about 50x smaller BHP error at 0.1 m strokes)");
   command->callback([args, exit_code]() { *exit_code = RunServe(*args); });
 }
 

@@ -15,6 +15,11 @@ std::string LoopbackConfig() {
          "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>";
 }
 
+std::string FastAckConfig() {
+  return "<Internal><HeartbeatInterval min=\"1ms\" minsched=\"1ms\">1ms</HeartbeatInterval>"
+         "</Internal>";
+}
+
 Qos SensorQos(bool keep_all) {
   Qos qos;
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_SECS(1));

@@ -37,6 +37,12 @@ Result<RigHost> RigHost::Create(std::string rig_id, const RigParams& params,
   // A running rig reports leaving the model's range instead of stopping (design.md, Errors).
   options.stop_on_range_violation = false;
   options.choke_input = ChokeInput::kReference;
+  if (options.pressure_positions_m.empty()) {
+    for (int i = 0; i < kDefaultProfilePoints; ++i) {
+      options.pressure_positions_m.push_back(params.pipe_length_m * i /
+                                             (kDefaultProfilePoints - 1));
+    }
+  }
   if (!Within(initial.choke_deg, limits.choke_min_deg, limits.choke_max_deg) ||
       !Within(initial.pump_lpm, limits.pump_min_lpm, limits.pump_max_lpm) ||
       !Within(initial.outlet_barg, limits.outlet_min_barg, limits.outlet_max_barg)) {
@@ -50,16 +56,25 @@ Result<RigHost> RigHost::Create(std::string rig_id, const RigParams& params,
   auto simulator = RigSimulator::Create(params, options, inputs);
   if (!simulator.ok()) return simulator.status();
   return RigHost(std::move(rig_id), RigSampler(std::move(simulator).value()), 1.0 / sensor_rate_hz,
-                 limits, inputs);
+                 limits, inputs, options.pressure_positions_m);
 }
 
 RigHost::RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
-                 RigInputs inputs)
+                 RigInputs inputs, std::vector<double> positions_m)
     : rig_id_(std::move(rig_id)),
       sampler_(std::move(sampler)),
       period_s_(period_s),
       limits_(limits),
-      inputs_(inputs) {}
+      inputs_(inputs),
+      positions_m_(std::move(positions_m)) {}
+
+std::optional<double> RigHost::piston_sine_hz() const {
+  if (piston_.mode == PistonCommandIn::Mode::kSine && piston_.frequency_hz > 0.0 &&
+      piston_.amplitude_m != 0.0) {
+    return piston_.frequency_hz;
+  }
+  return std::nullopt;
+}
 
 Status RigHost::Refuse(const std::string& reason) {
   ++counters_.rejected_commands;
@@ -188,6 +203,14 @@ Result<RigSample> RigHost::Tick() {
     return step;
   });
   if (!sample.ok()) return sample.status();
+  // The sampler interpolates between simulator steps, the newer of which may have been computed
+  // (up to one step, l/(N c) = 5.3 ms, ahead) with the commands before this tick's. The pure
+  // inputs, pump flow FT2 and outlet pressure C1, are what the commands say now: the lab's pump
+  // and pressure regulator follow a command at once, and a controller sees its command in the
+  // next sample. FT3 = FT1 + FT2 stays consistent; the pipe answers on the model's next step.
+  sample->values[Index(Channel::kFT2)] = inputs_.pump_flow_m3ps;
+  sample->values[Index(Channel::kFT3)] = (*sample)[Channel::kFT1] + inputs_.pump_flow_m3ps;
+  sample->values[Index(Channel::kC1)] = inputs_.outlet_pressure_pa;
   time_s_ = target;
   ++counters_.samples;
   return sample;

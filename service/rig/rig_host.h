@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
@@ -84,6 +85,15 @@ class RigHost {
   double choke_command_deg() const;
   double pump_command_lpm() const;
   double outlet_command_barg() const;
+  const PistonCommandIn& piston_command() const { return piston_; }
+  // The heave generator's sine frequency while it runs one with a non-zero amplitude: what the
+  // observer's disturbance model needs (rig_observer.h).
+  std::optional<double> piston_sine_hz() const;
+  // Where each sample's pressure_at_positions_pa is taken along the pipe [m from the inlet]: the
+  // pressure-profile topic. SimulationOptions::pressure_positions_m, or by default
+  // kDefaultProfilePoints points evenly from the inlet to the outlet.
+  const std::vector<double>& pressure_positions_m() const { return positions_m_; }
+  static constexpr int kDefaultProfilePoints = 19;  // every 50 m on the 900 m pipe
 
   // Advances one sensor period with the commands in force and returns every channel then.
   // Fails only when the simulation itself fails (solver, or the model range if the options stop
@@ -92,7 +102,7 @@ class RigHost {
 
  private:
   RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
-          RigInputs inputs);
+          RigInputs inputs, std::vector<double> positions_m);
   double PistonPositionAt(double time_s) const;
 
   std::string rig_id_;
@@ -105,6 +115,7 @@ class RigHost {
   double piston_from_m_ = 0.0;  // position when the command arrived (ramps and holds start here)
   double time_s_ = 0.0;
   RigCounters counters_;
+  std::vector<double> positions_m_;
 };
 
 }  // namespace mpdrig::service

@@ -1,9 +1,11 @@
 #include "service/rig/rig_service.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "service/rig/wire.h"
@@ -16,6 +18,11 @@ struct RigService::Impl {
   ServeOptions options;
   std::vector<RigHost> rigs;
   std::vector<std::uint64_t> last_step_request;
+  std::vector<std::optional<RigObserver>> observers;  // per rig; created on its first sample
+  std::vector<bool> observer_failed;                  // per rig: stopped, the status says why
+  std::uint64_t estimate_every = 1;                   // publish every this many samples
+  std::uint64_t profile_every = 0;                    // 0: no profile topic
+  ProfileBuffers profile_buffers;
   std::uint64_t deadline_misses = 0;
   Clock::time_point started;
 
@@ -23,8 +30,10 @@ struct RigService::Impl {
   std::optional<dds::Domain> domain;
   dds::Entity participant;
   dds::Entity sensors_topic, choke_topic, piston_topic, pump_topic, outlet_topic, step_topic,
-      status_topic;
+      status_topic, estimate_topic, profile_topic;
   std::optional<dds::Writer<mpdrig_RigSensors>> sensors;
+  std::optional<dds::Writer<mpdrig_RigEstimate>> estimate;
+  std::optional<dds::Writer<mpdrig_PressureProfile>> profile;
   std::optional<dds::Writer<mpdrig_RigStatus>> status;
   std::optional<dds::Reader<mpdrig_ChokeCommand>> choke;
   std::optional<dds::Reader<mpdrig_PistonCommand>> piston;
@@ -108,9 +117,51 @@ struct RigService::Impl {
       (void)rig.Refuse("simulation step failed: " + sample.status().message());
       return Status::Ok();
     }
-    const mpdrig_RigSensors wire = ToWire(rig.rig_id(), rig.counters().samples - 1, *sample,
-                                          rig.params().atmospheric_pressure_pa);
-    return sensors->Write(wire);
+    const std::uint64_t counter = rig.counters().samples - 1;
+    const double atmosphere = rig.params().atmospheric_pressure_pa;
+    MPDRIG_RETURN_IF_ERROR(sensors->Write(ToWire(rig.rig_id(), counter, *sample, atmosphere)));
+
+    const std::size_t index = static_cast<std::size_t>(&rig - rigs.data());
+    RigObserver* observer = Observe(index, *sample);
+    if (observer != nullptr && counter % estimate_every == 0) {
+      MPDRIG_RETURN_IF_ERROR(estimate->Write(
+          ToWire(rig.rig_id(), counter, sample->time_s, observer->Estimate(), atmosphere)));
+    }
+    if (profile_every > 0 && counter % profile_every == 0) {
+      std::vector<double> estimated;
+      if (observer != nullptr) {
+        for (double x : rig.pressure_positions_m()) estimated.push_back(observer->PressureAtPa(x));
+      }
+      MPDRIG_RETURN_IF_ERROR(profile->Write(
+          ToWire(rig.rig_id(), counter, sample->time_s, rig.pressure_positions_m(),
+                 sample->pressure_at_positions_pa, estimated, atmosphere, &profile_buffers)));
+    }
+    return Status::Ok();
+  }
+
+  // Brings rig `index`'s observer to the sample; nullptr if there is none (off, or it failed:
+  // then the rig runs on and its status says why).
+  RigObserver* Observe(std::size_t index, const RigSample& sample) {
+    if (!options.observer || observer_failed[index]) return nullptr;
+    RigHost& rig = rigs[index];
+    std::optional<RigObserver>& observer = observers[index];
+    Status status = Status::Ok();
+    if (!observer) {
+      auto created = RigObserver::Create(rig.params(), options.observer_options, sample);
+      if (created.ok()) {
+        observer.emplace(std::move(created).value());
+      } else {
+        status = created.status();
+      }
+    }
+    if (status.ok()) status = observer->Update(sample, rig.piston_sine_hz());
+    if (!status.ok()) {
+      observer_failed[index] = true;
+      observer.reset();
+      rig.NoteEvent("observer stopped: " + status.message());
+      return nullptr;
+    }
+    return &*observer;
   }
 
   Status PublishStatus(std::size_t index) {
@@ -209,6 +260,23 @@ struct RigService::Impl {
   }
 };
 
+Status ServeOptions::Validate(double sensor_rate_hz) const {
+  auto out_of_range = [sensor_rate_hz](const char* what, double value, const char* zero) {
+    std::ostringstream out;
+    out << what << " " << value << " Hz must be in [0, " << sensor_rate_hz
+        << "] Hz (the sensor rate; 0: " << zero << ")";
+    return Status::Error(out.str());
+  };
+  if (!(estimate_hz >= 0.0 && estimate_hz <= sensor_rate_hz)) {
+    return out_of_range("estimate rate", estimate_hz, "with every sample");
+  }
+  if (!(profile_hz >= 0.0 && profile_hz <= sensor_rate_hz)) {
+    return out_of_range("profile rate", profile_hz, "off");
+  }
+  if (observer) return observer_options.observer.Validate();
+  return Status::Ok();
+}
+
 RigService::RigService(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RigService::~RigService() = default;
 
@@ -232,6 +300,19 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   impl->options = options;
   impl->rigs = std::move(rigs);
   impl->last_step_request.assign(impl->rigs.size(), 0);
+  impl->observers.resize(impl->rigs.size());
+  impl->observer_failed.assign(impl->rigs.size(), false);
+  const double rate_hz = 1.0 / impl->rigs.front().sensor_period_s();
+  MPDRIG_RETURN_IF_ERROR(options.Validate(rate_hz));
+  // Every k-th sample: the nearest whole divisor of the sensor rate (at least every sample).
+  if (options.estimate_hz > 0.0) {
+    impl->estimate_every = std::max<std::uint64_t>(
+        1, static_cast<std::uint64_t>(std::lround(rate_hz / options.estimate_hz)));
+  }
+  if (options.profile_hz > 0.0) {
+    impl->profile_every = std::max<std::uint64_t>(
+        1, static_cast<std::uint64_t>(std::lround(rate_hz / options.profile_hz)));
+  }
 
   auto domain = dds::Domain::Create(options.domain, options.dds_config);
   if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
@@ -257,11 +338,24 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
       topic(&mpdrig_OutletCommand_desc, kOutletCommandTopic, &impl->outlet_topic));
   MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_StepRequest_desc, kStepRequestTopic, &impl->step_topic));
   MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigStatus_desc, kStatusTopic, &impl->status_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigEstimate_desc, kEstimateTopic, &impl->estimate_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      topic(&mpdrig_PressureProfile_desc, kPressureProfileTopic, &impl->profile_topic));
 
   auto sensors = dds::Writer<mpdrig_RigSensors>::Create(
       p, impl->sensors_topic.handle(), dds::SensorQos(options.clock == ClockMode::kLockstep));
   if (!sensors.ok()) return sensors.status();
   impl->sensors.emplace(std::move(sensors).value());
+  // Estimates and profiles are sensor-like streams: the same QoS, for the same reasons.
+  const bool keep_all = options.clock == ClockMode::kLockstep;
+  auto estimate = dds::Writer<mpdrig_RigEstimate>::Create(p, impl->estimate_topic.handle(),
+                                                          dds::SensorQos(keep_all));
+  if (!estimate.ok()) return estimate.status();
+  impl->estimate.emplace(std::move(estimate).value());
+  auto profile = dds::Writer<mpdrig_PressureProfile>::Create(p, impl->profile_topic.handle(),
+                                                             dds::SensorQos(keep_all));
+  if (!profile.ok()) return profile.status();
+  impl->profile.emplace(std::move(profile).value());
   auto status =
       dds::Writer<mpdrig_RigStatus>::Create(p, impl->status_topic.handle(), dds::StatusQos());
   if (!status.ok()) return status.status();

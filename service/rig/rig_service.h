@@ -13,6 +13,10 @@
 // Several controllers may command one rig: each actuator's topic uses exclusive ownership, so
 // the strongest live writer wins and the next takes over when it goes; when none is left, the
 // actuator goes to its safe state (ServeOptions) and the status says so.
+// Beside each rig runs the backstepping observer on the rig's topside channels; its estimate
+// (bottom-hole pressure, heave velocity, the disturbance frequency it uses) goes out on
+// mpdrig_estimate right after the sensor sample it belongs to, and the pressure along the pipe,
+// simulated and estimated, on mpdrig_pressure_profile at a lower rate.
 #pragma once
 
 #include <atomic>
@@ -24,6 +28,7 @@
 #include "model/common/status.h"
 #include "service/dds/dds.h"
 #include "service/rig/rig_host.h"
+#include "service/rig/rig_observer.h"
 
 namespace mpdrig::service {
 
@@ -39,6 +44,16 @@ struct ServeOptions {
   // lease ran out): the piston holds where it is; the choke goes to this opening (NaN: it keeps
   // its last command). Pump and outlet keep theirs.
   double safe_choke_deg = std::numeric_limits<double>::quiet_NaN();
+  // The backstepping observer beside each rig (rig_observer.h), published on mpdrig_estimate
+  // at estimate_hz (0: with every sensor sample); it steps on every sample either way.
+  bool observer = true;
+  RigObserverOptions observer_options;
+  double estimate_hz = 0.0;
+  // Pressure along the pipe (RigHost::pressure_positions_m) on mpdrig_pressure_profile at this
+  // rate of rig time (0: off); with the observer's estimate at the same positions.
+  double profile_hz = 10.0;
+
+  Status Validate(double sensor_rate_hz) const;
 };
 
 class RigService {

@@ -72,4 +72,62 @@ PistonCommandIn FromWire(const mpdrig_PistonCommand& wire) {
   return command;
 }
 
+mpdrig_RigEstimate ToWire(const std::string& rig_id, std::uint64_t sample_counter,
+                          double sim_time_s, const RigObserverEstimate& in, double atmosphere_pa) {
+  const observer::ObserverEstimate& e = in.estimate;
+  mpdrig_RigEstimate wire{};
+  wire.rig_id = const_cast<char*>(rig_id.c_str());  // written, never freed or changed by DDS
+  wire.sample_counter = sample_counter;
+  wire.sim_time_s = sim_time_s;
+  wire.observer_time_s = e.time_s;
+  wire.BHP_est_barg = units::PaAbsToBarg(e.bhp_pa, atmosphere_pa);
+  wire.piston_velocity_est_mps = e.piston_velocity_mps;
+  wire.piston_position_est_m = e.piston_position_m;
+  wire.FT4_est_lpm = units::M3psToLpm(e.inlet_flow_m3ps);
+  wire.disturbance_frequency_hz = e.disturbance_hz;
+  switch (in.frequency_source) {
+    case FrequencySource::kPistonSine:
+      wire.frequency_source = mpdrig_FREQUENCY_PISTON_SINE;
+      break;
+    case FrequencySource::kTracked:
+      wire.frequency_source = mpdrig_FREQUENCY_TRACKED;
+      break;
+    case FrequencySource::kUnlocked:
+      wire.frequency_source = mpdrig_FREQUENCY_UNLOCKED;
+      break;
+  }
+  return wire;
+}
+
+mpdrig_PressureProfile ToWire(const std::string& rig_id, std::uint64_t sample_counter,
+                              double sim_time_s, const std::vector<double>& positions_m,
+                              const std::vector<double>& pressure_pa,
+                              const std::vector<double>& estimated_pa, double atmosphere_pa,
+                              ProfileBuffers* buffers) {
+  buffers->position_m = positions_m;
+  buffers->pressure_barg.clear();
+  for (double p : pressure_pa)
+    buffers->pressure_barg.push_back(units::PaAbsToBarg(p, atmosphere_pa));
+  buffers->pressure_est_barg.clear();
+  for (double p : estimated_pa) {
+    buffers->pressure_est_barg.push_back(units::PaAbsToBarg(p, atmosphere_pa));
+  }
+  // Sequences that borrow the buffers: _release = false, DDS never frees them.
+  auto borrow = [](std::vector<double>& v) {
+    dds_sequence_double seq{};
+    seq._maximum = seq._length = static_cast<std::uint32_t>(v.size());
+    seq._buffer = v.empty() ? nullptr : v.data();
+    seq._release = false;
+    return seq;
+  };
+  mpdrig_PressureProfile wire{};
+  wire.rig_id = const_cast<char*>(rig_id.c_str());
+  wire.sample_counter = sample_counter;
+  wire.sim_time_s = sim_time_s;
+  wire.position_m = borrow(buffers->position_m);
+  wire.pressure_barg = borrow(buffers->pressure_barg);
+  wire.pressure_est_barg = borrow(buffers->pressure_est_barg);
+  return wire;
+}
+
 }  // namespace mpdrig::service

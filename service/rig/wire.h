@@ -3,10 +3,12 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "model/sim/rig_simulator.h"
 #include "mpdrig.h"
 #include "service/rig/rig_host.h"
+#include "service/rig/rig_observer.h"
 
 namespace mpdrig::service {
 
@@ -18,6 +20,8 @@ inline constexpr const char* kPumpCommandTopic = "mpdrig_pump_command";
 inline constexpr const char* kOutletCommandTopic = "mpdrig_outlet_command";
 inline constexpr const char* kStepRequestTopic = "mpdrig_step_request";
 inline constexpr const char* kStatusTopic = "mpdrig_status";
+inline constexpr const char* kEstimateTopic = "mpdrig_estimate";
+inline constexpr const char* kPressureProfileTopic = "mpdrig_pressure_profile";
 
 // A sample in the lab's units (bar gauge with the rig's atmospheric pressure, L/min, deg, m).
 // `rig_id` must outlive the returned struct (the wire struct points at it).
@@ -26,5 +30,21 @@ mpdrig_RigSensors ToWire(const std::string& rig_id, std::uint64_t sample_counter
 RigSample FromWire(const mpdrig_RigSensors& wire, double atmospheric_pressure_pa);
 
 PistonCommandIn FromWire(const mpdrig_PistonCommand& wire);
+
+// The observer's estimate for the sensor sample `sample_counter` at `sim_time_s`, in lab units.
+mpdrig_RigEstimate ToWire(const std::string& rig_id, std::uint64_t sample_counter,
+                          double sim_time_s, const RigObserverEstimate& estimate,
+                          double atmospheric_pressure_pa);
+
+// A pressure profile in lab units; the wire struct points into these buffers (and `rig_id`),
+// which must outlive it. `estimated_pa` may be empty (no observer).
+struct ProfileBuffers {
+  std::vector<double> position_m, pressure_barg, pressure_est_barg;
+};
+mpdrig_PressureProfile ToWire(const std::string& rig_id, std::uint64_t sample_counter,
+                              double sim_time_s, const std::vector<double>& positions_m,
+                              const std::vector<double>& pressure_pa,
+                              const std::vector<double>& estimated_pa,
+                              double atmospheric_pressure_pa, ProfileBuffers* buffers);
 
 }  // namespace mpdrig::service

@@ -527,5 +527,26 @@ TEST_F(CliTest, ServeRefusesBadOptions) {
   EXPECT_TRUE(Contains(twice.err, "given twice")) << twice.err;
 }
 
+// Bad serve options are refused with a reason before anything runs (no DDS traffic: the checks
+// come before the domain is created; the domain is the test's own anyway).
+TEST_F(CliTest, ServeRefusesBadObserverProfileAndHeaveOptions) {
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  const std::string serve = "serve --duration 1 --domain " + std::to_string(domain) + " ";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--rate-hz 100 --estimate-hz 1000", "estimate rate 1000 Hz"},
+      {"--rate-hz 50 --profile-hz 500", "profile rate 500 Hz"},
+      {"--observer-pole 1 2", "negative real part"},
+      {"--heave-amp-m 0.1 --heave-hz 3", "--heave-hz"},
+      {"--heave-amp-m 0.7", "--heave-amp-m"},
+      {"--profile-points 1", "--profile-points"},
+  };
+  for (const auto& [options, reason] : cases) {
+    const RunResult run = Run(serve + options);
+    EXPECT_NE(run.exit_code, 0) << options;
+    EXPECT_TRUE(Contains(run.err, reason)) << options << ": " << run.err;
+  }
+}
+
 }  // namespace
 }  // namespace mpdrig

@@ -129,5 +129,26 @@ TEST(RigHost, PistonSineGivesTheModelsResponseAtThatFrequency) {
   for (double f : {0.1, 0.15, 0.2, 0.3, 0.35, 0.5}) EXPECT_GT(at_drive, 5.0 * amplitude_at(f)) << f;
 }
 
+// The pump flow and the outlet pressure are inputs: the next sample after a command shows them
+// (what a command-to-sensor latency measurement relies on), even at 1 kHz, where a sample falls
+// between simulator steps computed before the command (5.3 ms apart).
+TEST(RigHost, PumpAndOutletCommandsShowInTheNextSample) {
+  auto created =
+      RigHost::Create("rig-1", RigParams(), SimulationOptions(), 1000.0, {31.0, 5.0, 0.0});
+  ASSERT_TRUE(created.ok());
+  RigHost& rig = *created;
+  for (int i = 0; i < 7; ++i) {
+    auto settled = rig.Tick();
+    ASSERT_TRUE(settled.ok());
+    ASSERT_TRUE(rig.SetPumpLpm(i % 2 == 0 ? 6.0 : 5.0).ok());
+    ASSERT_TRUE(rig.SetOutletBarg(0.1 * i).ok());
+    auto next = rig.Tick();
+    ASSERT_TRUE(next.ok());
+    EXPECT_DOUBLE_EQ(units::M3psToLpm((*next)[Channel::kFT2]), i % 2 == 0 ? 6.0 : 5.0) << i;
+    EXPECT_NEAR(units::PaAbsToBarg((*next)[Channel::kC1], 101325.0), 0.1 * i, 1e-12) << i;
+    EXPECT_DOUBLE_EQ((*next)[Channel::kFT3], (*next)[Channel::kFT1] + (*next)[Channel::kFT2]);
+  }
+}
+
 }  // namespace
 }  // namespace mpdrig::service

@@ -1,0 +1,489 @@
+// bhp_controller: an example controller that holds the bottom-hole pressure of a rig at a set
+// point against heave, with the choke. A client: it speaks only the DDS topics (mpdrig_sensors,
+// mpdrig_estimate, mpdrig_choke_command, mpdrig_step_request) and never links model/, so it runs
+// unchanged against the virtual rig or the lab's rig behind a bridge.
+//
+// Control law, choke reference u [deg] (opening the choke lowers the pressure):
+//   e = BHP - set point                                  [bar]   (PT1, or BHP_est with
+//   --use-estimate) u = u_I + Kp e + Re{theta z}                         [deg] u_I' = Ki e (frozen
+//   while u is clamped and e pushes further: anti-windup)
+// PI feedback alone cannot reject a 0.1-0.2 Hz heave: the choke acts on the bottom through the
+// 900 m pipe, l/c = 1.06 s of transport delay plus the 0.1 s actuator lag, which is 40-90 degrees
+// of phase at the heave frequency, before the pipe's own resonance at c/4l = 0.24 Hz (thesis 9.3).
+// The feed-forward does that part. The observer (thesis 10) publishes the heave as a rotating
+// phasor: X = (X1, X2) of the disturbance model (10.2.8)-(10.2.11) with v_d = X2 and
+// x_d = -X1/omega, so
+//   z = v_d^ + j omega x_d^ = |z| exp(j (omega t + phi))       [m/s]
+// and the heave's effect on the bottom-hole pressure in steady state is Re{D z} for some complex
+// D [bar/(m/s)], while a choke motion Re{theta z} adds Re{G(j omega) theta z}. The feed-forward
+// gain theta is adapted until the oscillation at omega vanishes (adaptive feed-forward
+// cancellation, a gradient step on the demodulated error W = 2 e conj(z)/|z|^2 = D + G theta):
+//   theta' = -gamma W / G^,   G^ = -g exp(-j omega tau)
+// with a rough plant model G^: g the static choke gain [bar/deg] and tau the delay from the choke
+// to the bottom (l/c plus the actuator lag plus the pipe's phase). It converges while the phase
+// of G^ is within 90 degrees of the true G(j omega); the defaults are within about 20 degrees on
+// the lab rig at 0.1-0.2 Hz for 5-20 L/min of pump flow and a 30-45 degree choke.
+//
+//   bhp_controller --rig rig-1                                # hold the mean BHP of 10 s
+//   bhp_controller --rig rig-1 --setpoint-barg 4 --use-estimate
+//   bhp_controller --lockstep --duration 120 --measure-last 40 --open-loop   # baseline
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <complex>
+#include <csignal>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "mpdrig.h"
+#include "service/dds/dds.h"
+
+namespace {
+
+using Complex = std::complex<double>;
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+
+struct ControllerOptions {
+  double setpoint_barg = std::numeric_limits<double>::quiet_NaN();  // NaN: learn it
+  double learn_s = 10.0;  // without a set point: hold the choke this long, then hold the mean BHP
+  double kp_deg_per_bar = 0.1;
+  double ki_deg_per_bar_s = 0.05;
+  bool feedforward = true;
+  double adapt_per_s = 0.2;  // gamma: the cancellation converges in about 1/gamma s
+  double choke_gain_bar_per_deg = 0.7;
+  double delay_s = 1.3;
+  double choke_min_deg = 2.0, choke_max_deg = 88.0;
+};
+
+// The control law above; time and signals are arguments, the transport is elsewhere.
+class BhpController {
+ public:
+  BhpController(const ControllerOptions& options, double initial_choke_deg)
+      : o_(options), integral_deg_(initial_choke_deg) {}
+
+  // One sample: the BHP [barg] at time t [s], the heave phasor z [m/s] and its frequency [Hz]
+  // (z = 0 or frequency <= 0: no feed-forward this sample). Returns the choke reference [deg].
+  double Update(double t_s, double bhp_barg, Complex z, double frequency_hz) {
+    const double dt = last_t_s_ ? std::clamp(t_s - *last_t_s_, 0.0, 1.0) : 0.0;
+    last_t_s_ = t_s;
+    if (std::isnan(o_.setpoint_barg)) {
+      // No set point given: watch with the choke held, then hold the mean BHP seen. A mean over
+      // whole heave periods is where the bottom-hole pressure sits without the heave.
+      if (!learn_start_s_) learn_start_s_ = t_s;
+      learn_sum_ += bhp_barg;
+      ++learn_n_;
+      if (t_s - *learn_start_s_ < o_.learn_s) return integral_deg_;
+      o_.setpoint_barg = learn_sum_ / learn_n_;
+    }
+    const double e = bhp_barg - o_.setpoint_barg;
+    const bool heave_known = o_.feedforward && frequency_hz > 0.0 && std::abs(z) > 1e-4;
+    if (heave_known) {
+      const double omega = 2.0 * std::numbers::pi * frequency_hz;
+      const Complex plant =
+          -o_.choke_gain_bar_per_deg * std::exp(Complex(0.0, -omega * o_.delay_s));
+      const Complex demodulated = 2.0 * e * std::conj(z) / std::norm(z);
+      theta_ -= o_.adapt_per_s * dt * demodulated / plant;
+    }
+    const double feedforward = heave_known ? (theta_ * z).real() : 0.0;
+    const double wanted = integral_deg_ + o_.kp_deg_per_bar * e + feedforward;
+    const double command = std::clamp(wanted, o_.choke_min_deg, o_.choke_max_deg);
+    // Anti-windup: integrate unless clamped with the error pushing further into the limit.
+    const bool pushing_up = wanted > o_.choke_max_deg && e > 0.0;
+    const bool pushing_down = wanted < o_.choke_min_deg && e < 0.0;
+    if (!pushing_up && !pushing_down) integral_deg_ += o_.ki_deg_per_bar_s * e * dt;
+    return command;
+  }
+
+  double setpoint_barg() const { return o_.setpoint_barg; }
+  Complex theta() const { return theta_; }
+
+ private:
+  ControllerOptions o_;
+  double integral_deg_;
+  Complex theta_{0.0, 0.0};
+  std::optional<double> last_t_s_;
+  std::optional<double> learn_start_s_;
+  double learn_sum_ = 0.0;
+  long learn_n_ = 0;
+};
+
+struct Args {
+  std::string rig_id = "rig-1";
+  int domain = 0;
+  std::string dds_config;
+  ControllerOptions control;
+  bool use_estimate = false;
+  bool open_loop = false;
+  bool lockstep = false;
+  double duration_s = 0.0;
+  double measure_last_s = 0.0;
+  int strength = 10;
+  std::string log_path;
+  double timeout_s = 10.0;
+};
+
+// One sensor sample and the estimate that goes with it, as the controller uses them.
+struct Reading {
+  std::uint64_t counter = 0;
+  double time_s = 0.0;
+  double pt1_barg = 0.0;
+  double choke_deg = 0.0;
+  bool has_estimate = false;
+  double bhp_est_barg = 0.0;
+  Complex z{0.0, 0.0};
+  double frequency_hz = 0.0;
+};
+
+int Fail(const std::string& what) {
+  std::fprintf(stderr, "bhp_controller: %s\n", what.c_str());
+  return 1;
+}
+
+// Half the peak-to-peak swing and the mean of PT1 over the measured window.
+struct Swing {
+  double lo = 1e300, hi = -1e300, sum = 0.0;
+  double choke_lo = 1e300, choke_hi = -1e300;
+  long n = 0;
+  void Add(double pt1, double choke) {
+    lo = std::min(lo, pt1);
+    hi = std::max(hi, pt1);
+    choke_lo = std::min(choke_lo, choke);
+    choke_hi = std::max(choke_hi, choke);
+    sum += pt1;
+    ++n;
+  }
+};
+
+int Run(const Args& args) {
+  using namespace mpdrig;
+  // In lockstep every step waits for the choke command's acknowledgement: fast heartbeats (added
+  // to an inline fragment; a complete <CycloneDDS> document should set them itself).
+  std::string config = args.dds_config.empty() ? dds::LoopbackConfig() : args.dds_config;
+  if (args.lockstep && config.find("CycloneDDS") == std::string::npos) {
+    config += dds::FastAckConfig();
+  }
+  auto domain = dds::Domain::Create(args.domain, config);
+  if (!domain.ok()) return Fail(domain.status().message());
+  auto participant = dds::CreateParticipant(args.domain);
+  if (!participant.ok()) return Fail(participant.status().message());
+  const dds_entity_t p = participant->handle();
+  auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors");
+  auto estimate_topic = dds::CreateTopic(p, &mpdrig_RigEstimate_desc, "mpdrig_estimate");
+  auto choke_topic = dds::CreateTopic(p, &mpdrig_ChokeCommand_desc, "mpdrig_choke_command");
+  auto step_topic = dds::CreateTopic(p, &mpdrig_StepRequest_desc, "mpdrig_step_request");
+  for (const auto* t : {&sensors_topic, &estimate_topic, &choke_topic, &step_topic}) {
+    if (!t->ok()) return Fail(t->status().message());
+  }
+  // In lockstep the controller sets the pace and must see every sample (keep all, like the
+  // service); in real time only the newest matters.
+  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(p, sensors_topic->handle(),
+                                                        dds::SensorQos(args.lockstep));
+  auto estimates = dds::Reader<mpdrig_RigEstimate>::Create(p, estimate_topic->handle(),
+                                                           dds::SensorQos(args.lockstep));
+  auto choke = dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic->handle(),
+                                                        dds::CommandQos(args.strength));
+  dds::Qos step_qos;
+  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto steps = dds::Writer<mpdrig_StepRequest>::Create(p, step_topic->handle(), step_qos);
+  if (!sensors.ok()) return Fail(sensors.status().message());
+  if (!estimates.ok()) return Fail(estimates.status().message());
+  if (!choke.ok()) return Fail(choke.status().message());
+  if (!steps.ok()) return Fail(steps.status().message());
+
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  std::ofstream log;
+  if (!args.log_path.empty()) {
+    log.open(args.log_path);
+    if (!log) return Fail(args.log_path + ": cannot write");
+    log << "# rig-log: 1\n# source: bhp_controller, rig " << args.rig_id
+        << "\ntime_s,PT1_barg,BHP_est_barg,choke_position_deg,choke_reference_deg,"
+           "BHP_setpoint_barg\n";
+  }
+  const bool wants_estimate = args.use_estimate || args.control.feedforward;
+
+  if (args.lockstep) {
+    // The service must see the step requests (and our commands) before we ask for steps.
+    for (int waited = 0;; waited += 10) {
+      dds_publication_matched_status_t step_match{}, choke_match{};
+      dds_get_publication_matched_status(steps->handle(), &step_match);
+      dds_get_publication_matched_status(choke->handle(), &choke_match);
+      if (step_match.current_count > 0 && choke_match.current_count > 0) break;
+      if (g_stop || waited > 1000 * args.timeout_s) {
+        return Fail("no lockstep rig service found on domain " + std::to_string(args.domain));
+      }
+      dds_sleepfor(DDS_MSECS(10));
+    }
+  }
+
+  std::optional<BhpController> controller;
+  Swing swing;
+  std::vector<Reading> pending;  // sensor samples waiting for their estimate
+  std::vector<mpdrig_RigEstimate> unused;
+  std::optional<Reading> last_estimate;  // realtime: the newest estimate seen
+  std::uint64_t request_id = 0;
+  std::uint64_t next_counter = 0;  // lockstep: the sample we wait for
+  bool finished = false;
+  std::string rig_id = args.rig_id;
+  long commands = 0;
+
+  auto ask_step = [&]() -> mpdrig::Status {
+    mpdrig_StepRequest request{rig_id.data(), ++request_id, 1};
+    return steps->Write(request);
+  };
+  // Handles one complete reading: control, command, measurement.
+  auto act = [&](const Reading& r) -> mpdrig::Status {
+    if (!controller) controller.emplace(args.control, r.choke_deg);
+    const double bhp = args.use_estimate ? r.bhp_est_barg : r.pt1_barg;
+    const double command = controller->Update(r.time_s, bhp, r.has_estimate ? r.z : Complex{},
+                                              r.has_estimate ? r.frequency_hz : 0.0);
+    if (!args.open_loop) {
+      mpdrig_ChokeCommand c{rig_id.data(), command};
+      MPDRIG_RETURN_IF_ERROR(choke->Write(c));
+      ++commands;
+      if (args.lockstep) {
+        // The next step must see this command (rig_service.h, lockstep).
+        MPDRIG_RETURN_IF_ERROR(
+            dds::Check(dds_wait_for_acks(choke->handle(), DDS_SECS(5)), "dds_wait_for_acks"));
+      }
+    }
+    if (log.is_open()) {
+      log << r.time_s << ',' << r.pt1_barg << ','
+          << (r.has_estimate ? r.bhp_est_barg : std::nan("")) << ',' << r.choke_deg << ','
+          << (args.open_loop ? std::nan("") : command) << ',' << controller->setpoint_barg()
+          << '\n';
+    }
+    if (args.duration_s > 0.0 && r.time_s > args.duration_s - args.measure_last_s) {
+      swing.Add(r.pt1_barg, r.choke_deg);
+    }
+    if (args.duration_s > 0.0 && r.time_s >= args.duration_s - 1e-9) finished = true;
+    return mpdrig::Status::Ok();
+  };
+
+  if (args.lockstep) {
+    const mpdrig::Status asked = ask_step();
+    if (!asked.ok()) return Fail(asked.message());
+  }
+  double idle_s = 0.0;
+  while (!g_stop && !finished) {
+    auto ready = sensors->Wait(DDS_MSECS(100));
+    if (!ready.ok()) return Fail(ready.status().message());
+    auto took = sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
+      if (rig_id != s.rig_id) return;
+      Reading r;
+      r.counter = s.sample_counter;
+      r.time_s = s.sim_time_s;
+      r.pt1_barg = s.PT_barg[0];
+      r.choke_deg = s.choke_position_deg;
+      pending.push_back(r);
+    });
+    if (!took.ok()) return Fail(took.status().message());
+    if (!wants_estimate || !args.lockstep) {
+      // Real time: pair each sample with the newest estimate (they come right after it).
+      auto e_took = estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
+        if (rig_id != e.rig_id) return;
+        Reading est;
+        est.has_estimate = true;
+        est.bhp_est_barg = e.BHP_est_barg;
+        est.z =
+            Complex(e.piston_velocity_est_mps,
+                    2.0 * std::numbers::pi * e.disturbance_frequency_hz * e.piston_position_est_m);
+        est.frequency_hz = e.disturbance_frequency_hz;
+        last_estimate = est;
+      });
+      if (!e_took.ok()) return Fail(e_took.status().message());
+      if (pending.empty()) {
+        if (!*ready) idle_s += 0.1;
+        if (idle_s > args.timeout_s) {
+          if (controller) break;  // the rig stopped: report what was measured
+          return Fail("no sensor samples from " + rig_id);
+        }
+        continue;
+      }
+      idle_s = 0.0;
+      Reading r = pending.back();  // the newest: a real-time controller does not catch up
+      pending.clear();
+      if (last_estimate) {
+        r.has_estimate = true;
+        r.bhp_est_barg = last_estimate->bhp_est_barg;
+        r.z = last_estimate->z;
+        r.frequency_hz = last_estimate->frequency_hz;
+      }
+      if (args.use_estimate && !r.has_estimate) continue;  // no estimate yet
+      const mpdrig::Status acted = act(r);
+      if (!acted.ok()) return Fail(acted.message());
+      if (args.lockstep && !finished) {
+        const mpdrig::Status asked = ask_step();
+        if (!asked.ok()) return Fail(asked.message());
+      }
+      continue;
+    }
+    // Lockstep with the estimate: sample k and estimate k, then the next step.
+    if (pending.empty()) {
+      if (!*ready) idle_s += 0.1;
+      if (idle_s > args.timeout_s) {
+        if (controller) break;  // the rig stopped: report what was measured
+        return Fail("no sensor samples from " + rig_id);
+      }
+      continue;
+    }
+    idle_s = 0.0;
+    Reading r = pending.back();
+    pending.clear();
+    if (!controller) next_counter = r.counter;  // the rig may have run before we came
+    if (r.counter != next_counter) {
+      return Fail("lockstep sample " + std::to_string(r.counter) + " instead of " +
+                  std::to_string(next_counter) + " (another client steps this rig?)");
+    }
+    for (int waited = 0; !r.has_estimate && !g_stop; ++waited) {
+      auto e_ready = estimates->Wait(DDS_MSECS(100));
+      if (!e_ready.ok()) return Fail(e_ready.status().message());
+      auto e_took = estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
+        if (rig_id != e.rig_id || e.sample_counter != r.counter) return;
+        r.has_estimate = true;
+        r.bhp_est_barg = e.BHP_est_barg;
+        r.z =
+            Complex(e.piston_velocity_est_mps,
+                    2.0 * std::numbers::pi * e.disturbance_frequency_hz * e.piston_position_est_m);
+        r.frequency_hz = e.disturbance_frequency_hz;
+      });
+      if (!e_took.ok()) return Fail(e_took.status().message());
+      if (waited > 10 * args.timeout_s) {
+        return Fail("no mpdrig_estimate for sample " + std::to_string(r.counter) +
+                    " (is the service's observer off?)");
+      }
+    }
+    const mpdrig::Status acted = act(r);
+    if (!acted.ok()) return Fail(acted.message());
+    ++next_counter;
+    if (!finished) {
+      const mpdrig::Status asked = ask_step();
+      if (!asked.ok()) return Fail(asked.message());
+    }
+  }
+
+  std::fprintf(stderr, "bhp_controller: %s, %ld choke commands, set point %.4f barg\n",
+               rig_id.c_str(), commands, controller ? controller->setpoint_barg() : std::nan(""));
+  if (swing.n > 0) {
+    // One line, key=value, for scripts (bench/bhp_attenuation.sh).
+    std::printf(
+        "rig=%s mode=%s window_s=%g samples=%ld PT1_amplitude_bar=%.5f PT1_mean_barg=%.5f "
+        "choke_min_deg=%.3f choke_max_deg=%.3f\n",
+        rig_id.c_str(),
+        args.open_loop              ? "fixed-choke"
+        : !args.control.feedforward ? "pi"
+        : args.use_estimate         ? "pi+ff(estimate)"
+                                    : "pi+ff",
+        args.measure_last_s, swing.n, 0.5 * (swing.hi - swing.lo), swing.sum / swing.n,
+        swing.choke_lo, swing.choke_hi);
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app(
+      "bhp_controller - hold a rig's bottom-hole pressure at a set point against heave with the "
+      "choke (an example client: it speaks only the DDS topics)");
+  Args args;
+  ControllerOptions& c = args.control;
+  app.add_option("--rig", args.rig_id, "rig id to control")->capture_default_str();
+  app.add_option("--domain", args.domain, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  app.add_option("--dds-config", args.dds_config, "Cyclone DDS XML (default: loopback only)");
+  app.add_option("--setpoint-barg", c.setpoint_barg,
+                 "bottom-hole pressure to hold [barg] (default: the mean over the first "
+                 "--learn seconds, with the choke held)");
+  app.add_option("--learn", c.learn_s,
+                 "without --setpoint-barg: watch this long [s] (whole heave periods are best)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  app.add_flag("--use-estimate", args.use_estimate,
+               "control the observer's BHP_est (mpdrig_estimate) instead of the PT1 transmitter: "
+               "what a controller on a real well, without a downhole sensor, would do");
+  app.add_option("--kp", c.kp_deg_per_bar, "proportional gain [deg of choke per bar]")
+      ->capture_default_str();
+  app.add_option("--ki", c.ki_deg_per_bar_s, "integral gain [deg per bar per s]")
+      ->capture_default_str();
+  bool no_feedforward = false;
+  app.add_flag("--no-feedforward", no_feedforward,
+               "PI only: no adaptive cancellation of the heave (it needs mpdrig_estimate)");
+  app.add_option("--adapt", c.adapt_per_s,
+                 "adaptation rate gamma of the heave cancellation [1/s]; above about 0.4 the "
+                 "adaptation outruns the pipe's delay and oscillates")
+      ->check(CLI::Range(0.0, 5.0))
+      ->capture_default_str();
+  app.add_option("--choke-gain", c.choke_gain_bar_per_deg,
+                 "plant model: BHP drop per degree of choke opening [bar/deg] (about 2 dp/G "
+                 "dG/dtheta at the operating point)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--delay", c.delay_s,
+                 "plant model: delay from the choke to the bottom [s] (l/c = 1.06 s, plus the "
+                 "actuator's 0.1 s and the pipe's phase)")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  app.add_option("--choke-min-deg", c.choke_min_deg, "lowest choke reference [deg]")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+  app.add_option("--choke-max-deg", c.choke_max_deg, "highest choke reference [deg]")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+  app.add_option("--strength", args.strength,
+                 "ownership strength of the choke commands: of several controllers the "
+                 "strongest live one wins")
+      ->capture_default_str();
+  app.add_flag("--open-loop", args.open_loop,
+               "write no commands: only measure (the fixed-choke baseline)");
+  app.add_flag("--lockstep", args.lockstep,
+               "the rig runs `mpdrig serve --clock lockstep`: this controller steps it one "
+               "sample at a time (deterministic)");
+  app.add_option("--duration", args.duration_s, "stop at this rig time [s] (0: run until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--measure-last", args.measure_last_s,
+                 "report PT1's half peak-to-peak swing over the last this many seconds of "
+                 "--duration (stdout, one key=value line)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--log", args.log_path,
+                 "write a CSV of time, PT1, BHP_est, choke position and reference, set point "
+                 "(rig-log column names)");
+  app.add_option("--timeout", args.timeout_s, "give up after this long without samples [s]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.footer(
+      "Control law (details at the top of clients/bhp_controller.cc):\n"
+      "  e = BHP - set point;  choke = u_I + Kp e + Re{theta z};  u_I' = Ki e (anti-windup)\n"
+      "PI alone cannot reject 0.1-0.2 Hz heave: the choke acts 1.06 s (l/c) away from the\n"
+      "bottom. The observer's heave phasor z = v_d + j omega x_d (mpdrig_estimate) gives the\n"
+      "phase of the disturbance, and theta adapts until the oscillation at omega is gone.\n"
+      "Examples (serve in one terminal, the controller in another):\n"
+      "  mpdrig serve --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 5 --choke-deg 31\n"
+      "  bhp_controller --rig rig-1                 # watches 10 s, then holds the mean BHP\n"
+      "  bhp_controller --rig rig-1 --use-estimate  # on the observer's estimate, no PT1\n"
+      "  bhp_controller --rig rig-1 --no-feedforward  # PI only: watch it fail at 0.2 Hz\n"
+      "Attenuation, fixed choke vs controlled: bench/bhp_attenuation.sh");
+  CLI11_PARSE(app, argc, argv);
+  c.feedforward = !no_feedforward;
+  if (!(c.choke_min_deg < c.choke_max_deg)) {
+    std::fprintf(stderr, "bhp_controller: --choke-min-deg must be below --choke-max-deg\n");
+    return 2;
+  }
+  if (args.measure_last_s > args.duration_s) {
+    std::fprintf(stderr, "bhp_controller: --measure-last needs a --duration at least as long\n");
+    return 2;
+  }
+  return Run(args);
+}
