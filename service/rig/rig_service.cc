@@ -188,6 +188,21 @@ struct RigService::Impl {
     wire.warnings._length = wire.warnings._maximum = count;
     wire.warnings._buffer = count > 0 ? warnings : nullptr;
     wire.warnings._release = false;
+    // The physical effects this rig runs with (`serve --effect`, the config file).
+    std::vector<std::string> effects;
+    for (const EffectSetting& effect : rig.params().effects) {
+      std::string text = effect.name;
+      for (const auto& [key, value] : effect.values) {
+        text += " " + key + "=" + std::to_string(value);
+      }
+      effects.push_back(std::move(text));
+    }
+    std::vector<char*> effect_names;
+    for (std::string& text : effects) effect_names.push_back(text.data());
+    wire.active_effects._length = wire.active_effects._maximum =
+        static_cast<std::uint32_t>(effect_names.size());
+    wire.active_effects._buffer = effect_names.empty() ? nullptr : effect_names.data();
+    wire.active_effects._release = false;
     return status->Write(wire);
   }
 

@@ -12,6 +12,8 @@
 
 #include <gtest/gtest.h>
 
+#include "model/effects/effect.h"
+
 #include "model/common/units.h"
 #include "mpdrig.h"
 #include "service/rig/wire.h"
@@ -33,7 +35,12 @@ class ServiceTest : public ::testing::Test {
   void Start(double safe_choke_deg = std::nan("")) {
     std::vector<RigHost> rigs;
     for (const char* id : {"rig-1", "rig-2"}) {
-      auto rig = RigHost::Create(id, RigParams(), SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
+      // rig-2 runs with a physical effect, which its status reports.
+      RigParams params;
+      if (std::string(id) == "rig-2") {
+        ASSERT_TRUE(ApplyEffectSpec(&params, "sensor_lag:time_constant_s=0.2").ok());
+      }
+      auto rig = RigHost::Create(id, params, SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
       ASSERT_TRUE(rig.ok()) << rig.status().message();
       rigs.push_back(std::move(rig).value());
     }
@@ -110,6 +117,10 @@ class ServiceTest : public ::testing::Test {
           for (std::uint32_t i = 0; i < s.warnings._length; ++i) {
             last_warnings_ += std::string(s.warnings._buffer[i]) + "\n";
           }
+          last_effects_.clear();
+          for (std::uint32_t i = 0; i < s.active_effects._length; ++i) {
+            last_effects_ += std::string(s.active_effects._buffer[i]) + "\n";
+          }
         }
       });
     }
@@ -133,7 +144,8 @@ class ServiceTest : public ::testing::Test {
   std::atomic<bool> stop_{false};
   Status run_status_ = Status::Ok();
   std::uint64_t request_id_ = 0;
-  std::string last_warnings_;  // of the last completed step's status
+  std::string last_warnings_;
+  std::string last_effects_;  // active_effects of the last completed step's status  // of the last completed step's status
   dds::Entity participant_;
   dds::Entity sensors_topic_, status_topic_, choke_topic_, piston_topic_, step_topic_,
       estimate_topic_, profile_topic_;
@@ -145,6 +157,14 @@ class ServiceTest : public ::testing::Test {
   std::optional<dds::Writer<mpdrig_PistonCommand>> piston_;
   std::optional<dds::Writer<mpdrig_StepRequest>> step_;
 };
+
+TEST_F(ServiceTest, StatusReportsTheActiveEffectsPerRig) {
+  Start();
+  Step("rig-1", 1);
+  EXPECT_EQ(last_effects_, "");
+  Step("rig-2", 1);
+  EXPECT_EQ(last_effects_, "sensor_lag time_constant_s=0.200000\n");
+}
 
 TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
   Start();
