@@ -25,19 +25,6 @@ struct CompareArgs {
   bool quiet = false;
 };
 
-Status WriteText(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::fwrite(text.data(), 1, text.size(), stdout);
-    return std::fflush(stdout) == 0 ? Status::Ok() : Status::Error("cannot write stdout");
-  }
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return Status::Error(path + ": cannot open for writing");
-  out << text;
-  out.close();
-  if (!out) return Status::Error(path + ": write failed");
-  return Status::Ok();
-}
-
 int RunCompare(const CompareArgs& args) {
   const std::string name = "compare";
   if (args.json_path.empty() && args.report_path.empty()) {

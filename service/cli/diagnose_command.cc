@@ -32,17 +32,6 @@ struct DiagnoseArgs {
   bool quiet = false;
 };
 
-Status WriteFile(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::fwrite(text.data(), 1, text.size(), stdout);
-    return Status::Ok();
-  }
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  return out ? Status::Ok() : Status::Error(path + ": cannot write");
-}
-
 int RunDiagnose(DiagnoseArgs args) {
   const std::string name = "diagnose";
   const auto started = std::chrono::steady_clock::now();
@@ -90,11 +79,11 @@ int RunDiagnose(DiagnoseArgs args) {
   const Diagnosis& d = *diagnosis;
 
   if (!args.json_path.empty()) {
-    const Status written = WriteFile(args.json_path, report::DiagnosisJson(d, args.log_path));
+    const Status written = WriteText(args.json_path, report::DiagnosisJson(d, args.log_path));
     if (!written.ok()) return Fail(name, written);
   }
   if (!args.report_path.empty()) {
-    const Status written = WriteFile(args.report_path, report::DiagnosisHtml(d, args.log_path));
+    const Status written = WriteText(args.report_path, report::DiagnosisHtml(d, args.log_path));
     if (!written.ok()) return Fail(name, written);
   }
   FILE* summary = args.json_path == "-" || args.report_path == "-" ? stderr : stdout;

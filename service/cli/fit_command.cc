@@ -35,19 +35,6 @@ struct FitArgs {
   bool quiet = false;
 };
 
-Status WriteText(const std::string& path, const std::string& text) {
-  if (path == "-") {
-    std::fwrite(text.data(), 1, text.size(), stdout);
-    return std::fflush(stdout) == 0 ? Status::Ok() : Status::Error("cannot write stdout");
-  }
-  std::ofstream out(path, std::ios::binary);
-  if (!out) return Status::Error(path + ": cannot open for writing");
-  out << text;
-  out.close();
-  if (!out) return Status::Error(path + ": write failed");
-  return Status::Ok();
-}
-
 Result<double> ParseDouble(const std::string& text, const std::string& what) {
   std::size_t used = 0;
   double value = 0.0;

@@ -1,6 +1,7 @@
 #include "service/cli/model_options.h"
 
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 
 #include "model/effects/effect.h"
@@ -75,6 +76,19 @@ std::string ModelOptions::Describe(const RigParams& params) const {
       << 1e3 * params.pipe_length_m / (cells * params.wave_speed_mps) << " ms)";
   for (const EffectSetting& effect : params.effects) out << ", + " << effect.name;
   return out.str();
+}
+
+Status WriteText(const std::string& path, const std::string& text) {
+  if (path == "-") {
+    std::fwrite(text.data(), 1, text.size(), stdout);
+    return std::fflush(stdout) == 0 ? Status::Ok() : Status::Error("cannot write stdout");
+  }
+  std::ofstream out(path, std::ios::binary);
+  if (!out) return Status::Error(path + ": cannot open for writing");
+  out << text;
+  out.close();
+  if (!out) return Status::Error(path + ": write failed");
+  return Status::Ok();
 }
 
 int Fail(const std::string& command, const Status& status) {

@@ -37,6 +37,9 @@ struct ModelOptions {
   std::string Describe(const RigParams& params) const;
 };
 
+// Writes a command's text output (JSON, HTML, a config) to `path`, or to stdout for "-".
+Status WriteText(const std::string& path, const std::string& text);
+
 // Prints "mpdrig <command>: <message>" to stderr and returns the exit code for a failure.
 int Fail(const std::string& command, const Status& status);
 
