@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <optional>
 #include <sstream>
 #include <thread>
@@ -41,6 +42,41 @@ struct RigService::Impl {
   std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
   std::optional<dds::Reader<mpdrig_StepRequest>> steps;
 
+  // Who commands each rig's actuators: "choke" -> "strength 20, writer 1a2b...", per rig index.
+  std::vector<std::map<std::string, std::string>> owners;
+
+  // The writer of an applied command, from Cyclone's discovery data: its ownership strength
+  // and GUID (the owner under exclusive ownership is the strongest live writer).
+  static std::string DescribeWriter(dds_entity_t reader, dds_instance_handle_t publication) {
+    dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader, publication);
+    if (endpoint == nullptr) return "unknown writer";
+    int32_t strength = 0;
+    if (endpoint->qos != nullptr) (void)dds_qget_ownership_strength(endpoint->qos, &strength);
+    char guid[2 * sizeof(endpoint->key.v) + 1];
+    for (std::size_t i = 0; i < sizeof(endpoint->key.v); ++i) {
+      std::snprintf(guid + 2 * i, 3, "%02x", endpoint->key.v[i]);
+    }
+    dds_builtintopic_free_endpoint(endpoint);
+    return "strength " + std::to_string(strength) + ", writer " + guid;
+  }
+  void NoteOwner(const char* rig_id, const char* actuator, dds_entity_t reader,
+                 const dds_sample_info_t& info) {
+    for (std::size_t i = 0; i < rigs.size(); ++i) {
+      if (rigs[i].rig_id() == rig_id) {
+        if (owners.size() < rigs.size()) owners.resize(rigs.size());
+        owners[i][actuator] = DescribeWriter(reader, info.publication_handle);
+      }
+    }
+  }
+  void NoteNoOwner(const char* rig_id, const char* actuator) {
+    for (std::size_t i = 0; i < rigs.size(); ++i) {
+      if (rigs[i].rig_id() == rig_id) {
+        if (owners.size() < rigs.size()) owners.resize(rigs.size());
+        owners[i][actuator] = "none";
+      }
+    }
+  }
+
   RigHost* Find(const char* rig_id) {
     for (RigHost& rig : rigs) {
       if (rig.rig_id() == rig_id) return &rig;
@@ -69,6 +105,7 @@ struct RigService::Impl {
     };
     // No choke controller left for a rig: the configured safe opening, or keep the last one.
     auto choke_lost = [this](const mpdrig_ChokeCommand& c) {
+      NoteNoOwner(c.rig_id, "choke");
       RigHost* rig = Find(c.rig_id);
       if (rig == nullptr) return;
       if (std::isnan(options.safe_choke_deg)) {
@@ -79,30 +116,35 @@ struct RigService::Impl {
       }
     };
     auto taken = choke->TakeEach(
-        [&](const mpdrig_ChokeCommand& c, const dds_sample_info_t&) {
+        [&](const mpdrig_ChokeCommand& c, const dds_sample_info_t& info) {
+          NoteOwner(c.rig_id, "choke", choke->handle(), info);
           apply(kChokeCommandTopic, c.rig_id,
                 [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
         },
         choke_lost);
     if (!taken.ok()) return taken.status();
-    taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t&) {
+    taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
+      NoteOwner(c.rig_id, "pump", pump->handle(), info);
       apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
     });
     if (!taken.ok()) return taken.status();
-    taken = outlet->TakeEach([&](const mpdrig_OutletCommand& c, const dds_sample_info_t&) {
+    taken = outlet->TakeEach([&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
+      NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
       apply(kOutletCommandTopic, c.rig_id,
             [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
     });
     if (!taken.ok()) return taken.status();
     // No piston controller left: the heave generator stops where it is.
     auto piston_lost = [this](const mpdrig_PistonCommand& c) {
+      NoteNoOwner(c.rig_id, "piston");
       RigHost* rig = Find(c.rig_id);
       if (rig == nullptr) return;
       (void)rig->SetPiston(PistonCommandIn{});  // hold
       rig->NoteEvent("no piston controller left: safe state, piston holds");
     };
     taken = piston->TakeEach(
-        [&](const mpdrig_PistonCommand& c, const dds_sample_info_t&) {
+        [&](const mpdrig_PistonCommand& c, const dds_sample_info_t& info) {
+          NoteOwner(c.rig_id, "piston", piston->handle(), info);
           apply(kPistonCommandTopic, c.rig_id,
                 [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
         },
@@ -203,6 +245,17 @@ struct RigService::Impl {
         static_cast<std::uint32_t>(effect_names.size());
     wire.active_effects._buffer = effect_names.empty() ? nullptr : effect_names.data();
     wire.active_effects._release = false;
+    // Who commands each actuator ("choke: strength 20, writer <guid>"; "none" once lost).
+    std::vector<std::string> owner_texts;
+    if (index < owners.size()) {
+      for (const auto& [actuator, owner] : owners[index]) owner_texts.push_back(actuator + ": " + owner);
+    }
+    std::vector<char*> owner_ptrs;
+    for (std::string& text : owner_texts) owner_ptrs.push_back(text.data());
+    wire.actuator_owners._length = wire.actuator_owners._maximum =
+        static_cast<std::uint32_t>(owner_ptrs.size());
+    wire.actuator_owners._buffer = owner_ptrs.empty() ? nullptr : owner_ptrs.data();
+    wire.actuator_owners._release = false;
     return status->Write(wire);
   }
 

@@ -117,6 +117,10 @@ class ServiceTest : public ::testing::Test {
           for (std::uint32_t i = 0; i < s.warnings._length; ++i) {
             last_warnings_ += std::string(s.warnings._buffer[i]) + "\n";
           }
+          last_owners_.clear();
+          for (std::uint32_t i = 0; i < s.actuator_owners._length; ++i) {
+            last_owners_ += std::string(s.actuator_owners._buffer[i]) + "\n";
+          }
           last_effects_.clear();
           for (std::uint32_t i = 0; i < s.active_effects._length; ++i) {
             last_effects_ += std::string(s.active_effects._buffer[i]) + "\n";
@@ -145,7 +149,8 @@ class ServiceTest : public ::testing::Test {
   Status run_status_ = Status::Ok();
   std::uint64_t request_id_ = 0;
   std::string last_warnings_;
-  std::string last_effects_;  // active_effects of the last completed step's status  // of the last completed step's status
+  std::string last_effects_;
+  std::string last_owners_;  // actuator_owners of the last completed step's status  // active_effects of the last completed step's status  // of the last completed step's status
   dds::Entity participant_;
   dds::Entity sensors_topic_, status_topic_, choke_topic_, piston_topic_, step_topic_,
       estimate_topic_, profile_topic_;
@@ -262,6 +267,7 @@ TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeS
   Acked(weak->handle());
   Acked(strong->handle());
   EXPECT_NEAR(opening_after_steps(), 50.0, 0.01) << "the stronger controller wins";
+  EXPECT_NE(last_owners_.find("choke: strength 20, writer "), std::string::npos) << last_owners_;
 
   // The strong controller goes; the weak one's next command is in force.
   dds::Writer<mpdrig_ChokeCommand> gone = std::move(strong).value();
@@ -270,12 +276,14 @@ TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeS
   ASSERT_TRUE(weak->Write(from_weak).ok());
   Acked(weak->handle());
   EXPECT_NEAR(opening_after_steps(), 45.0, 0.01) << "the next controller takes over";
+  EXPECT_NE(last_owners_.find("choke: strength 10, writer "), std::string::npos) << last_owners_;
 
   // The last controller goes: the safe state (choke fully open), and the status says so.
   { auto leaving = std::move(weak).value(); }
   dds_sleepfor(DDS_MSECS(200));  // the writer's disappearance reaches the service's reader
   EXPECT_NEAR(opening_after_steps(), 90.0, 0.01) << "safe state: choke open";
   EXPECT_NE(last_warnings_.find("no choke controller left"), std::string::npos) << last_warnings_;
+  EXPECT_NE(last_owners_.find("choke: none"), std::string::npos) << last_owners_;
 }
 
 // What the estimate topic carried for one rig, copied out of DDS's loan.
