@@ -134,8 +134,8 @@ std::vector<NamedValue> Named(const FitResult& fit) {
 // every fit's model time saved).
 MeasuredLog Head(const MeasuredLog& log, double t_end) {
   const std::vector<double>& t = log.time_s();
-  const std::size_t n = static_cast<std::size_t>(
-      std::upper_bound(t.begin(), t.end(), t_end) - t.begin());
+  const std::size_t n =
+      static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), t_end) - t.begin());
   MeasuredLog head;
   head.path = log.path;
   head.metadata = log.metadata;

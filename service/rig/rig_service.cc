@@ -248,7 +248,8 @@ struct RigService::Impl {
     // Who commands each actuator ("choke: strength 20, writer <guid>"; "none" once lost).
     std::vector<std::string> owner_texts;
     if (index < owners.size()) {
-      for (const auto& [actuator, owner] : owners[index]) owner_texts.push_back(actuator + ": " + owner);
+      for (const auto& [actuator, owner] : owners[index])
+        owner_texts.push_back(actuator + ": " + owner);
     }
     std::vector<char*> owner_ptrs;
     for (std::string& text : owner_texts) owner_ptrs.push_back(text.data());

@@ -150,7 +150,9 @@ class ServiceTest : public ::testing::Test {
   std::uint64_t request_id_ = 0;
   std::string last_warnings_;
   std::string last_effects_;
-  std::string last_owners_;  // actuator_owners of the last completed step's status  // active_effects of the last completed step's status  // of the last completed step's status
+  std::string
+      last_owners_;  // actuator_owners of the last completed step's status  // active_effects of
+                     // the last completed step's status  // of the last completed step's status
   dds::Entity participant_;
   dds::Entity sensors_topic_, status_topic_, choke_topic_, piston_topic_, step_topic_,
       estimate_topic_, profile_topic_;

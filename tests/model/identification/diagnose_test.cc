@@ -12,8 +12,8 @@
 // model's scoring error on the log with the effect exceeds that on the log without it by
 // kDetectableMargin. An effect the base parameters can absorb (e.g. a tiny lag taken up by a
 // slightly lower wave speed) is not detectable from the log, and no method could rank it.
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -120,8 +120,8 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n", effect.c_str(),
                 seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * without,
                 is_detectable ? "" : " not detectable", Ranking(d).c_str());
-    const bool ranked_first = !d.candidates.empty() && d.verdict &&
-                              SameFamily(effect, d.candidates.front().effect);
+    const bool ranked_first =
+        !d.candidates.empty() && d.verdict && SameFamily(effect, d.candidates.front().effect);
     first += ranked_first;
     if (!is_detectable) continue;
     ++detectable;
