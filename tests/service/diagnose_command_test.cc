@@ -1,6 +1,5 @@
 // `mpdrig synth` and `mpdrig diagnose` as a user runs them: the JSON names outside checks read,
 // the self-contained HTML report (rendered by headless Chromium), errors for bad input.
-#include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -10,31 +9,19 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/shell.h"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path TempDir() {
-  const fs::path dir =
-      fs::temp_directory_path() /
-      ("mpdrig_diagnose_test_" +
-       std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir() { return mpdrig::testing::TestTempDir("mpdrig_diagnose_test_"); }
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using mpdrig::testing::ReadFile;
 
+// Runs a shell command; returns its exit code and (in *output) stdout and stderr.
 int RunShell(const std::string& command, std::string* output) {
-  const fs::path out = TempDir() / "command_output.txt";
-  const int status = std::system((command + " > " + out.string() + " 2>&1").c_str());
-  if (output != nullptr) *output = ReadFile(out);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return mpdrig::testing::RunShell(command, TempDir() / "command_output.txt", output);
 }
 
 const std::string kExe = MPDRIG_EXE;

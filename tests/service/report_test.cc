@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/shell.h"
+
 #include "model/analysis/compare.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
@@ -27,28 +29,13 @@ namespace {
 namespace fs = std::filesystem;
 using riglog::Channel;
 
-fs::path TempDir() {
-  const fs::path dir =
-      fs::temp_directory_path() /
-      ("mpdrig_report_test_" +
-       std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path TempDir() { return mpdrig::testing::TestTempDir("mpdrig_report_test_"); }
 
-std::string ReadFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using mpdrig::testing::ReadFile;
 
 // Runs a shell command; returns its exit code and (in *output) stdout and stderr.
 int RunShell(const std::string& command, std::string* output) {
-  const fs::path out = TempDir() / "command_output.txt";
-  const int status = std::system((command + " > " + out.string() + " 2>&1").c_str());
-  if (output != nullptr) *output = ReadFile(out);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return mpdrig::testing::RunShell(command, TempDir() / "command_output.txt", output);
 }
 
 // A "measured" log: a 0.2 Hz piston sine through the model with c = 1000 m/s, PT1..PT10, C2, FT3,
