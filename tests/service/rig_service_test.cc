@@ -165,6 +165,40 @@ class ServiceTest : public ::testing::Test {
   std::optional<dds::Writer<mpdrig_StepRequest>> step_;
 };
 
+// Commands and status are transient-local: a subscriber that joins late (a monitor, a second
+// controller) receives the command in force and the current status at once.
+TEST_F(ServiceTest, LateJoinerReceivesTheCurrentCommandAndStatus) {
+  Start();
+  char rig_id[] = "rig-1";
+  mpdrig_ChokeCommand command{rig_id, 37.5};
+  ASSERT_TRUE(choke_->Write(command).ok());
+  Acked(choke_->handle());
+  Step("rig-1", 1);
+
+  const dds_entity_t p = participant_.handle();
+  auto late_commands =
+      dds::Reader<mpdrig_ChokeCommand>::Create(p, choke_topic_.handle(), dds::CommandQos(0));
+  auto late_status =
+      dds::Reader<mpdrig_RigStatus>::Create(p, status_topic_.handle(), dds::StatusQos());
+  ASSERT_TRUE(late_commands.ok() && late_status.ok());
+  double seen_deg = -1.0;
+  for (int attempt = 0; attempt < 50 && seen_deg < 0.0; ++attempt) {
+    (void)late_commands->Wait(DDS_MSECS(100));
+    (void)late_commands->TakeEach([&](const mpdrig_ChokeCommand& c, const dds_sample_info_t&) {
+      if (std::string(c.rig_id) == "rig-1") seen_deg = c.opening_deg;
+    });
+  }
+  EXPECT_EQ(seen_deg, 37.5) << "the late joiner got the command in force";
+  bool status_seen = false;
+  for (int attempt = 0; attempt < 50 && !status_seen; ++attempt) {
+    (void)late_status->Wait(DDS_MSECS(100));
+    (void)late_status->TakeEach([&](const mpdrig_RigStatus& st, const dds_sample_info_t&) {
+      status_seen |= std::string(st.rig_id) == "rig-1" && st.last_completed_step_request > 0;
+    });
+  }
+  EXPECT_TRUE(status_seen) << "the late joiner got the current status";
+}
+
 TEST_F(ServiceTest, StatusReportsTheActiveEffectsPerRig) {
   Start();
   Step("rig-1", 1);
