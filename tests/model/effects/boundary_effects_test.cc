@@ -12,6 +12,7 @@
 #include "model/boundary/choke.h"
 #include "model/effects/effect.h"
 #include "model/sim/rig_simulator.h"
+#include "tests/model/effects/sine_response.h"
 #include "tests/model/rig_test_util.h"
 
 namespace mpdrig {
@@ -29,52 +30,20 @@ RigParams With(std::string_view spec) { return With(RigParams(), spec); }
 
 double PhaseDeg(Complex z) { return std::arg(z) * 180.0 / std::numbers::pi; }
 
-struct SineRun {
-  double freq_hz = 0.15;
-  double amplitude_m = 0.002;  // small: the linearised closed forms hold
-  double choke_deg = 31.0;
-  double pump_lpm = 5.0;
-  double outlet_barg = 5.0;
-  int cells = 60;
-  double settle_s = 60.0;  // f1/2 = 0.075/s: e^-4.5 of the start-up transient is left
-  int periods = 4;
+// Small amplitude on the linear model: the linearised closed forms below hold.
+struct SineRun : testing::SineRun {
+  SineRun() {
+    freq_hz = 0.15;
+    amplitude_m = 0.002;
+    model = PipeModel::kLinear;
+  }
 };
 
-// Complex amplitude of each channel at the drive frequency (SI), relative to the piston
-// position's, on the linear model with linear pipe and piston friction (the closed forms below
-// are linear).
+// With linear pipe and piston friction (the closed forms below are linear).
 std::array<Complex, kChannelCount> Response(RigParams params, const SineRun& run) {
   params.friction_f2_per_m = 0.0;
   params.piston_friction_fd2_pa_s2_per_m2 = 0.0;
-  const double f = run.freq_hz;
-  InputSignals inputs;
-  inputs.piston_position_m = [&](double t) {
-    return run.amplitude_m * std::sin(2.0 * std::numbers::pi * f * t);
-  };
-  inputs.rig = [&](double) { return testing::Held(run.choke_deg, run.pump_lpm, run.outlet_barg); };
-  const int per_period = 64;
-  const double t_start = std::ceil(run.settle_s * f) / f;
-  std::vector<double> times;
-  times.push_back(0.0);
-  for (int k = 0; k < run.periods * per_period; ++k)
-    times.push_back(t_start + k / (f * per_period));
-  SimulationOptions options;
-  options.cells = run.cells;
-  options.model = PipeModel::kLinear;
-  auto result = Simulate(params, options, inputs, times);
-  EXPECT_TRUE(result.ok()) << result.status().message();
-  std::array<Complex, kChannelCount> out{};
-  if (!result.ok()) return out;
-  const Complex piston(0.0, -run.amplitude_m / 2.0);  // A sin = (A/2i) e^{iwt} + c.c.
-  for (std::size_t c = 0; c < kChannelCount; ++c) {
-    Complex sum = 0.0;
-    for (std::size_t k = 1; k < times.size(); ++k) {
-      const double t = times[k];
-      sum += result->samples[k].values[c] * std::exp(Complex(0.0, -2.0 * std::numbers::pi * f * t));
-    }
-    out[c] = sum / static_cast<double>(times.size() - 1) / piston;
-  }
-  return out;
+  return testing::SineResponse(params, run);
 }
 
 // The time step of a run with `cells` cells (characteristics scheme: dt = dx / c).
