@@ -125,7 +125,7 @@ Scored Score(const MeasuredLog& log, const ModelTraces& model, double t0, double
 std::vector<NamedValue> Named(const FitResult& fit) {
   std::vector<NamedValue> values;
   for (std::size_t i = 0; i < fit.keys.size(); ++i) {
-    values.push_back({fit.keys[i], fit.estimates[i], fit.standard_errors[i]});
+    values.push_back({fit.keys[i], fit.estimates[i], fit.standard_errors[i], fit.held[i]});
   }
   return values;
 }

@@ -70,6 +70,7 @@ struct NamedValue {
   std::string key;
   double value = 0.0;
   double standard_error = 0.0;
+  bool held = false;  // no influence on the log: kept at its start value (FitResult::held)
 };
 
 struct CandidateResult {

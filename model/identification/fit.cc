@@ -32,6 +32,9 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Condition limit of the column-scaled J^T J: directions below it are unidentifiable.
 constexpr double kSingularRatio = 1.0e-12;
+// A parameter whose difference step changes the residual vector by less than this share of its
+// norm has no influence (bit-identical replays give 0; round-off alone stays far below).
+constexpr double kNoInfluence = 1.0e-9;
 
 struct TuningRange {
   std::string_view key;
@@ -521,11 +524,40 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   }
   result.error_before = residuals.Error(r0.data());
 
+  // A parameter that does not move the residuals at the start is held there and reported so
+  // (`held`), rather than returned as if it had been estimated. E.g. the choke leak is the floor
+  // of the choke characteristic (G = max(G_table, leak), 9.4): with the choke open it changes
+  // nothing, and its estimate would only be its start value. Holding it also keeps the
+  // Levenberg-Marquardt step away from a zero Jacobian column, which only Ceres's tiny minimum
+  // diagonal regularises. The probes use ReplayCost's forward steps, so Ceres's first Jacobian
+  // finds them in the cache.
+  result.held.assign(p, false);
+  {
+    const double reference = Eigen::Map<const Eigen::VectorXd>(r0.data(), m).norm();
+    std::vector<double> shifted = z, probe(m);
+    for (std::size_t j = 0; j < p; ++j) {
+      shifted[j] = z[j] + Step(options.relative_step, z[j], lower_z[j], upper_z[j]);
+      if (residuals.Evaluate(shifted.data(), probe.data())) {
+        double change = 0.0;
+        for (int i = 0; i < m; ++i) change += (probe[i] - r0[i]) * (probe[i] - r0[i]);
+        result.held[j] = std::sqrt(change) <= kNoInfluence * reference;
+      }
+      shifted[j] = z[j];
+    }
+  }
+  std::vector<int> held_indices;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (result.held[j]) held_indices.push_back(static_cast<int>(j));
+  }
+
   // Ceres owns the cost function (default ownership) and reads/writes z in place.
   ceres::Problem problem;
   problem.AddResidualBlock(new ReplayCost(&residuals, lower_z, upper_z, options.relative_step,
                                           options.central_differences),
                            nullptr, z.data());
+  if (!held_indices.empty() && held_indices.size() < p) {
+    problem.SetManifold(z.data(), new ceres::SubsetManifold(static_cast<int>(p), held_indices));
+  }
   for (std::size_t j = 0; j < p; ++j) {
     problem.SetParameterLowerBound(z.data(), static_cast<int>(j), lower_z[j]);
     problem.SetParameterUpperBound(z.data(), static_cast<int>(j), upper_z[j]);
@@ -539,15 +571,20 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   // Steps below a tenth of the difference step are below what the derivatives resolve.
   solver.parameter_tolerance = 0.1 * options.relative_step;
   solver.num_threads = 1;
-  solver.logging_type = ceres::SILENT;
-  solver.minimizer_progress_to_stdout = false;
+  solver.logging_type = std::getenv("MPDRIG_CERES_LOG") ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver.minimizer_progress_to_stdout = std::getenv("MPDRIG_CERES_LOG") != nullptr;
   ProgressCallback callback(residuals, options.progress);
   solver.callbacks.push_back(&callback);
   std::string options_error;
   if (!solver.IsValid(&options_error)) return Status::Error("solver options: " + options_error);
   ceres::Solver::Summary summary;
-  ceres::Solve(solver, &problem, &summary);
-  result.solver_report = summary.BriefReport();
+  if (held_indices.size() < p) {
+    ceres::Solve(solver, &problem, &summary);
+    result.solver_report = summary.BriefReport();
+  } else {
+    summary.termination_type = ceres::CONVERGENCE;
+    result.solver_report = "no parameter moves the residuals: all held at their start values";
+  }
   if (summary.termination_type == ceres::FAILURE) {
     return Status::Error("the solver failed: " + summary.message +
                          (residuals.last_failure().empty()

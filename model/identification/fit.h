@@ -72,6 +72,9 @@ struct FitResult {
   std::vector<double> initial;    // start values
   std::vector<double> estimates;
   std::vector<double> standard_errors;           // NaN where J^T J is singular (unidentifiable)
+  // True where the parameter did not move the residuals at the start (relative change below
+  // kNoInfluence for its difference step): it was held at its start value, not fitted.
+  std::vector<bool> held;
   std::vector<std::vector<double>> correlation;  // keys.size() squared
   double error_before = 0.0;  // mean NRMSE over compared channels on the window (compare's error)
   double error_after = 0.0;

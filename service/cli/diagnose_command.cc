@@ -176,6 +176,26 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   synth_command->add_option("--rate-hz", synth->options.rate_hz, "sample rate [Hz]")
       ->capture_default_str();
+  synth_command
+      ->add_option("--pressure-noise-pa", synth->options.pressure_noise_pa,
+                   "standard deviation of the pressure transmitters' white noise [Pa]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  synth_command
+      ->add_option("--flow-noise-m3ps", synth->options.flow_noise_m3ps,
+                   "standard deviation of the flow meters' white noise [m^3/s]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  synth_command
+      ->add_option("--piston-noise-m", synth->options.piston_noise_m,
+                   "standard deviation of the piston position's white noise [m]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  synth_command
+      ->add_option("--choke-noise-deg", synth->options.choke_noise_deg,
+                   "standard deviation of the choke position's white noise [deg]")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   synth_command->add_option("--out", synth->out_path, "rig log to write")->required();
   synth_command->callback([synth, exit_code]() { *exit_code = RunSynth(*synth); });
 }

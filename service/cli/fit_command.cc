@@ -127,6 +127,7 @@ std::string FitJson(const FitResult& fit, const std::vector<FitParameter>& param
         << ": {\"initial\": " << JsonNumber(fit.initial[j])
         << ", \"estimate\": " << JsonNumber(fit.estimates[j])
         << ", \"std_error\": " << JsonNumber(fit.standard_errors[j])
+        << ", \"held\": " << (fit.held[j] ? "true" : "false")
         << ", \"lower\": " << JsonNumber(parameters[j].lower)
         << ", \"upper\": " << JsonNumber(parameters[j].upper) << "}";
   }
@@ -166,7 +167,10 @@ void PrintSummary(const FitResult& fit, const std::vector<FitParameter>& paramet
         fit.estimates[j] <= parameters[j].lower || fit.estimates[j] >= parameters[j].upper;
     std::printf("%-*s  %12.6g  %12.6g  +- %8.3g  [%g, %g]%s\n", w, fit.keys[j].c_str(),
                 fit.initial[j], fit.estimates[j], fit.standard_errors[j], parameters[j].lower,
-                parameters[j].upper, at_bound ? "  at a bound" : "");
+                parameters[j].upper,
+                fit.held[j]    ? "  held: no influence on this log"
+                : at_bound ? "  at a bound"
+                           : "");
   }
   if (fit.keys.size() > 1) {
     std::printf("correlation:\n");
@@ -264,7 +268,9 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       "0..5, choke_leak_m2 0..1e-5; an effect's own bounds from `mpdrig effects`). The start\n"
       "values are the config's (thesis defaults, --config, --effect, --set). Reports estimates\n"
       "with standard errors (from J^T J at the optimum), their correlations, and the error\n"
-      "before and after. Runs at 50 cells unless --cells says otherwise (a fit replays the log\n"
+      "before and after. A parameter that does not change the replay at all (the choke leak\n"
+      "while the choke is open: it is only the characteristic's floor) is held at its start\n"
+      "value and marked `held`. Runs at 50 cells unless --cells says otherwise (a fit replays the log\n"
       "dozens of times); compare the fitted config at the same --cells.\n"
       "Example (the thesis's chapter 8-9 tuning):\n"
       "  mpdrig fit lab.csv --params wave_speed_mps,friction_f1_per_s,choke_leak_m2 \\\n"
@@ -273,7 +279,7 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       "An effect's parameter (the effect must be on):\n"
       "  mpdrig fit lab.csv --effect sensor_lag --params sensor_lag.time_constant_s \\\n"
       "      --bounds sensor_lag.time_constant_s=0:0.5 --window-s 0:60 --json -\n"
-      "JSON: params.<key>.{initial, estimate, std_error, lower, upper}, correlation.{keys,\n"
+      "JSON: params.<key>.{initial, estimate, std_error, held, lower, upper}, correlation.{keys,\n"
       "matrix}, error_before, error_after, iterations, replays, converged, window_s, cells,\n"
       "solver_report (README.md, 'Fitting parameters'). Progress goes to stderr.");
   args->model.AddAll(command);

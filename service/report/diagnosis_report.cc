@@ -36,7 +36,8 @@ std::string ParamsJson(const std::vector<NamedValue>& params) {
   for (std::size_t i = 0; i < params.size(); ++i) {
     if (i) out += ",";
     out += Quote(params[i].key) + ":{\"value\":" + Num(params[i].value) +
-           ",\"std_error\":" + Num(params[i].standard_error) + "}";
+           ",\"std_error\":" + Num(params[i].standard_error) +
+           ",\"held\":" + (params[i].held ? "true" : "false") + "}";
   }
   return out + "}";
 }

@@ -182,6 +182,33 @@ TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
   EXPECT_NEAR(comparison->error, fit->error_after, 1e-12);
 }
 
+// While the choke is open (31 deg until 15 s) its characteristic is above the leak, G =
+// max(G_table, leak) (9.4), so the leak changes nothing: it is held at its start value and
+// reported as held (not as an estimate), and the wave speed and friction are still fitted.
+TEST(FitTest, AParameterWithoutInfluenceIsHeldAndTheOthersStillFit) {
+  RigParams truth;
+  truth.wave_speed_mps = 1000.0;
+  truth.friction_f1_per_s = 0.3;
+  truth.choke_leak_m2 = 1.0e-6;
+  const MeasuredLog log = MakeLog(truth, 1.0);
+  FitOptions options = Options();
+  options.window_end_s = 14.5;
+  auto fit =
+      FitParameters(log, RigParams{},
+                    Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}), options);
+  ASSERT_TRUE(fit.ok()) << fit.status().message();
+  SCOPED_TRACE(fit->solver_report);
+  ASSERT_EQ(fit->held.size(), 3u);
+  EXPECT_FALSE(fit->held[0]);
+  EXPECT_FALSE(fit->held[1]);
+  EXPECT_TRUE(fit->held[2]);
+  EXPECT_EQ(fit->estimates[2], fit->initial[2]);
+  EXPECT_TRUE(std::isnan(fit->standard_errors[2]));
+  EXPECT_NEAR(fit->estimates[0], 1000.0, 0.01 * 1000.0);
+  EXPECT_NEAR(fit->estimates[1], 0.3, 0.03 * 0.3);
+  EXPECT_TRUE(fit->converged);
+}
+
 TEST(FitTest, RecoversAnEffectParameter) {
   RigParams truth;
   truth.effects.push_back({"sensor_lag", {{"time_constant_s", 0.15}}});
