@@ -1,5 +1,7 @@
 #include "model/analysis/log_stream.h"
 
+#include "model/sim/log_inputs.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -262,10 +264,23 @@ Status RowPipeline::Emit() {
     const long i = emitted_;
     const Entry& entry = At(i);
     if (replay_ && !sampler_) {
-      RigInputs initial;
-      initial.choke_opening_frac = first_.row.choke_opening_frac;
-      initial.pump_flow_m3ps = first_.row.pump_flow_m3ps;
-      initial.outlet_pressure_pa = first_.row.outlet_pressure_pa;
+      // The initial steady state from the inputs' mean over the log's first
+      // kInitialInputWindowS (log_inputs.h), not from its first, noisy row. Every row of the
+      // first smoothing block is still held here, and that block spans the window unless the
+      // log is sampled above 8 kHz (then the rows it has).
+      RigInputs initial{0.0, 0.0, 0.0};  // sums first
+      long count = 0;
+      for (const Entry& entry : rows_) {
+        if (entry.row.time_s > first_.row.time_s + kInitialInputWindowS) break;
+        initial.choke_opening_frac += entry.row.choke_opening_frac;
+        initial.pump_flow_m3ps += entry.row.pump_flow_m3ps;
+        initial.outlet_pressure_pa += entry.row.outlet_pressure_pa;
+        ++count;
+      }
+      MPDRIG_CHECK(count > 0);
+      initial.choke_opening_frac /= count;
+      initial.pump_flow_m3ps /= count;
+      initial.outlet_pressure_pa /= count;
       auto simulator = RigSimulator::Create(replay_->params, replay_->options, initial,
                                             first_.smoothed_m, first_.row.time_s);
       if (!simulator.ok()) return simulator.status();

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <cstdio>
+#include <cstdlib>
 
 #include "model/effects/effect.h"
 
@@ -154,6 +156,91 @@ MeasuredLog Head(const MeasuredLog& log, double t_end) {
   return head;
 }
 
+// What a local search (scans, then Levenberg-Marquardt) needs to know, shared by the candidates
+// and the baseline's second search.
+struct SearchContext {
+  const MeasuredLog* fit_log = nullptr;
+  const RigParams* start = nullptr;  // the user's start values (base parameters)
+  SimulationOptions simulation;
+  FitOptions fit_options;
+  double t_begin = 0.0, t_end = 0.0;  // the fitting data
+  bool fits_wave_speed = false;
+  std::size_t base_count = 0;  // parameters[0, base_count) are base parameters
+};
+
+// Local fit of `parameters` (the base ones, then the effect's) from the fitted baseline `params`
+// (with the effect switched on). Starts from a scan: the effect's strength over its plausible
+// range (its fitted parameters together, x {1/4, 1/2, 1, 2, 4} of their defaults) and, for each,
+// the fine wave-speed scan. An effect that slows or delays the waves (added inertia, a lag, a
+// compliance) moves the best wave speed; a local fit from the baseline's c can trade one for the
+// other and stop short. Two starting points for the other base parameters: the baseline's
+// estimates, and the start values (the baseline's may have absorbed the missing effect, e.g. a
+// higher f1 standing in for unsteady friction, and then hold the candidate back). Without effect
+// parameters this is the same search for the base model alone.
+Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& params,
+                               const std::vector<FitParameter>& parameters, int* replays) {
+  RigParams from_start = *context.start;
+  from_start.wave_speed_mps = params.wave_speed_mps;
+  from_start.effects = params.effects;
+  double best_error = std::numeric_limits<double>::infinity();
+  RigParams best = params;
+  const double centre = params.wave_speed_mps;
+  const bool has_effect = parameters.size() > context.base_count;
+  const std::vector<double> factors =
+      has_effect ? std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0} : std::vector<double>{1.0};
+  auto consider = [&](const RigParams& trial) {
+    auto traces = ReplayModel(*context.fit_log, trial, context.simulation);
+    ++*replays;
+    if (!traces.ok()) return;
+    const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
+    if (error < best_error) best_error = error, best = trial;
+  };
+  for (int origin = 0; origin < 2; ++origin) {
+    for (double factor : factors) {
+      RigParams strength = origin == 0 ? params : from_start;
+      bool valid = true;
+      for (std::size_t j = context.base_count; j < parameters.size() && valid; ++j) {
+        const FitParameter& parameter = parameters[j];
+        auto value = GetParamValue(strength, parameter.key);
+        if (!value.ok()) {
+          valid = false;
+          break;
+        }
+        const double scaled = *value != 0.0 ? *value * factor
+                                            : parameter.lower +
+                                                  0.05 * factor * (parameter.upper - parameter.lower);
+        valid = SetParamValue(&strength, parameter.key,
+                              std::clamp(scaled, parameter.lower, parameter.upper))
+                    .ok();
+      }
+      if (!valid) continue;
+      const int points = context.fits_wave_speed ? kFineScanPoints : 1;
+      for (int k = 0; k < points; ++k) {
+        RigParams trial = strength;
+        if (context.fits_wave_speed) {
+          trial.wave_speed_mps =
+              centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (points - 1));
+        }
+        consider(trial);
+      }
+    }
+  }
+  // The finest wave-speed step around the best point.
+  if (context.fits_wave_speed) {
+    const RigParams around = best;
+    for (int k = 0; k < kFineScanPoints; ++k) {
+      RigParams trial = around;
+      trial.wave_speed_mps =
+          around.wave_speed_mps *
+          (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
+      consider(trial);
+    }
+  }
+  auto fit = FitParameters(*context.fit_log, best, parameters, context.fit_options);
+  if (fit.ok()) *replays += fit->replays;
+  return fit;
+}
+
 }  // namespace
 
 double EstimateNoiseFloor(const MeasuredLog& log) {
@@ -299,6 +386,27 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
   auto base_fit = FitParameters(fit_log, base_start, base_parameters, fit_options);
   if (!base_fit.ok()) return base_fit.status().Within("fitting the base model");
   diagnosis.replays += base_fit->replays;
+  SearchContext search;
+  search.fit_log = &fit_log;
+  search.start = &start;
+  search.simulation = simulation;
+  search.fit_options = fit_options;
+  search.t_begin = t_begin;
+  search.t_end = diagnosis.fit_end_s;
+  search.fits_wave_speed = fits_wave_speed;
+  search.base_count = base_parameters.size();
+  // The baseline also gets the candidates' search (their scans and two starting points, without
+  // an effect), and keeps whichever fits the fitting data better. Otherwise a candidate could win
+  // by its search alone: a better base point found from its other start, credited to its effect.
+  {
+    int null_replays = 0;
+    auto second = SearchAndFit(search, base_fit->params, base_parameters, &null_replays);
+    diagnosis.replays += null_replays;
+    if (second.ok() && second->error_after < base_fit->error_after) {
+      second->error_before = base_fit->error_before;
+      base_fit = std::move(second);
+    }
+  }
   auto base_traces = ReplayModel(log, base_fit->params, simulation);
   if (!base_traces.ok()) return base_traces.status();
   ++diagnosis.replays;
@@ -341,80 +449,15 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
       candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
       RigParams params = base_fit->params;
       params.effects.push_back({candidate.effect, {}});
-      // Start the local fit from a scan: the effect's strength over its plausible range (the
-      // fitted parameters together, x {1/4, 1/2, 1, 2, 4} of their defaults) and, for each, the
-      // fine wave-speed scan. An effect that slows or delays the waves (added inertia, a lag, a
-      // compliance) moves the best wave speed, and the valley in c is narrow: a local fit from
-      // the baseline's c can trade one for the other and stop short.
-      // Two starting points for the other base parameters: the baseline's estimates, and the
-      // start values (the baseline's may have absorbed the missing effect, e.g. a higher f1
-      // standing in for unsteady friction, and then hold the candidate back).
-      {
-        RigParams from_start = start;
-        from_start.wave_speed_mps = params.wave_speed_mps;
-        from_start.effects = params.effects;
-        double best_error = std::numeric_limits<double>::infinity();
-        RigParams best = params;
-        const double centre = params.wave_speed_mps;
-        for (int origin = 0; origin < 2; ++origin)
-          for (double factor : {0.25, 0.5, 1.0, 2.0, 4.0}) {
-            RigParams strength = origin == 0 ? params : from_start;
-            bool valid = true;
-            for (std::size_t j = base_parameters.size(); j < candidate_parameters[i].size(); ++j) {
-              const FitParameter& parameter = candidate_parameters[i][j];
-              auto value = GetParamValue(strength, parameter.key);
-              if (!value.ok()) {
-                valid = false;
-                break;
-              }
-              const double scaled =
-                  *value != 0.0
-                      ? *value * factor
-                      : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
-              valid &= SetParamValue(&strength, parameter.key,
-                                     std::clamp(scaled, parameter.lower, parameter.upper))
-                           .ok();
-            }
-            if (!valid) continue;
-            const int points = fits_wave_speed ? kFineScanPoints : 1;
-            for (int k = 0; k < points; ++k) {
-              RigParams trial = strength;
-              if (fits_wave_speed) {
-                trial.wave_speed_mps =
-                    centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (points - 1));
-              }
-              auto traces = ReplayModel(fit_log, trial, simulation);
-              ++replays[i];
-              if (!traces.ok()) continue;
-              const double error = WindowError(fit_log, *traces, t_begin, diagnosis.fit_end_s);
-              if (error < best_error) best_error = error, best = trial;
-            }
-          }
-        // The finest wave-speed step around the best point.
-        if (fits_wave_speed) {
-          const RigParams around = best;
-          for (int k = 0; k < kFineScanPoints; ++k) {
-            RigParams trial = around;
-            trial.wave_speed_mps =
-                around.wave_speed_mps *
-                (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
-            auto traces = ReplayModel(fit_log, trial, simulation);
-            ++replays[i];
-            if (!traces.ok()) continue;
-            const double error = WindowError(fit_log, *traces, t_begin, diagnosis.fit_end_s);
-            if (error < best_error) best_error = error, best = trial;
-          }
-        }
-        params = best;
-      }
       FitOptions candidate_options = fit_options;
       candidate_options.max_iterations = options.candidate_iterations;
-      auto fit = FitParameters(fit_log, params, candidate_parameters[i], candidate_options);
+      SearchContext candidate_context = search;
+      candidate_context.fit_options = candidate_options;
+      auto fit = SearchAndFit(candidate_context, params, candidate_parameters[i], &replays[i]);
       if (!fit.ok()) {
         candidate.failure = fit.status().message();
         return;
       }
-      replays[i] += fit->replays;
       auto traces = ReplayModel(log, fit->params, simulation);
       ++replays[i];
       if (!traces.ok()) {
@@ -436,6 +479,12 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
         const double d = base_score.block_errors[k] - score.block_errors[k];
         if (!std::isfinite(d)) continue;
         mean += d, squares += d * d, ++blocks;
+      }
+      if (std::getenv("MPDRIG_DEBUG_BLOCKS")) {
+        std::fprintf(stderr, "%s:", candidate.effect.c_str());
+        for (int k = 0; k < kScoreBlocks; ++k)
+          std::fprintf(stderr, " %.3f/%.3f", 100 * base_score.block_errors[k], 100 * score.block_errors[k]);
+        std::fprintf(stderr, "\n");
       }
       if (blocks >= 2) {
         mean /= blocks;

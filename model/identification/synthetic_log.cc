@@ -31,11 +31,13 @@ class Random {
   std::mt19937_64 engine_;
 };
 
-// The lab's actuators take time: the choke's motor and the pump's speed ramp; a step in the log
-// is a ramp over this time (and a jump would send a sharp front through the pipe, see PistonAt).
-constexpr double kChokeRampS = 1.0;
-constexpr double kPumpRampS = 1.0;
+// The lab's actuators take time: a choke step moves at the actuator's rate limit (90 deg/s,
+// RigParams::choke_rate_limit_frac_per_s, thesis 8.4), a pump step ramps the pump's speed
+// (assumed: 4 L/min in 0.4 s).
+constexpr double kChokeRateDegPerS = 90.0;
+constexpr double kPumpRateLpmPerS = 10.0;
 constexpr double kPistonTaperS = 2.0;
+constexpr double kLowAmplitude = 0.4;
 
 struct Excitation {
   double piston_amp_m = 0.05;
@@ -65,7 +67,13 @@ double PistonAt(const Excitation& e, double duration, double t) {
   const double end = start + third;
   const double taper = Taper(t - start, kPistonTaperS) * Taper(end - t, kPistonTaperS);
   if (t < third || t >= 2.0 * third) {
-    return taper * e.piston_amp_m *
+    // The second half of each sines part at kLowAmplitude of the first: the same frequencies at
+    // two amplitudes, so a damping that grows with the flow (helical friction) differs from one
+    // that grows with the frequency (unsteady friction), as the lab's amplitude series do.
+    const double middle = start + 0.5 * third;
+    const double level =
+        1.0 - (1.0 - kLowAmplitude) * Taper(t - middle + 0.5 * kPistonTaperS, kPistonTaperS);
+    return taper * level * e.piston_amp_m *
            (0.6 * std::sin(w * e.sine_hz[0] * t) + 0.4 * std::sin(w * e.sine_hz[1] * t));
   }
   const double tau = t - third;
@@ -74,14 +82,15 @@ double PistonAt(const Excitation& e, double duration, double t) {
   return taper * e.piston_amp_m * 0.8 * std::sin(phase);
 }
 
-double Held(const std::vector<std::pair<double, double>>& steps, double t, double ramp_s) {
+// The level of a sequence of (time, level) steps at t, each step a ramp at `rate` per second
+// (an actuator's rate limit) from the level before it.
+double Ramped(const std::vector<std::pair<double, double>>& steps, double t, double rate) {
   double value = steps.front().second;
-  for (const auto& [time, v] : steps) {
-    if (t >= time + ramp_s) {
-      value = v;
-    } else if (t > time) {
-      value += (v - value) * (t - time) / ramp_s;
-    }
+  for (const auto& [time, level] : steps) {
+    if (t <= time) break;
+    const double change = level - value;
+    const double ramp_s = std::fabs(change) / rate;
+    value = t >= time + ramp_s ? level : value + change * (t - time) / ramp_s;
   }
   return value;
 }
@@ -138,7 +147,8 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   Excitation excitation;
   // Column separation needs low pressure to show: an open choke and little pump flow, as in the
   // runs where the thesis's model went below zero absolute pressure (11.5).
-  const bool low_pressure = options.hidden_effect && *options.hidden_effect == "column_separation";
+  const bool low_pressure = options.low_pressure.value_or(
+      options.hidden_effect && *options.hidden_effect == "column_separation");
   excitation.piston_amp_m = low_pressure ? random.Uniform(0.06, 0.1) : random.Uniform(0.03, 0.05);
   excitation.sine_hz[0] = random.Uniform(0.1, 0.2);
   excitation.sine_hz[1] = random.Uniform(0.3, 0.5);
@@ -167,8 +177,8 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
     position.clear(), choke.clear(), pump.clear(), outlet.clear();
     for (double t : log.time_s) {
       position.push_back(PistonAt(excitation, options.duration_s, t));
-      choke.push_back(units::ChokeDegToFrac(Held(excitation.choke_steps, t, kChokeRampS)));
-      pump.push_back(units::LpmToM3ps(Held(excitation.pump_steps, t, kPumpRampS)));
+      choke.push_back(units::ChokeDegToFrac(Ramped(excitation.choke_steps, t, kChokeRateDegPerS)));
+      pump.push_back(units::LpmToM3ps(Ramped(excitation.pump_steps, t, kPumpRateLpmPerS)));
       outlet.push_back(log.atmospheric_pressure_pa);
     }
     riglog::RigLog inputs = log;

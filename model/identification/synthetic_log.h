@@ -29,6 +29,10 @@ struct SyntheticLogOptions {
   int cells = 50;
   std::optional<std::string> hidden_effect;  // none: the base model only
   bool perturb_base = true;                  // wave speed +-10%, f1 +-30%, choke leak +-30%
+  // The low-pressure runs (open choke, little pump flow, larger heave) where column separation
+  // shows; unset: for a hidden column_separation only. Set it to compare a log with the same
+  // excitation without the effect.
+  std::optional<bool> low_pressure;
   double pressure_noise_pa = 300.0;          // 0.003 bar, transmitters of 0.1% of 3-10 bar span
   double flow_noise_m3ps = 5.0e-7;           // 0.03 L/min
   double piston_noise_m = 2.0e-5;

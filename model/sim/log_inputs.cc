@@ -104,10 +104,22 @@ Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::stri
   MPDRIG_CHECK(columns.piston_position_m.size() == n && columns.choke_opening_frac.size() == n &&
                columns.pump_flow_m3ps.size() == n && columns.outlet_pressure_pa.size() == n);
   std::vector<double> smoothed = SmoothedPistonPosition(columns, smoothing_s);
+  // As RowPipeline (compare's replay): the mean over the first kInitialInputWindowS.
+  RigInputs initial{0.0, 0.0, 0.0};  // sums first
+  std::size_t count = 0;
+  for (; count < n && columns.time_s[count] <= columns.time_s[0] + kInitialInputWindowS; ++count) {
+    initial.choke_opening_frac += columns.choke_opening_frac[count];
+    initial.pump_flow_m3ps += columns.pump_flow_m3ps[count];
+    initial.outlet_pressure_pa += columns.outlet_pressure_pa[count];
+  }
+  initial.choke_opening_frac /= count;
+  initial.pump_flow_m3ps /= count;
+  initial.outlet_pressure_pa /= count;
   auto shared = std::make_shared<SharedInputs>(std::move(columns), std::move(smoothed));
   InputSignals signals;
   signals.piston_position_m = [shared](double t) { return shared->Piston(t); };
   signals.rig = [shared](double t) { return shared->Rig(t); };
+  signals.initial = initial;
   return signals;
 }
 

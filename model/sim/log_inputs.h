@@ -7,6 +7,10 @@
 // noisy measurement, so it is smoothed by a local quadratic fit over `smoothing_s` (model/signal)
 // before the simulator differentiates it; the choke position is used as is (ChokeInput::kMeasured).
 // Between samples every input is linear in time, beyond the ends it is held.
+// The replay starts from the steady state (5.3.2) of the inputs' mean over the log's first
+// kInitialInputWindowS, not of its first row: one noisy sample of FT2 (0.4 % of 8 L/min) would
+// set the initial pressure 0.06 bar off, and that offset decays only at the pipe friction's rate
+// (seconds), so a fit would bend f1 to follow the noise of one sample.
 #pragma once
 
 #include <memory>
@@ -18,6 +22,9 @@
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
+
+// Window over which a replay averages the log's rig inputs for its initial steady state.
+inline constexpr double kInitialInputWindowS = 0.5;
 
 // The input columns of a log, SI, one value per row of `time_s`.
 struct LogInputColumns {

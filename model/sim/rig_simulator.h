@@ -159,6 +159,9 @@ class RigSampler {
 struct InputSignals {
   std::function<double(double)> piston_position_m;  // continuous in time
   std::function<RigInputs(double)> rig;             // held values (choke, pump, outlet)
+  // The inputs whose steady state the run starts from; rig(t0) if absent. A measured log's
+  // replay gives its inputs' mean over the first moments (log_inputs.h).
+  std::optional<RigInputs> initial;
 };
 
 struct RunResult {
