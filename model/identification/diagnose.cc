@@ -4,8 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
-#include <cstdio>
-#include <cstdlib>
 
 #include "model/effects/effect.h"
 
@@ -154,6 +152,33 @@ MeasuredLog Head(const MeasuredLog& log, double t_end) {
     head.channels.push_back({channel.channel, channel.unit, cut(channel.values_si)});
   }
   return head;
+}
+
+// Fills a candidate's scores from its Score on the scoring data: error, penalised error,
+// improvement over the baseline, the improvement's standard error from the blocks, significance.
+void Assess(const Scored& score, const Scored& base_score, double base_error,
+            CandidateResult* candidate) {
+  candidate->error = score.error;
+  candidate->penalised_error = score.error * (1.0 + kParameterPrice * candidate->extra_params);
+  candidate->channel_errors = score.channel_errors;
+  candidate->improvement = (base_error - score.error) / base_error;
+  // Spread of the block improvements: their standard error.
+  double mean = 0.0, squares = 0.0;
+  int blocks = 0;
+  for (int k = 0; k < kScoreBlocks; ++k) {
+    const double d = base_score.block_errors[k] - score.block_errors[k];
+    if (!std::isfinite(d)) continue;
+    mean += d, squares += d * d, ++blocks;
+  }
+  candidate->improvement_std_error = 0.0;
+  if (blocks >= 2) {
+    mean /= blocks;
+    const double variance = std::max(0.0, (squares - blocks * mean * mean) / (blocks - 1));
+    candidate->improvement_std_error = std::sqrt(variance / blocks);
+  }
+  const double absolute = base_error - candidate->penalised_error;
+  candidate->significant = blocks >= 2 && absolute > kMinRelativeImprovement * base_error &&
+                           absolute > kSignificanceZ * candidate->improvement_std_error;
 }
 
 // What a local search (scans, then Levenberg-Marquardt) needs to know, shared by the candidates
@@ -467,33 +492,8 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
       const Scored score = Score(log, *traces, score_begin, t_end);
       candidate.params = Named(*fit);
       candidate.fit_error = fit->error_after;
-      candidate.error = score.error;
-      candidate.penalised_error = score.error * (1.0 + kParameterPrice * candidate.extra_params);
-      candidate.channel_errors = score.channel_errors;
       candidate.fitted = fit->params;
-      candidate.improvement = (baseline.error - score.error) / baseline.error;
-      // Spread of the block improvements: their standard error.
-      double mean = 0.0, squares = 0.0;
-      int blocks = 0;
-      for (int k = 0; k < kScoreBlocks; ++k) {
-        const double d = base_score.block_errors[k] - score.block_errors[k];
-        if (!std::isfinite(d)) continue;
-        mean += d, squares += d * d, ++blocks;
-      }
-      if (std::getenv("MPDRIG_DEBUG_BLOCKS")) {
-        std::fprintf(stderr, "%s:", candidate.effect.c_str());
-        for (int k = 0; k < kScoreBlocks; ++k)
-          std::fprintf(stderr, " %.3f/%.3f", 100 * base_score.block_errors[k], 100 * score.block_errors[k]);
-        std::fprintf(stderr, "\n");
-      }
-      if (blocks >= 2) {
-        mean /= blocks;
-        const double variance = std::max(0.0, (squares - blocks * mean * mean) / (blocks - 1));
-        candidate.improvement_std_error = std::sqrt(variance / blocks);
-      }
-      const double absolute = baseline.error - candidate.penalised_error;
-      candidate.significant = blocks >= 2 && absolute > kMinRelativeImprovement * baseline.error &&
-                              absolute > 3.0 * candidate.improvement_std_error;
+      Assess(score, base_score, baseline.error, &candidate);
     });
   }
   report("candidates", 1.0);
@@ -513,31 +513,43 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
                    [](const CandidateResult& a, const CandidateResult& b) {
                      return a.penalised_error < b.penalised_error;
                    });
-  if (!diagnosis.candidates.empty() && diagnosis.candidates.front().significant) {
-    CandidateResult& winner = diagnosis.candidates.front();
-    // The winner's fit ran on the candidates' short budget: polish it with the baseline's.
-    report("polish", steps - 0.75);
-    std::vector<FitParameter> winner_parameters;
-    for (const NamedValue& value : winner.params) {
+  // The candidates' fits ran on a short budget: the leading ones get the baseline's, and the
+  // ranking is redone. A polished fit is kept when it fits the fitting data better (never chosen
+  // by the scoring data, which must stay unseen).
+  report("polish", steps - 0.75);
+  for (std::size_t i = 0; i < std::min(kPolishedCandidates, diagnosis.candidates.size()); ++i) {
+    CandidateResult& candidate = diagnosis.candidates[i];
+    if (!candidate.failure.empty()) continue;
+    std::vector<FitParameter> parameters;
+    for (const NamedValue& value : candidate.params) {
       auto parameter = DefaultFitParameter(value.key);
-      if (parameter.ok()) winner_parameters.push_back(*parameter);
+      if (parameter.ok()) parameters.push_back(*parameter);
     }
-    auto polished = FitParameters(fit_log, winner.fitted, winner_parameters, fit_options);
-    if (polished.ok()) {
-      diagnosis.replays += polished->replays;
-      auto traces = ReplayModel(log, polished->params, simulation);
-      ++diagnosis.replays;
-      if (traces.ok()) {
-        const Scored score = Score(log, *traces, score_begin, t_end);
-        if (score.error < winner.error) {
-          winner.params = Named(*polished);
-          winner.fit_error = polished->error_after;
-          winner.error = score.error;
-          winner.penalised_error = score.error * (1.0 + kParameterPrice * winner.extra_params);
-          winner.channel_errors = score.channel_errors;
-          winner.fitted = polished->params;
-          winner.improvement = (baseline.error - score.error) / baseline.error;
-        }
+    auto polished = FitParameters(fit_log, candidate.fitted, parameters, fit_options);
+    if (!polished.ok()) continue;
+    diagnosis.replays += polished->replays;
+    if (!(polished->error_after < candidate.fit_error)) continue;
+    auto traces = ReplayModel(log, polished->params, simulation);
+    ++diagnosis.replays;
+    if (!traces.ok()) continue;
+    candidate.params = Named(*polished);
+    candidate.fit_error = polished->error_after;
+    candidate.fitted = polished->params;
+    Assess(Score(log, *traces, score_begin, t_end), base_score, baseline.error, &candidate);
+  }
+  std::stable_sort(diagnosis.candidates.begin(), diagnosis.candidates.end(),
+                   [](const CandidateResult& a, const CandidateResult& b) {
+                     return a.penalised_error < b.penalised_error;
+                   });
+  if (!diagnosis.candidates.empty() && diagnosis.candidates.front().significant) {
+    const CandidateResult& winner = diagnosis.candidates.front();
+    // Others as good as the winner: significant, and the winner's lead over them below what
+    // would count as significant over the baseline.
+    for (std::size_t i = 1; i < diagnosis.candidates.size(); ++i) {
+      const CandidateResult& other = diagnosis.candidates[i];
+      if (other.significant && other.penalised_error - winner.penalised_error <
+                                   kMinRelativeImprovement * baseline.error) {
+        diagnosis.equivalent.push_back(other.effect);
       }
     }
     diagnosis.verdict = winner.effect;

@@ -95,8 +95,12 @@ int RunDiagnose(DiagnoseArgs args) {
     std::fprintf(summary, "%2zu. %s\n", i + 1,
                  DescribeCandidate(d.candidates[i], d.baseline).c_str());
   }
-  std::fprintf(summary, "verdict: %s (%d model runs, %.1f s)\n",
-               d.verdict ? d.verdict->c_str() : "no effect is significant", d.replays,
+  std::string equivalent;
+  for (const std::string& name : d.equivalent) equivalent += (equivalent.empty() ? "" : ", ") + name;
+  if (!equivalent.empty()) equivalent = "; as good: " + equivalent;
+  std::fprintf(summary, "verdict: %s%s (%d model runs, %.1f s)\n",
+               d.verdict ? d.verdict->c_str() : "no effect is significant", equivalent.c_str(),
+               d.replays,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
   return 0;
 }
@@ -133,7 +137,8 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "   `mpdrig effects` in turn, fits it with the base parameters, and scores it on the rest\n"
       "   of the log (data it was not fitted on), with a price of 1% per extra parameter,\n"
       "4. ranks them and says what each explains. `significant`: better than the base model by\n"
-      "   more than 5% and three standard errors (over 8 blocks of the scoring data).\n"
+      "   more than 10% and two standard errors (over 8 blocks of the scoring data); `as good`\n"
+      "   names significant candidates the verdict does not beat by that 10%.\n"
       "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
       "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
       "Progress on stderr; a summary on stdout.");

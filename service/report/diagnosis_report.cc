@@ -84,6 +84,9 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
     out << "}";
   }
   out << "],\"verdict\":" << (d.verdict ? Quote(*d.verdict) : std::string("null"));
+  out << ",\"equivalent\":[";
+  for (std::size_t i = 0; i < d.equivalent.size(); ++i) out << (i ? "," : "") << Quote(d.equivalent[i]);
+  out << "]";
   // Where the fitted base model fails: worst channels, worst bands, lags.
   const Comparison& cmp = d.baseline_comparison;
   std::vector<const ChannelMetrics*> channels;
@@ -138,6 +141,14 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
   if (winner != nullptr) {
     html << "<p class=\"verdict\">Missing effect: <b>" << EscapeHtml(winner->effect) << "</b>. "
          << EscapeHtml(DescribeCandidate(*winner, b)) << ".</p>\n";
+    if (!d.equivalent.empty()) {
+      std::string names;
+      for (const std::string& name : d.equivalent) names += (names.empty() ? "" : ", ") + name;
+      html << "<p>Explains the log as well (the verdict does not clearly beat it): <b>"
+           << EscapeHtml(names)
+           << "</b>. The log does not excite what tells them apart; see what each explains "
+              "below.</p>\n";
+    }
   } else {
     html << "<p class=\"verdict none\">No effect of the catalogue explains the remaining error "
             "beyond noise and extra freedom. Baseline error "

@@ -49,7 +49,8 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   const std::string text = ReadFile(json);
   for (const char* field : {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"",
                             "\"candidates\":[{\"effect\":", "\"significant\":true",
-                            "\"verdict\":\"sensor_lag\"", "\"noise_floor\":"}) {
+                            "\"verdict\":\"sensor_lag\"", "\"equivalent\":[",
+                            "\"held\":", "\"noise_floor\":"}) {
     EXPECT_NE(text.find(field), std::string::npos) << field << " in " << text.substr(0, 400);
   }
   // Ranked best first: the first candidate is the verdict.
@@ -88,6 +89,8 @@ TEST(DiagnoseCommandTest, RefusesBadInput) {
       << output;
   EXPECT_NE(RunShell(kExe + " diagnose " + log + " --candidates gremlins --json -", &output), 0);
   EXPECT_NE(output.find("unknown effect 'gremlins'; valid effects:"), std::string::npos) << output;
+  EXPECT_NE(RunShell(kExe + " synth --pressure-noise-pa -1 --out " + log, &output), 0);
+  EXPECT_NE(output.find("--pressure-noise-pa"), std::string::npos) << output;
   EXPECT_NE(RunShell(kExe + " synth --effect gremlins --out " + log, &output), 0);
   EXPECT_NE(output.find("valid effects"), std::string::npos) << output;
   {

@@ -40,8 +40,10 @@ fs::path TempDir() {
   return dir;
 }
 
-// The inputs of a lab run: piston `piston(t)` [m], choke 31 deg, pump 20 L/min, C1 0 barg.
-riglog::RigLog InputLog(const std::function<double(double)>& piston) {
+// The inputs of a lab run: piston `piston(t)` [m], choke 31 deg, pump 20 L/min (or
+// pump_lpm(row)), C1 0 barg.
+riglog::RigLog InputLog(const std::function<double(double)>& piston,
+                        const std::function<double(std::size_t)>& pump_lpm = {}) {
   riglog::RigLog log;
   const long count = std::lround(kDurationS * kRateHz);
   for (long i = 0; i <= count; ++i) log.time_s.push_back(i / kRateHz);
@@ -49,7 +51,7 @@ riglog::RigLog InputLog(const std::function<double(double)>& piston) {
   for (double t : log.time_s) {
     position.push_back(piston(t));
     choke.push_back(units::ChokeDegToFrac(31.0));
-    pump.push_back(units::LpmToM3ps(20.0));
+    pump.push_back(units::LpmToM3ps(pump_lpm ? pump_lpm(pump.size()) : 20.0));
     outlet.push_back(log.atmospheric_pressure_pa);
   }
   EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position).ok());
@@ -124,6 +126,47 @@ TEST(CompareTest, ReplayGivesExactlyWhatSimulateGives) {
       ASSERT_EQ(model->values_si[c][i], expected[i][log->channels[c].channel])
           << riglog::ChannelName(log->channels[c].channel) << " sample " << i;
     }
+  }
+}
+
+// A replay starts from the steady state of its inputs' mean over the first
+// kInitialInputWindowS, so one noisy first sample moves the initial state by its share of the
+// window only. Measured against a log whose pump flow is higher on every row: the initial C2 of
+// the log with only its first row that high moves by 1/N of that (N rows in the window; the
+// choke pressure is smooth in q, so linear to well under 10% for 2.5% of the flow), in both
+// replays (compare's pipeline and Simulate on SignalsFromLog).
+TEST(CompareTest, ReplayStartsFromTheMeanOfTheFirstInputs) {
+  const riglog::RigLog clean = InputLog(kPistonSine);
+  auto with_pump = [&](std::size_t rows, double lpm) {
+    return InputLog(kPistonSine, [=](std::size_t row) { return row < rows ? lpm : 20.0; });
+  };
+  std::size_t window_rows = 0;
+  while (clean.time_s[window_rows] <= clean.time_s[0] + kInitialInputWindowS) ++window_rows;
+  ASSERT_GT(window_rows, 10u);
+  const double spike_lpm = 20.5;
+  auto initial_c2 = [&](const riglog::RigLog& inputs, bool pipeline) {
+    if (!pipeline) return SimulateLog(inputs, RigParams{}, {0.0, 0.01}).front()[Channel::kC2];
+    const std::vector<RigSample> samples = SimulateLog(clean, RigParams{}, clean.time_s);
+    const std::string path = WriteMeasuredLog(inputs, samples, "first.csv");
+    auto log = LoadMeasuredLog(path);
+    EXPECT_TRUE(log.ok()) << log.status().message();
+    auto model = ReplayModel(*log, RigParams{}, SimulationOptions{});
+    EXPECT_TRUE(model.ok()) << model.status().message();
+    for (std::size_t c = 0; c < log->channels.size(); ++c) {
+      if (log->channels[c].channel == Channel::kC2) return model->values_si[c][0];
+    }
+    ADD_FAILURE() << "no C2";
+    return 0.0;
+  };
+  for (bool pipeline : {true, false}) {
+    SCOPED_TRACE(pipeline ? "compare's pipeline" : "Simulate on SignalsFromLog");
+    const double base = initial_c2(with_pump(0, 20.0), pipeline);
+    const double all = initial_c2(with_pump(clean.num_rows(), spike_lpm), pipeline) - base;
+    const double first = initial_c2(with_pump(1, spike_lpm), pipeline) - base;
+    ASSERT_GT(all, 1000.0);  // Pa: the higher flow's choke pressure
+    EXPECT_NEAR(first * static_cast<double>(window_rows) / all, 1.0, 0.1)
+        << "first row only: " << first << " Pa, every row: " << all << " Pa, " << window_rows
+        << " rows in the window";
   }
 }
 

@@ -77,11 +77,12 @@ std::string Ranking(const Diagnosis& d) {
   for (const CandidateResult& c : d.candidates) {
     char line[200];
     // error, and the improvement over its standard error (the significance test's z)
-    std::snprintf(line, sizeof(line), " %s %.4g(z%.1f)%s", c.effect.c_str(), 100.0 * c.error,
+    std::snprintf(line, sizeof(line), " %s %.4g(z%.1f)%s", c.effect.c_str(), 100.0 * c.penalised_error,
                   (d.baseline.error - c.penalised_error) / c.improvement_std_error,
                   c.significant ? "*" : "");
     out += line;
   }
+  for (const std::string& name : d.equivalent) out += " =" + name;
   return out;
 }
 
@@ -100,21 +101,21 @@ TEST(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
 
 class DiagnoseHiddenEffect : public ::testing::TestWithParam<std::string> {};
 
-// The two inlet compliances (a lumped hose, and the compressible heave-generator compartment
-// with its clearance flow) act at the same place and mostly the same way; on these logs diagnose
-// finds "a compliance at the inlet" reliably but does not reliably tell which (measured on the CI
-// seeds: hose_compliance ranked first in 1 of 3, piston_compressibility in 2 of 3, the other of
-// the two in the remaining cases). For them the test accepts either; issue 4 stays open on it.
-bool SameFamily(const std::string& hidden, const std::string& found) {
-  const auto inlet = [](const std::string& name) {
-    return name == "hose_compliance" || name == "piston_compressibility";
-  };
-  return found == hidden || (inlet(hidden) && inlet(found));
+// Ranked first: the verdict, or one of the candidates the diagnosis reports as explaining the
+// log as well (`equivalent`). On these logs the two inlet compliances are one such pair: the
+// compartment's own mode (piston_compressibility at water-like bulk moduli) lies far above the
+// rig's band, so it acts as a lumped compliance V/K at the inlet, as hose_compliance does, and
+// the diagnosis names both (measured on piston_compressibility seed 6: the true model scores
+// 1.177 %, the best hose fit 1.181 %).
+bool RankedFirst(const std::string& hidden, const Diagnosis& d) {
+  if (!d.verdict) return false;
+  return *d.verdict == hidden ||
+         std::find(d.equivalent.begin(), d.equivalent.end(), hidden) != d.equivalent.end();
 }
 
 TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
   const std::string effect = GetParam();
-  int detectable = 0, first_detectable = 0, first = 0;
+  int detectable = 0, first_detectable = 0, first = 0, alone = 0, wrong = 0;
   const int cases = CasesPerEffect();
   for (int seed = 1; seed <= cases; ++seed) {
     const Case c = RunCase(effect, seed);
@@ -127,9 +128,10 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n", effect.c_str(),
                 seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * without,
                 is_detectable ? "" : " not detectable", Ranking(d).c_str());
-    const bool ranked_first =
-        !d.candidates.empty() && d.verdict && SameFamily(effect, d.candidates.front().effect);
+    const bool ranked_first = RankedFirst(effect, d);
     first += ranked_first;
+    alone += d.verdict && *d.verdict == effect;
+    wrong += d.verdict && !ranked_first;
     if (!is_detectable) continue;
     ++detectable;
     if (!ranked_first) continue;
@@ -140,13 +142,14 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     EXPECT_TRUE(after <= 0.5 * d.baseline.error || after <= 1.1 * without)
         << "seed " << seed << ": error " << d.baseline.error << " -> " << after;
   }
-  std::printf("%s: ranked first and significant in %d of %d detectable cases, %d of %d in all\n",
-              effect.c_str(), first_detectable, detectable, first, cases);
+  std::printf(
+      "%s: ranked first and significant in %d of %d detectable cases, %d of %d in all (the "
+      "verdict alone in %d)\n",
+      effect.c_str(), first_detectable, detectable, first, cases, alone);
   EXPECT_GE(first_detectable, detectable - detectable / 10) << "at least 9 in 10";
-  // A subtle effect that the refitted base model mostly absorbs (helical friction, a little
-  // entrained air at the rig's pressures: "not detectable" above) must still not lose to
-  // another: first in at least two thirds of all cases.
-  EXPECT_GE(3 * first, 2 * cases) << "ranked first in " << first << " of " << cases;
+  // Where the effect is too weak to show, the diagnosis may find nothing, but it must not name
+  // another effect: a wrong verdict in at most 1 case in 10 (0 of the CI's 3).
+  EXPECT_LE(wrong, cases / 10) << wrong << " wrong verdicts";
 }
 
 std::vector<std::string> AllEffects() {
