@@ -24,7 +24,7 @@ for effect in "${effects[@]}"; do
     "${mpdrig}" diagnose "${log}" --json "${work}/${effect}.json" --quiet >"${work}/summary"
   read -r wall user sys rss <"${work}/time"
   runs="$(sed -n 's/.*(\([0-9]*\) model runs.*/\1/p' "${work}/summary")"
-  verdict="$(sed -n 's/^verdict: \([^ ]*\).*/\1/p' "${work}/summary")"
+  verdict="$(sed -n 's/^verdict: \([^ ;]*\).*/\1/p' "${work}/summary")"
   awk -v e="${effect}" -v w="${wall}" -v u="${user}" -v s="${sys}" -v r="${rss}" \
     -v n="${runs}" -v v="${verdict}" 'BEGIN { printf "%-22s %8.1f %8.1f %8.0f %7s  %s\n", e, w, u + s, r / 1024, n, v }'
 done

@@ -213,11 +213,18 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
   const bool has_effect = parameters.size() > context.base_count;
   const std::vector<double> factors =
       has_effect ? std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0} : std::vector<double>{1.0};
+  // Every scan point, for the second start below.
+  struct Point {
+    double error;
+    RigParams params;
+  };
+  std::vector<Point> points;
   auto consider = [&](const RigParams& trial) {
     auto traces = ReplayModel(*context.fit_log, trial, context.simulation);
     ++*replays;
     if (!traces.ok()) return;
     const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
+    points.push_back({error, trial});
     if (error < best_error) best_error = error, best = trial;
   };
   for (int origin = 0; origin < 2; ++origin) {
@@ -261,8 +268,27 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
       consider(trial);
     }
   }
+  // Two local fits: from the best scan point, and from the best one in another valley of the
+  // wave speed (more than kSecondStartSpan away). The effect's strength and the wave speed trade
+  // against each other (a compliance or a lag lowers the resonances as a lower c does), and the
+  // scan's best point can sit in the wrong valley of that trade: measured on a hidden
+  // hose_compliance (seed 2), the fit from the best point ended 0.9% high in c with 10% more
+  // error on the fitting data than the fit from the second start, which found the truth.
+  const Point* second = nullptr;
+  for (const Point& point : points) {
+    const bool elsewhere =
+        std::fabs(point.params.wave_speed_mps / best.wave_speed_mps - 1.0) > kSecondStartSpan;
+    if (elsewhere && (second == nullptr || point.error < second->error)) second = &point;
+  }
   auto fit = FitParameters(*context.fit_log, best, parameters, context.fit_options);
   if (fit.ok()) *replays += fit->replays;
+  if (second != nullptr) {
+    auto other = FitParameters(*context.fit_log, second->params, parameters, context.fit_options);
+    if (other.ok()) {
+      *replays += other->replays;
+      if (!fit.ok() || other->error_after < fit->error_after) return other;
+    }
+  }
   return fit;
 }
 

@@ -60,6 +60,9 @@ inline constexpr double kFineScanSpan = 0.025;
 // ... and a finest one over +-kFinestScanSpan: the valley in c can be narrower than 0.5% (light
 // damping, many reflections over a long log).
 inline constexpr double kFinestScanSpan = 0.005;
+// A local search also fits from its best scan point in another valley of the wave speed: more
+// than this (relative) away from the best.
+inline constexpr double kSecondStartSpan = 0.0075;
 
 struct DiagnoseOptions {
   SimulationOptions simulation;  // cells: kDiagnoseCells unless set

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <deque>
 #include <sstream>
 
@@ -571,8 +572,11 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   // Steps below a tenth of the difference step are below what the derivatives resolve.
   solver.parameter_tolerance = 0.1 * options.relative_step;
   solver.num_threads = 1;
-  solver.logging_type = std::getenv("MPDRIG_CERES_LOG") ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-  solver.minimizer_progress_to_stdout = std::getenv("MPDRIG_CERES_LOG") != nullptr;
+  // MPDRIG_CERES_LOG=1 in the environment prints Ceres's per-iteration table to stdout (trust
+  // region ratio, step, radius): the way to see why a fit stops.
+  const bool ceres_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;
+  solver.logging_type = ceres_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver.minimizer_progress_to_stdout = ceres_log;
   ProgressCallback callback(residuals, options.progress);
   solver.callbacks.push_back(&callback);
   std::string options_error;

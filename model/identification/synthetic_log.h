@@ -2,8 +2,12 @@
 // `diagnose` on data whose answer is known): the model with one catalogue effect switched on at
 // a random strength, perturbed base parameters, the lab's kind of excitation and sensor noise.
 //
-// Excitation (what the lab runs): piston sines at a few frequencies and a sweep, choke steps,
-// pump flow steps (on/off between two levels). Noise: white, Gaussian, per channel kind.
+// Excitation (what the lab runs): piston sines at two frequencies (each sines part at a full and
+// then a lower amplitude), a sweep, choke steps, pump flow steps between two levels. Every
+// change is smooth (tapered piston joins, 0.5 s choke and pump transitions): the model is
+// replayed on a grid whose time step is about a sample, and a jump would leave the grid's
+// fingerprint in the log (synthetic_log.cc). Noise: white, Gaussian, per channel kind, on the
+// inputs too (the model replays them as measured).
 // Deterministic for a seed (std::mt19937_64 with explicit distributions written out here, so the
 // same seed gives the same log with any standard library).
 #pragma once
