@@ -571,6 +571,12 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   solver.function_tolerance = options.function_tolerance;
   // Steps below a tenth of the difference step are below what the derivatives resolve.
   solver.parameter_tolerance = 0.1 * options.relative_step;
+  // With bounds, Ceres runs a projected Armijo line search on every step. Its default cubic
+  // interpolation asks for the gradient at each trial point, a whole Jacobian (p replays) here;
+  // quadratic interpolation needs only costs, and a few contractions are enough (measured: about
+  // half the replays per fit).
+  solver.line_search_interpolation_type = ceres::QUADRATIC;
+  solver.max_num_line_search_step_size_iterations = 4;
   solver.num_threads = 1;
   // MPDRIG_CERES_LOG=1 in the environment prints Ceres's per-iteration table to stdout (trust
   // region ratio, step, radius): the way to see why a fit stops.
