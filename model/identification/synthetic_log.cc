@@ -155,12 +155,20 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   excitation.piston_amp_m = low_pressure ? random.Uniform(0.06, 0.1) : random.Uniform(0.03, 0.05);
   excitation.sine_hz[0] = random.Uniform(0.1, 0.2);
   excitation.sine_hz[1] = random.Uniform(0.3, 0.5);
-  for (double t = 0.0; t < options.duration_s; t += random.Uniform(10.0, 20.0)) {
+  // Step tests: the choke and the pump alternate between a low and a high band every 8-14 s
+  // (the pump a few seconds after the choke), so every step is a step of a few degrees or L/min
+  // (uniform levels in one band could step by nothing, and a log without a real choke step says
+  // nothing about the choke's dynamics).
+  const double choke_bands[2][2] = {{low_pressure ? 40.0 : 28.0, low_pressure ? 48.0 : 30.0},
+                                    {low_pressure ? 52.0 : 31.0, low_pressure ? 60.0 : 33.0}};
+  const double pump_bands[2][2] = {{low_pressure ? 2.0 : 6.0, low_pressure ? 2.8 : 7.5},
+                                   {low_pressure ? 3.2 : 8.5, low_pressure ? 4.0 : 10.0}};
+  int band = 0;
+  for (double t = 0.0; t < options.duration_s; t += random.Uniform(8.0, 14.0), band ^= 1) {
     excitation.choke_steps.emplace_back(
-        t, low_pressure ? random.Uniform(40.0, 60.0) : random.Uniform(28.0, 33.0));
-    excitation.pump_steps.emplace_back(
-        t + random.Uniform(3.0, 7.0),
-        low_pressure ? random.Uniform(2.0, 4.0) : random.Uniform(6.0, 10.0));
+        t, random.Uniform(choke_bands[band][0], choke_bands[band][1]));
+    excitation.pump_steps.emplace_back(t + random.Uniform(3.0, 6.0),
+                                       random.Uniform(pump_bands[band][0], pump_bands[band][1]));
   }
   excitation.pump_steps.insert(excitation.pump_steps.begin(), {0.0, low_pressure ? 3.0 : 8.0});
 
