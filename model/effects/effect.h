@@ -75,6 +75,10 @@ struct EffectParamInfo {
   double min_value;  // inclusive: physical plausibility, and the range `fit` searches
   double max_value;
   bool fitted;  // diagnose fits it (the effect's strength); the others stay at their defaults
+  // The range the lab may meet, where it differs from [default/2, 2 default] (0, 0: that one):
+  // where `mpdrig synth` draws a hidden effect's strength (log-uniformly).
+  double plausible_min = 0.0;
+  double plausible_max = 0.0;
 };
 
 // What an effect is created with.

@@ -193,9 +193,26 @@ struct SearchContext {
   std::size_t base_count = 0;  // parameters[0, base_count) are base parameters
 };
 
+// The catalogue's entry for an effect parameter key ("effect.param") if it has a plausible
+// range (EffectParamInfo::plausible_min/max), else null.
+const EffectParamInfo* PlausibleRange(const std::string& key) {
+  const std::size_t dot = key.find('.');
+  if (dot == std::string::npos) return nullptr;
+  const EffectInfo* effect = FindEffectInfo(key.substr(0, dot));
+  if (effect == nullptr) return nullptr;
+  for (const EffectParamInfo& param : effect->params) {
+    if (param.key == key.substr(dot + 1) && param.plausible_min > 0.0 &&
+        param.plausible_min < param.plausible_max) {
+      return &param;
+    }
+  }
+  return nullptr;
+}
+
 // Local fit of `parameters` (the base ones, then the effect's) from the fitted baseline `params`
 // (with the effect switched on). Starts from a scan: the effect's strength over its plausible
-// range (its fitted parameters together, x {1/4, 1/2, 1, 2, 4} of their defaults) and, for each,
+// range (its fitted parameters together, x {1/4, 1/2, 1, 2, 4} of their defaults, or five
+// log-spaced points of EffectParamInfo's plausible range where it has one) and, for each,
 // the fine wave-speed scan. An effect that slows or delays the waves (added inertia, a lag, a
 // compliance) moves the best wave speed; a local fit from the baseline's c can trade one for the
 // other and stop short. Two starting points for the other base parameters: the baseline's
@@ -238,9 +255,17 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
           valid = false;
           break;
         }
-        const double scaled = *value != 0.0 ? *value * factor
-                                            : parameter.lower +
-                                                  0.05 * factor * (parameter.upper - parameter.lower);
+        double scaled = *value != 0.0 ? *value * factor
+                                      : parameter.lower +
+                                            0.05 * factor * (parameter.upper - parameter.lower);
+        // A strength whose plausible range spans decades (trapped air in the compartment, free
+        // gas) is scanned over that range, log-spaced, as the factors span theirs.
+        if (const EffectParamInfo* info = PlausibleRange(parameter.key)) {
+          const double position = std::log(factor / factors.front()) /
+                                  std::log(factors.back() / factors.front());
+          scaled = info->plausible_min *
+                   std::pow(info->plausible_max / info->plausible_min, position);
+        }
         valid = SetParamValue(&strength, parameter.key,
                               std::clamp(scaled, parameter.lower, parameter.upper))
                     .ok();

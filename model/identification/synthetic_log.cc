@@ -129,7 +129,12 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
         lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
       lo = std::max(lo, param.min_value);
       hi = std::min(hi, param.max_value);
-      const double value = effect_random.Uniform(lo, hi);
+      double value = effect_random.Uniform(lo, hi);
+      if (param.plausible_min > 0.0 && param.plausible_min < param.plausible_max) {
+        // Log-uniform over the plausible range (it spans decades).
+        value = param.plausible_min *
+                std::pow(param.plausible_max / param.plausible_min, effect_random.Uniform(0.0, 1.0));
+      }
       setting.values.emplace_back(std::string(param.key), value);
       description << " " << param.key << "=" << value;
     }

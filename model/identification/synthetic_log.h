@@ -51,7 +51,9 @@ struct SyntheticLog {
 };
 
 // The hidden effect's fitted parameters are drawn uniformly in [default / 2, 2 default] (within
-// the effect's bounds); an effect with default 0 draws in the lower fifth of its range. The same
+// the effect's bounds), or log-uniformly in their plausible range where the catalogue gives one
+// (EffectParamInfo::plausible_min/max); an effect with default 0 draws in the lower fifth of its
+// range. The same
 // seed with and without a hidden effect gives the same base parameters, excitation and noise.
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options);
 

@@ -12,6 +12,8 @@
 // model's scoring error on the log with the effect exceeds that on the log without it by
 // kDetectableMargin. An effect the base parameters can absorb (e.g. a tiny lag taken up by a
 // slightly lower wave speed) is not detectable from the log, and no method could rank it.
+// Where it is not detectable, the diagnosis may find nothing but must not name another effect
+// (a wrong verdict in at most 1 case in 10).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
