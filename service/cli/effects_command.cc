@@ -30,10 +30,15 @@ int RunEffects(const std::string& only) {
       const std::string key = std::string(info->name) + "." + std::string(param.key);
       char range[64];
       std::snprintf(range, sizeof(range), "[%g, %g]", param.min_value, param.max_value);
-      std::printf("  %-34s %-6.*s default %-9.4g %-16s %.*s%s\n", key.c_str(),
+      char plausible[64] = "";
+      if (param.plausible_min > 0.0 && param.plausible_min < param.plausible_max) {
+        std::snprintf(plausible, sizeof(plausible), "; plausible on the rig %g..%g",
+                      param.plausible_min, param.plausible_max);
+      }
+      std::printf("  %-34s %-6.*s default %-9.4g %-16s %.*s%s%s\n", key.c_str(),
                   static_cast<int>(param.unit.size()), param.unit.data(), param.default_value,
                   range, static_cast<int>(param.description.size()), param.description.data(),
-                  param.fitted ? " (diagnose fits it)" : "");
+                  param.fitted ? " (diagnose fits it)" : "", plausible);
     }
     std::printf("\n");
   }
