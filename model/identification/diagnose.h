@@ -38,9 +38,9 @@ namespace mpdrig {
 
 inline constexpr double kParameterPrice = 0.01;          // 1% of the error per extra parameter
 // Significance is first a matter of size: on logs without a hidden effect no candidate's
-// penalised error was more than 5% below the baseline's (10 synthetic logs x 9 candidates; the
-// replay of noisy inputs lets a smoothing effect gain a little), while an effect that the
-// refitted base model cannot absorb leaves 20% or more to gain (tests/.../diagnose_test.cc).
+// penalised error was more than 6.9% below the baseline's (10 synthetic logs x 9 candidates; the
+// replay of noisy inputs lets a smoothing effect gain a little), while a hidden effect that the
+// refitted base model cannot absorb left 21% or more to gain (diagnose_test, 10 seeds).
 inline constexpr double kMinRelativeImprovement = 0.10;  // 10% of the baseline's scoring error
 inline constexpr int kScoreBlocks = 8;
 // ... and of consistency: the improvement beyond this many of its standard errors over the
