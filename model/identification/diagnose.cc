@@ -255,16 +255,16 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
           valid = false;
           break;
         }
-        double scaled = *value != 0.0 ? *value * factor
-                                      : parameter.lower +
-                                            0.05 * factor * (parameter.upper - parameter.lower);
+        double scaled = *value != 0.0
+                            ? *value * factor
+                            : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
         // A strength whose plausible range spans decades (trapped air in the compartment, free
         // gas) is scanned over that range, log-spaced, as the factors span theirs.
         if (const EffectParamInfo* info = PlausibleRange(parameter.key)) {
-          const double position = std::log(factor / factors.front()) /
-                                  std::log(factors.back() / factors.front());
-          scaled = info->plausible_min *
-                   std::pow(info->plausible_max / info->plausible_min, position);
+          const double position =
+              std::log(factor / factors.front()) / std::log(factors.back() / factors.front());
+          scaled =
+              info->plausible_min * std::pow(info->plausible_max / info->plausible_min, position);
         }
         valid = SetParamValue(&strength, parameter.key,
                               std::clamp(scaled, parameter.lower, parameter.upper))

@@ -36,7 +36,7 @@
 
 namespace mpdrig {
 
-inline constexpr double kParameterPrice = 0.01;          // 1% of the error per extra parameter
+inline constexpr double kParameterPrice = 0.01;  // 1% of the error per extra parameter
 // Significance is first a matter of size: on logs without a hidden effect no candidate's
 // penalised error was more than 6.9% below the baseline's (10 synthetic logs x 9 candidates; the
 // replay of noisy inputs lets a smoothing effect gain a little), while a hidden effect that the
@@ -112,9 +112,9 @@ struct Diagnosis {
   double fit_end_s = 0.0;    // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
   double noise_floor = 0.0;  // estimated measurement noise as a mean NRMSE (second differences)
   CandidateResult baseline;  // effect ""
-  Comparison baseline_comparison;               // fitted baseline over the whole log
-  std::vector<CandidateResult> candidates;      // ranked best first
-  std::optional<std::string> verdict;           // the missing effect, if one is significant
+  Comparison baseline_comparison;           // fitted baseline over the whole log
+  std::vector<CandidateResult> candidates;  // ranked best first
+  std::optional<std::string> verdict;       // the missing effect, if one is significant
   // Other significant candidates that explain the log as well as the verdict: the verdict's lead
   // over them is below kMinRelativeImprovement of the baseline error (e.g. the two inlet
   // compliances, hose_compliance and piston_compressibility, where the log does not excite

@@ -71,7 +71,7 @@ struct FitResult {
   std::vector<std::string> keys;  // in the order of the parameters given
   std::vector<double> initial;    // start values
   std::vector<double> estimates;
-  std::vector<double> standard_errors;           // NaN where J^T J is singular (unidentifiable)
+  std::vector<double> standard_errors;  // NaN where J^T J is singular (unidentifiable)
   // True where the parameter did not move the residuals at the start (relative change below
   // kNoInfluence for its difference step): it was held at its start value, not fitted.
   std::vector<bool> held;

@@ -88,8 +88,7 @@ double PistonAt(const Excitation& e, double duration, double t) {
 
 // The level of a sequence of (time, level) steps at t, each step a raised-cosine transition
 // over `transition_s` from the level before it (smooth: no kink for a sharp front to start from).
-double Stepped(const std::vector<std::pair<double, double>>& steps, double t,
-               double transition_s) {
+double Stepped(const std::vector<std::pair<double, double>>& steps, double t, double transition_s) {
   double value = steps.front().second;
   for (const auto& [time, level] : steps) {
     if (t <= time) break;
@@ -132,8 +131,8 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
       double value = effect_random.Uniform(lo, hi);
       if (param.plausible_min > 0.0 && param.plausible_min < param.plausible_max) {
         // Log-uniform over the plausible range (it spans decades).
-        value = param.plausible_min *
-                std::pow(param.plausible_max / param.plausible_min, effect_random.Uniform(0.0, 1.0));
+        value = param.plausible_min * std::pow(param.plausible_max / param.plausible_min,
+                                               effect_random.Uniform(0.0, 1.0));
       }
       setting.values.emplace_back(std::string(param.key), value);
       description << " " << param.key << "=" << value;
@@ -170,8 +169,8 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
                                    {low_pressure ? 3.2 : 8.5, low_pressure ? 4.0 : 10.0}};
   int band = 0;
   for (double t = 0.0; t < options.duration_s; t += random.Uniform(8.0, 14.0), band ^= 1) {
-    excitation.choke_steps.emplace_back(
-        t, random.Uniform(choke_bands[band][0], choke_bands[band][1]));
+    excitation.choke_steps.emplace_back(t,
+                                        random.Uniform(choke_bands[band][0], choke_bands[band][1]));
     excitation.pump_steps.emplace_back(t + random.Uniform(3.0, 6.0),
                                        random.Uniform(pump_bands[band][0], pump_bands[band][1]));
   }

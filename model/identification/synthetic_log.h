@@ -37,8 +37,8 @@ struct SyntheticLogOptions {
   // shows; unset: for a hidden column_separation only. Set it to compare a log with the same
   // excitation without the effect.
   std::optional<bool> low_pressure;
-  double pressure_noise_pa = 300.0;          // 0.003 bar, transmitters of 0.1% of 3-10 bar span
-  double flow_noise_m3ps = 5.0e-7;           // 0.03 L/min
+  double pressure_noise_pa = 300.0;  // 0.003 bar, transmitters of 0.1% of 3-10 bar span
+  double flow_noise_m3ps = 5.0e-7;   // 0.03 L/min
   double piston_noise_m = 2.0e-5;
   double choke_noise_deg = 0.01;  // position feedback; near 30 deg G changes 15%/deg, so
                                   // more would swamp C2 with the replay of the noise itself

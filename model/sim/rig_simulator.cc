@@ -253,9 +253,8 @@ Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions
   }
   const double t0 = output_times.front();
   const double t_end = output_times.back();
-  auto simulator =
-      RigSimulator::Create(params, options, inputs.initial.value_or(inputs.rig(t0)),
-                           inputs.piston_position_m(t0), t0);
+  auto simulator = RigSimulator::Create(params, options, inputs.initial.value_or(inputs.rig(t0)),
+                                        inputs.piston_position_m(t0), t0);
   if (!simulator.ok()) return simulator.status();
   RigSampler sampler(std::move(simulator).value());
 

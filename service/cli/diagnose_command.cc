@@ -96,7 +96,8 @@ int RunDiagnose(DiagnoseArgs args) {
                  DescribeCandidate(d.candidates[i], d.baseline).c_str());
   }
   std::string equivalent;
-  for (const std::string& name : d.equivalent) equivalent += (equivalent.empty() ? "" : ", ") + name;
+  for (const std::string& name : d.equivalent)
+    equivalent += (equivalent.empty() ? "" : ", ") + name;
   if (!equivalent.empty()) equivalent = "; as good: " + equivalent;
   std::fprintf(summary, "verdict: %s%s (%d model runs, %.1f s)\n",
                d.verdict ? d.verdict->c_str() : "no effect is significant", equivalent.c_str(),

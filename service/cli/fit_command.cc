@@ -168,9 +168,9 @@ void PrintSummary(const FitResult& fit, const std::vector<FitParameter>& paramet
     std::printf("%-*s  %12.6g  %12.6g  +- %8.3g  [%g, %g]%s\n", w, fit.keys[j].c_str(),
                 fit.initial[j], fit.estimates[j], fit.standard_errors[j], parameters[j].lower,
                 parameters[j].upper,
-                fit.held[j]    ? "  held: no influence on this log"
-                : at_bound ? "  at a bound"
-                           : "");
+                fit.held[j] ? "  held: no influence on this log"
+                : at_bound  ? "  at a bound"
+                            : "");
   }
   if (fit.keys.size() > 1) {
     std::printf("correlation:\n");
@@ -270,7 +270,8 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       "with standard errors (from J^T J at the optimum), their correlations, and the error\n"
       "before and after. A parameter that does not change the replay at all (the choke leak\n"
       "while the choke is open: it is only the characteristic's floor) is held at its start\n"
-      "value and marked `held`. Runs at 50 cells unless --cells says otherwise (a fit replays the log\n"
+      "value and marked `held`. Runs at 50 cells unless --cells says otherwise (a fit replays the "
+      "log\n"
       "dozens of times); compare the fitted config at the same --cells.\n"
       "Example (the thesis's chapter 8-9 tuning):\n"
       "  mpdrig fit lab.csv --params wave_speed_mps,friction_f1_per_s,choke_leak_m2 \\\n"

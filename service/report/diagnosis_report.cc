@@ -85,7 +85,8 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   }
   out << "],\"verdict\":" << (d.verdict ? Quote(*d.verdict) : std::string("null"));
   out << ",\"equivalent\":[";
-  for (std::size_t i = 0; i < d.equivalent.size(); ++i) out << (i ? "," : "") << Quote(d.equivalent[i]);
+  for (std::size_t i = 0; i < d.equivalent.size(); ++i)
+    out << (i ? "," : "") << Quote(d.equivalent[i]);
   out << "]";
   // Where the fitted base model fails: worst channels, worst bands, lags.
   const Comparison& cmp = d.baseline_comparison;

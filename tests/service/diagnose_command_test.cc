@@ -47,10 +47,10 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   EXPECT_NE(output.find("verdict: sensor_lag"), std::string::npos) << output;
   EXPECT_NE(output.find("diagnose: 100% done"), std::string::npos) << "progress on stderr";
   const std::string text = ReadFile(json);
-  for (const char* field : {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"",
-                            "\"candidates\":[{\"effect\":", "\"significant\":true",
-                            "\"verdict\":\"sensor_lag\"", "\"equivalent\":[",
-                            "\"held\":", "\"noise_floor\":"}) {
+  for (const char* field :
+       {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"",
+        "\"candidates\":[{\"effect\":", "\"significant\":true", "\"verdict\":\"sensor_lag\"",
+        "\"equivalent\":[", "\"held\":", "\"noise_floor\":"}) {
     EXPECT_NE(text.find(field), std::string::npos) << field << " in " << text.substr(0, 400);
   }
   // Ranked best first: the first candidate is the verdict.
