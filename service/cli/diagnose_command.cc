@@ -182,26 +182,20 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   synth_command->add_option("--rate-hz", synth->options.rate_hz, "sample rate [Hz]")
       ->capture_default_str();
-  synth_command
-      ->add_option("--pressure-noise-pa", synth->options.pressure_noise_pa,
-                   "standard deviation of the pressure transmitters' white noise [Pa]")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  synth_command
-      ->add_option("--flow-noise-m3ps", synth->options.flow_noise_m3ps,
-                   "standard deviation of the flow meters' white noise [m^3/s]")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  synth_command
-      ->add_option("--piston-noise-m", synth->options.piston_noise_m,
-                   "standard deviation of the piston position's white noise [m]")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  synth_command
-      ->add_option("--choke-noise-deg", synth->options.choke_noise_deg,
-                   "standard deviation of the choke position's white noise [deg]")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+  // White noise on each kind of channel, as standard deviations (0: a clean log).
+  const auto add_noise = [&](const char* name, double* sigma, const char* what, const char* unit) {
+    synth_command
+        ->add_option(
+            name, *sigma,
+            std::string("white noise on the ") + what + ", standard deviation [" + unit + "]")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+  };
+  add_noise("--pressure-noise-pa", &synth->options.pressure_noise_pa, "pressure transmitters",
+            "Pa");
+  add_noise("--flow-noise-m3ps", &synth->options.flow_noise_m3ps, "flow meters", "m^3/s");
+  add_noise("--piston-noise-m", &synth->options.piston_noise_m, "piston position", "m");
+  add_noise("--choke-noise-deg", &synth->options.choke_noise_deg, "choke position", "deg");
   synth_command->add_option("--out", synth->out_path, "rig log to write")->required();
   synth_command->callback([synth, exit_code]() { *exit_code = RunSynth(*synth); });
 }
