@@ -9,7 +9,10 @@
 //    of the fitted baseline over the whole log (channels, bands, profile, lag, residual
 //    correlation) show where it fails.
 // 3. Each candidate effect: switched on, its fitted parameters (EffectParamInfo::fitted) fitted
-//    together with the base ones, from the baseline's estimates and the effect's defaults.
+//    together with the base ones: a scan of its strength and the wave speed from two starts (the
+//    baseline's estimates, the start values), then local fits from the best scan point and from
+//    the best one in another wave-speed valley. The baseline gets the same search without an
+//    effect and keeps it if it fits better, so that no candidate wins by its search alone.
 // 4. Score: the compare error (mean NRMSE over the compared channels) on the scoring data, with a
 //    price for freedom: penalised = error (1 + kParameterPrice extra parameters). Ranked by the
 //    penalised score. A candidate is `significant` when it beats the baseline on the scoring
