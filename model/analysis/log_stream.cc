@@ -268,20 +268,13 @@ Status RowPipeline::Emit() {
       // kInitialInputWindowS (log_inputs.h), not from its first, noisy row. Every row of the
       // first smoothing block is still held here, and that block spans the window unless the
       // log is sampled above 8 kHz (then the rows it has).
-      RigInputs initial{0.0, 0.0, 0.0};  // sums first
-      long count = 0;
-      for (const Entry& entry : rows_) {
-        if (entry.row.time_s > first_.row.time_s + kInitialInputWindowS) break;
-        initial.choke_opening_frac += entry.row.choke_opening_frac;
-        initial.pump_flow_m3ps += entry.row.pump_flow_m3ps;
-        initial.outlet_pressure_pa += entry.row.outlet_pressure_pa;
-        ++count;
+      InitialInputs initial;
+      for (const Entry& held : rows_) {
+        if (held.row.time_s > first_.row.time_s + kInitialInputWindowS) break;
+        initial.Add(held.row.time_s, {held.row.choke_opening_frac, held.row.pump_flow_m3ps,
+                                      held.row.outlet_pressure_pa});
       }
-      MPDRIG_CHECK(count > 0);
-      initial.choke_opening_frac /= count;
-      initial.pump_flow_m3ps /= count;
-      initial.outlet_pressure_pa /= count;
-      auto simulator = RigSimulator::Create(replay_->params, replay_->options, initial,
+      auto simulator = RigSimulator::Create(replay_->params, replay_->options, initial.Mean(),
                                             first_.smoothed_m, first_.row.time_s);
       if (!simulator.ok()) return simulator.status();
       sampler_.emplace(std::move(simulator).value());

@@ -67,6 +67,21 @@ class SharedInputs {
 
 }  // namespace
 
+void InitialInputs::Add(double time_s, const RigInputs& row) {
+  if (count_ == 0) first_time_s_ = time_s;
+  if (time_s > first_time_s_ + kInitialInputWindowS) return;
+  sum_.choke_opening_frac += row.choke_opening_frac;
+  sum_.pump_flow_m3ps += row.pump_flow_m3ps;
+  sum_.outlet_pressure_pa += row.outlet_pressure_pa;
+  ++count_;
+}
+
+RigInputs InitialInputs::Mean() const {
+  MPDRIG_CHECK(count_ > 0);
+  const double n = static_cast<double>(count_);
+  return {sum_.choke_opening_frac / n, sum_.pump_flow_m3ps / n, sum_.outlet_pressure_pa / n};
+}
+
 Result<LogInputColumns> InputColumnsFromLog(const riglog::RigLog& log, const std::string& path) {
   LogInputColumns columns;
   auto piston = RequireFinite(log, "piston_position", path);
@@ -105,21 +120,17 @@ Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::stri
                columns.pump_flow_m3ps.size() == n && columns.outlet_pressure_pa.size() == n);
   std::vector<double> smoothed = SmoothedPistonPosition(columns, smoothing_s);
   // As RowPipeline (compare's replay): the mean over the first kInitialInputWindowS.
-  RigInputs initial{0.0, 0.0, 0.0};  // sums first
-  std::size_t count = 0;
-  for (; count < n && columns.time_s[count] <= columns.time_s[0] + kInitialInputWindowS; ++count) {
-    initial.choke_opening_frac += columns.choke_opening_frac[count];
-    initial.pump_flow_m3ps += columns.pump_flow_m3ps[count];
-    initial.outlet_pressure_pa += columns.outlet_pressure_pa[count];
+  InitialInputs initial;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (columns.time_s[i] > columns.time_s[0] + kInitialInputWindowS) break;
+    initial.Add(columns.time_s[i], {columns.choke_opening_frac[i], columns.pump_flow_m3ps[i],
+                                    columns.outlet_pressure_pa[i]});
   }
-  initial.choke_opening_frac /= count;
-  initial.pump_flow_m3ps /= count;
-  initial.outlet_pressure_pa /= count;
   auto shared = std::make_shared<SharedInputs>(std::move(columns), std::move(smoothed));
   InputSignals signals;
   signals.piston_position_m = [shared](double t) { return shared->Piston(t); };
   signals.rig = [shared](double t) { return shared->Rig(t); };
-  signals.initial = initial;
+  signals.initial = initial.Mean();
   return signals;
 }
 

@@ -26,6 +26,20 @@ namespace mpdrig {
 // Window over which a replay averages the log's rig inputs for its initial steady state.
 inline constexpr double kInitialInputWindowS = 0.5;
 
+// The mean of a log's rig inputs over its first kInitialInputWindowS: what every replay (Simulate
+// on SignalsFromColumns, compare's RowPipeline) starts its steady state from. Rows in time order;
+// those past the window are ignored.
+class InitialInputs {
+ public:
+  void Add(double time_s, const RigInputs& row);
+  RigInputs Mean() const;  // after at least one row
+
+ private:
+  double first_time_s_ = 0.0;
+  long count_ = 0;
+  RigInputs sum_{0.0, 0.0, 0.0};
+};
+
 // The input columns of a log, SI, one value per row of `time_s`.
 struct LogInputColumns {
   std::vector<double> time_s;

@@ -128,11 +128,18 @@ void ExpectValidCorrelation(const FitResult& fit) {
   }
 }
 
-TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
+// The rig the generated logs of the base-parameter fits come from: c, f1 and leak away from the
+// thesis values the fits start at.
+RigParams Truth() {
   RigParams truth;
   truth.wave_speed_mps = 1000.0;
   truth.friction_f1_per_s = 0.3;
   truth.choke_leak_m2 = 1.0e-6;
+  return truth;
+}
+
+TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
+  const RigParams truth = Truth();
   const MeasuredLog log = MakeLog(truth, 1.0);
   // Noise floor: the error of the true parameters.
   auto exact = ReplayModel(log, truth, FitSimulation());
@@ -186,10 +193,7 @@ TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
 // max(G_table, leak) (9.4), so the leak changes nothing: it is held at its start value and
 // reported as held (not as an estimate), and the wave speed and friction are still fitted.
 TEST(FitTest, AParameterWithoutInfluenceIsHeldAndTheOthersStillFit) {
-  RigParams truth;
-  truth.wave_speed_mps = 1000.0;
-  truth.friction_f1_per_s = 0.3;
-  truth.choke_leak_m2 = 1.0e-6;
+  const RigParams truth = Truth();
   const MeasuredLog log = MakeLog(truth, 1.0);
   FitOptions options = Options();
   options.window_end_s = 14.5;
