@@ -89,10 +89,16 @@ Status CheckMeasuredLog(MeasuredLog* log) {
             [&](const MeasuredChannel& a, const MeasuredChannel& b) {
               return rank(a.channel) < rank(b.channel);
             });
+  ReconstructInputs(log);
   return Status::Ok();
 }
 
 }  // namespace
+
+void ReconstructInputs(MeasuredLog* log) {
+  log->reconstruction = PlanInputReconstruction(log->inputs);
+  log->reconstructed_inputs = ReconstructInputColumns(log->inputs, log->reconstruction);
+}
 
 Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress) {
   auto source = FileRowSource::Open(path, progress);
@@ -152,6 +158,11 @@ Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& rig_log, const s
 
 namespace {
 
+// The pipeline's own piston smoothing: none on reconstructed inputs (already smoothed).
+double PipelineSmoothingS(const ReplayOptions& replay) {
+  return replay.reconstruct_inputs ? 0.0 : replay.piston_smoothing_s;
+}
+
 // Reports `stage` at every whole percent of `total` samples.
 class PercentProgress {
  public:
@@ -185,15 +196,25 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
   traces.values_si.assign(log.channels.size(), {});
   for (auto& values : traces.values_si) values.reserve(times.size());
   PercentProgress percent(progress, "simulate", static_cast<long>(times.size()));
+  // The reconstruction made at loading; a log put together by hand gets one here.
+  const MeasuredLog* replayed = &log;
+  MeasuredLog reconstructed;
+  if (replay.reconstruct_inputs && log.reconstructed_inputs.time_s.size() != times.size()) {
+    reconstructed = log;
+    ReconstructInputs(&reconstructed);
+    replayed = &reconstructed;
+  }
+  traces.inputs_reconstructed = replay.reconstruct_inputs;
   RowPipeline pipeline(
-      replay.piston_smoothing_s, ReplaySetup{params, sim_options, times.back()},
+      PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back()},
       [&](const PipelineSample& sample) {
         for (std::size_t i = 0; i < log.channels.size(); ++i) {
           traces.values_si[i].push_back(sample.model->values[Index(log.channels[i].channel)]);
         }
         percent.Done(sample.index + 1);
       });
-  MemoryRowSource source(log);
+  MemoryRowSource source(
+      *replayed, replay.reconstruct_inputs ? InputView::kReconstructed : InputView::kMeasured);
   MPDRIG_RETURN_IF_ERROR(RunPipeline(&source, &pipeline));
   const RigSampler* sampler = pipeline.sampler();
   MPDRIG_CHECK(sampler != nullptr);
@@ -248,7 +269,11 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
   ComparisonAccumulator accumulator(*summary, options);
   std::vector<double> model_si(summary->channels.size());
   PercentProgress percent(progress, "analyse", static_cast<long>(n));
-  RowPipeline second_pass(options.piston_smoothing_s, std::nullopt,
+  // Pass 2 sees the inputs the model was fed, as CompareLog's replay pass does.
+  ReplayOptions replayed;
+  replayed.reconstruct_inputs = model.inputs_reconstructed;
+  replayed.piston_smoothing_s = options.piston_smoothing_s;
+  RowPipeline second_pass(PipelineSmoothingS(replayed), std::nullopt,
                           [&](const PipelineSample& sample) {
                             const auto i = static_cast<std::size_t>(sample.index);
                             for (std::size_t c = 0; c < model_si.size(); ++c) {
@@ -257,10 +282,21 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
                             accumulator.Add(sample, model_si.data());
                             percent.Done(sample.index + 1);
                           });
-  MemoryRowSource second_source(log);
+  const MeasuredLog* replayed_log = &log;
+  MeasuredLog reconstructed;
+  if (model.inputs_reconstructed && log.reconstructed_inputs.time_s.size() != n) {
+    reconstructed = log;
+    ReconstructInputs(&reconstructed);
+    replayed_log = &reconstructed;
+  }
+  MemoryRowSource second_source(
+      *replayed_log, model.inputs_reconstructed ? InputView::kReconstructed : InputView::kMeasured);
   MPDRIG_RETURN_IF_ERROR(RunPipeline(&second_source, &second_pass));
   auto result = accumulator.Finish(log.path, model.first_range_event);
-  if (result.ok()) result->atmospheric_pressure_pa = log.atmospheric_pressure_pa;
+  if (result.ok()) {
+    result->atmospheric_pressure_pa = log.atmospheric_pressure_pa;
+    if (model.inputs_reconstructed) result->input_reconstruction = replayed_log->reconstruction;
+  }
   return result;
 }
 
@@ -273,8 +309,12 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   auto first_source = FileRowSource::Open(path, progress);
   if (!first_source.ok()) return first_source.status();
   LogScanner scanner((*first_source)->channels(), options);
+  ReconstructionPlanner planner;
   RowPipeline first_pass(options.piston_smoothing_s, std::nullopt,
-                         [&](const PipelineSample& sample) { scanner.Add(sample); });
+                         [&](const PipelineSample& sample) {
+                           scanner.Add(sample);
+                           planner.Add(*sample.row);
+                         });
   MPDRIG_RETURN_IF_ERROR(RunPipeline(first_source->get(), &first_pass));
   auto summary = scanner.Finish(path);
   if (!summary.ok()) return summary.status();
@@ -282,12 +322,21 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   first_source->reset();
 
   // Pass 2: read it again, replay the model in lock step, accumulate the metrics.
-  auto source = FileRowSource::Open(path);
-  if (!source.ok()) return source.status();
+  auto file = FileRowSource::Open(path);
+  if (!file.ok()) return file.status();
+  std::unique_ptr<LogRowSource> source = std::move(file).value();
+  std::optional<InputReconstruction> plan;
+  if (options.reconstruct_inputs) {
+    plan = planner.Plan();
+    source = std::make_unique<ReconstructingRowSource>(std::move(source), *plan);
+  }
+  ReplayOptions replay;
+  replay.reconstruct_inputs = options.reconstruct_inputs;
+  replay.piston_smoothing_s = options.piston_smoothing_s;
   ComparisonAccumulator accumulator(*summary, options);
   std::vector<double> model_si(summary->channels.size());
   PercentProgress percent(progress, "replay", summary->samples);
-  RowPipeline pipeline(options.piston_smoothing_s, ReplaySetup{params, sim_options, summary->t1_s},
+  RowPipeline pipeline(PipelineSmoothingS(replay), ReplaySetup{params, sim_options, summary->t1_s},
                        [&](const PipelineSample& sample) {
                          for (std::size_t c = 0; c < model_si.size(); ++c) {
                            model_si[c] = sample.model->values[Index(summary->channels[c].channel)];
@@ -297,7 +346,7 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
                        });
   LogRow row;
   while (true) {
-    auto more = (*source)->Next(&row);
+    auto more = source->Next(&row);
     if (!more.ok()) return more.status();
     if (!*more) break;
     if (pipeline.rows_pushed() >= summary->samples || row.time_s > summary->t1_s) {
@@ -312,7 +361,10 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   const RigSampler* sampler = pipeline.sampler();
   auto result = accumulator.Finish(
       path, sampler != nullptr ? sampler->simulator().first_range_event() : std::nullopt);
-  if (result.ok()) result->atmospheric_pressure_pa = atmospheric_pressure_pa;
+  if (result.ok()) {
+    result->atmospheric_pressure_pa = atmospheric_pressure_pa;
+    result->input_reconstruction = plan;
+  }
   return result;
 }
 

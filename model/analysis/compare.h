@@ -88,7 +88,11 @@ struct MeasuredLog {
   std::string path;
   riglog::Metadata metadata;
   double atmospheric_pressure_pa = units::kStandardAtmospherePa;
-  LogInputColumns inputs;  // time_s lives here
+  LogInputColumns inputs;  // as measured; time_s lives here
+  // The inputs reconstructed under their noise (log_inputs.h), what a replay feeds the model by
+  // default, and how: made when the log is loaded.
+  LogInputColumns reconstructed_inputs;
+  InputReconstruction reconstruction;
   // Present (at least one sample measured), in the order of ComparedChannels().
   std::vector<MeasuredChannel> channels;
   const std::vector<double>& time_s() const { return inputs.time_s; }
@@ -100,17 +104,19 @@ struct MeasuredLog {
 Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress = {});
 // The same from a log already in memory (tests, tools that build logs).
 Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& log, const std::string& path);
+// Plans and makes log->reconstructed_inputs from log->inputs (both loaders do it; call it again
+// after changing the inputs by hand).
+void ReconstructInputs(MeasuredLog* log);
 
-struct ReplayOptions {
-  // Window of the local quadratic that smooths the measured piston position (as `simulate`).
-  double piston_smoothing_s = 0.05;
-};
+// Reconstructed inputs by default, or as measured (log_inputs.h).
+using ReplayOptions = InputReplayOptions;
 
 // The model's values of the compared channels at the log's times, in the order of
 // log.channels. The same numbers Simulate() gives for the log's inputs (the test checks this),
 // but only the compared channels are kept: 8 bytes per sample and channel.
 struct ModelTraces {
   std::vector<std::vector<double>> values_si;
+  bool inputs_reconstructed = false;  // fed MeasuredLog::reconstructed_inputs
   std::optional<RangeEvent> first_range_event;
   long steps = 0;
   double time_step_s = 0.0;
@@ -137,7 +143,12 @@ struct CompareOptions {
   int max_zoom_samples = 3000;
   int transfer_points = 300;  // at most this many points of the empirical transfer functions
   double transfer_min_power_fraction = 1.0e-4;  // of the piston's largest bin power
-  double piston_smoothing_s = 0.05;  // for the piston velocity used by the residual analysis
+  // The piston velocity used by the residual analysis: smoothed over this window (and, in
+  // CompareLog, the replay's piston when the inputs are not reconstructed).
+  double piston_smoothing_s = 0.05;
+  // CompareLog: replay reconstructed inputs (ReplayOptions::reconstruct_inputs). CompareTraces
+  // follows the traces it is given (ModelTraces::inputs_reconstructed).
+  bool reconstruct_inputs = true;
   // Welch segment length (samples, >= 8): longer logs are averaged over segments this long.
   // Memory per compared channel is about 24 bytes times this (compare_accumulator.h): 3 MB.
   int welch_segment_samples = 1 << 17;
@@ -239,6 +250,8 @@ struct Comparison {
   long spectrum_segments = 1;       // Welch segments K
   double spectrum_segment_s = 0.0;  // their length, L times the mean interval
   double atmospheric_pressure_pa = units::kStandardAtmospherePa;  // the log's, for the edges
+  // How the replayed inputs were reconstructed; absent when replayed as measured.
+  std::optional<InputReconstruction> input_reconstruction;
 
   const ChannelMetrics* Find(Channel channel) const;
 };

@@ -23,7 +23,7 @@
 
 #include "model/analysis/compare.h"
 #include "model/analysis/log_stream.h"
-#include "model/analysis/spectrum.h"
+#include "model/signal/spectrum.h"
 
 namespace mpdrig {
 

@@ -119,7 +119,9 @@ void FileRowSource::ReportProgress() {
   }
 }
 
-MemoryRowSource::MemoryRowSource(const MeasuredLog& log) : log_(log) {
+MemoryRowSource::MemoryRowSource(const MeasuredLog& log, InputView view)
+    : log_(log), inputs_(view == InputView::kMeasured ? log.inputs : log.reconstructed_inputs) {
+  MPDRIG_CHECK(inputs_.time_s.size() == log.inputs.time_s.size());
   MPDRIG_CHECK(log.channels.size() <= kComparedChannelCount);
   for (const MeasuredChannel& channel : log.channels) {
     channels_.push_back({channel.channel, channel.unit});
@@ -127,7 +129,7 @@ MemoryRowSource::MemoryRowSource(const MeasuredLog& log) : log_(log) {
 }
 
 Result<bool> MemoryRowSource::Next(LogRow* row) {
-  const LogInputColumns& in = log_.inputs;
+  const LogInputColumns& in = inputs_;
   if (next_ >= in.time_s.size()) return false;
   const std::size_t i = next_++;
   row->time_s = in.time_s[i];
@@ -139,6 +141,77 @@ Result<bool> MemoryRowSource::Next(LogRow* row) {
     row->measured_si[c] = log_.channels[c].values_si[i];
   }
   return true;
+}
+
+// ---- Input reconstruction --------------------------------------------------------------------
+
+void ReconstructionPlanner::Add(const LogRow& row) {
+  if (head_.time_s.size() >= kReconstructionPlanSamples) return;
+  head_.time_s.push_back(row.time_s);
+  head_.piston_position_m.push_back(row.piston_position_m);
+  head_.choke_opening_frac.push_back(row.choke_opening_frac);
+  head_.pump_flow_m3ps.push_back(row.pump_flow_m3ps);
+  head_.outlet_pressure_pa.push_back(row.outlet_pressure_pa);
+}
+
+ReconstructingRowSource::ReconstructingRowSource(std::unique_ptr<LogRowSource> source,
+                                                 InputReconstruction plan)
+    : source_(std::move(source)), plan_(plan) {}
+
+Result<bool> ReconstructingRowSource::Next(LogRow* row) {
+  while (ready_.empty()) {
+    if (source_done_ && pending_ >= held_.size()) return false;
+    if (!source_done_) {
+      for (std::size_t k = 0; k < kSmoothingBlock; ++k) {
+        LogRow next;
+        auto more = source_->Next(&next);
+        if (!more.ok()) return more.status();
+        if (!*more) {
+          source_done_ = true;
+          break;
+        }
+        held_.push_back(next);
+      }
+    }
+    ReconstructHeld(source_done_);
+  }
+  *row = ready_.front();
+  ready_.pop_front();
+  return true;
+}
+
+// A row's reconstruction is the whole log's when every row within reach of it is held: those
+// behind it are kept below, those ahead are there once the last held row lies beyond reach (or
+// the source has ended).
+void ReconstructingRowSource::ReconstructHeld(bool last_block) {
+  if (pending_ >= held_.size()) return;
+  const double reach = plan_.reach_s();
+  LogInputColumns raw;
+  for (const LogRow& row : held_) {
+    raw.time_s.push_back(row.time_s);
+    raw.piston_position_m.push_back(row.piston_position_m);
+    raw.choke_opening_frac.push_back(row.choke_opening_frac);
+    raw.pump_flow_m3ps.push_back(row.pump_flow_m3ps);
+    raw.outlet_pressure_pa.push_back(row.outlet_pressure_pa);
+  }
+  const LogInputColumns done = ReconstructInputColumns(raw, plan_);
+  const double last_time = held_.back().time_s;
+  while (pending_ < held_.size()) {
+    if (!last_block && !(last_time - held_[pending_].time_s > reach)) break;
+    LogRow row = held_[pending_];
+    row.piston_position_m = done.piston_position_m[pending_];
+    row.choke_opening_frac = done.choke_opening_frac[pending_];
+    row.pump_flow_m3ps = done.pump_flow_m3ps[pending_];
+    row.outlet_pressure_pa = done.outlet_pressure_pa[pending_];
+    ready_.push_back(row);
+    ++pending_;
+  }
+  // Keep what the next pending row reaches back to (or, all done, what a later one could).
+  const double from_s = pending_ < held_.size() ? held_[pending_].time_s : last_time;
+  while (!held_.empty() && pending_ > 0 && from_s - held_.front().time_s > reach) {
+    held_.pop_front();
+    --pending_;
+  }
 }
 
 // ---- Pipeline ---------------------------------------------------------------------------------

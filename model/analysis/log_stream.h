@@ -85,17 +85,51 @@ class FileRowSource final : public LogRowSource {
   double next_report_ = 0.0;
 };
 
+// Which of a MeasuredLog's inputs a MemoryRowSource hands out.
+enum class InputView { kMeasured, kReconstructed };
+
 // Rows of a log in memory (a MeasuredLog; it must outlive the source).
 class MemoryRowSource final : public LogRowSource {
  public:
-  explicit MemoryRowSource(const MeasuredLog& log);
+  explicit MemoryRowSource(const MeasuredLog& log, InputView view = InputView::kMeasured);
   const std::vector<SourceChannel>& channels() const override { return channels_; }
   Result<bool> Next(LogRow* row) override;
 
  private:
   const MeasuredLog& log_;
+  const LogInputColumns& inputs_;
   std::vector<SourceChannel> channels_;
   std::size_t next_ = 0;
+};
+
+// Collects the first kReconstructionPlanSamples rows of a stream and plans their reconstruction
+// (PlanInputReconstruction): the same plan as for the whole log in memory.
+class ReconstructionPlanner {
+ public:
+  void Add(const LogRow& row);
+  InputReconstruction Plan() const { return PlanInputReconstruction(head_); }
+
+ private:
+  LogInputColumns head_;
+};
+
+// Another source's rows with their inputs reconstructed (ReconstructInputColumns), in blocks of
+// 4096 rows with plan.reach_s() of margin on each side: the same doubles as reconstructing the
+// whole log, in memory that does not grow with it.
+class ReconstructingRowSource final : public LogRowSource {
+ public:
+  ReconstructingRowSource(std::unique_ptr<LogRowSource> source, InputReconstruction plan);
+  const std::vector<SourceChannel>& channels() const override { return source_->channels(); }
+  Result<bool> Next(LogRow* row) override;
+
+ private:
+  void ReconstructHeld(bool last_block);
+  std::unique_ptr<LogRowSource> source_;
+  InputReconstruction plan_;
+  std::deque<LogRow> held_;   // raw rows: the margin behind, the pending ones, the margin ahead
+  std::size_t pending_ = 0;   // index in held_ of the first row not yet reconstructed
+  std::deque<LogRow> ready_;  // reconstructed, to hand out
+  bool source_done_ = false;
 };
 
 // What the pipeline hands out for each row, in order.

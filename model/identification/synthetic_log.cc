@@ -201,7 +201,10 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
     MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
     MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
     MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
-    auto signals = SignalsFromLog(inputs, "synthetic", ReplayOptions{}.piston_smoothing_s);
+    // The generator's inputs are exact: replayed as they are (no reconstruction).
+    InputReplayOptions exact;
+    exact.reconstruct_inputs = false;
+    auto signals = SignalsFromLog(inputs, "synthetic", exact);
     if (!signals.ok()) return signals.status();
     run = Simulate(truth, simulation, *signals, log.time_s);
     if (run.ok() || run.status().code() != Status::Code::kModelRange) break;

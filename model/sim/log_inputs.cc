@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "model/common/units.h"
+#include "model/signal/input_reconstruction.h"
 #include "model/signal/smoothing.h"
 
 namespace mpdrig {
@@ -108,16 +109,96 @@ Result<LogInputColumns> InputColumnsFromLog(const riglog::RigLog& log, const std
   return columns;
 }
 
+namespace {
+
+double MedianInterval(const std::vector<double>& time_s) {
+  if (time_s.size() < 2) return 0.0;
+  std::vector<double> dt(time_s.size() - 1);
+  for (std::size_t i = 0; i + 1 < time_s.size(); ++i) dt[i] = time_s[i + 1] - time_s[i];
+  const auto middle = dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2);
+  std::nth_element(dt.begin(), middle, dt.end());
+  return *middle;
+}
+
+std::vector<double> Head(const std::vector<double>& values, std::size_t n) {
+  return {values.begin(), values.begin() + static_cast<std::ptrdiff_t>(n)};
+}
+
+}  // namespace
+
+double InputReconstruction::reach_s() const {
+  return std::max(piston_half_width_s, level_max_half_width_s);
+}
+
+std::string InputReconstruction::Describe() const {
+  std::ostringstream out;
+  out << "inputs reconstructed (noise estimated from the log): piston " << piston_noise_m * 1e3
+      << " mm, band " << piston_band_hz << " Hz, window +-" << piston_half_width_s << " s; choke "
+      << units::ChokeFracToDeg(choke_noise_frac) << " deg; FT2 "
+      << units::M3psToLpm(pump_noise_m3ps) << " L/min; C1 " << outlet_noise_pa * 1e-5
+      << " bar; steps kept, windows up to +-" << level_max_half_width_s << " s";
+  return out.str();
+}
+
+InputReconstruction PlanInputReconstruction(const LogInputColumns& columns) {
+  const std::size_t n = std::min(columns.time_s.size(), kReconstructionPlanSamples);
+  InputReconstruction plan;
+  plan.sample_interval_s = MedianInterval(Head(columns.time_s, n));
+  if (n < 16 || !(plan.sample_interval_s > 0.0))
+    return plan;  // too short to tell noise from signal
+  plan.piston_noise_m = WhiteNoiseSigma(Head(columns.piston_position_m, n));
+  plan.choke_noise_frac = WhiteNoiseSigma(Head(columns.choke_opening_frac, n));
+  plan.pump_noise_m3ps = WhiteNoiseSigma(Head(columns.pump_flow_m3ps, n));
+  plan.outlet_noise_pa = WhiteNoiseSigma(Head(columns.outlet_pressure_pa, n));
+  const double max_half_width_s = std::min(
+      kMaxReconstructionHalfWidthS, kMaxReconstructionHalfWidthSamples * plan.sample_interval_s);
+  plan.level_max_half_width_s = max_half_width_s;
+  if (plan.piston_noise_m > 0.0) {
+    plan.piston_band_hz = HighestSignalFrequencyHz(Head(columns.piston_position_m, n),
+                                                   plan.sample_interval_s, plan.piston_noise_m);
+    const double half_width_s =
+        std::min(BandLimitedHalfWidthS(plan.piston_band_hz), max_half_width_s);
+    // Below two sample intervals a tricube window holds too few points to smooth anything.
+    plan.piston_half_width_s = half_width_s >= 2.0 * plan.sample_interval_s ? half_width_s : 0.0;
+  }
+  return plan;
+}
+
+LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
+                                        const InputReconstruction& plan) {
+  LogInputColumns out;
+  out.time_s = columns.time_s;
+  out.piston_position_m =
+      SmoothBandLimited(columns.time_s, columns.piston_position_m, plan.piston_half_width_s);
+  auto levels = [&](const std::vector<double>& values, double sigma) {
+    StepKeepingOptions options;
+    options.sigma = sigma;
+    // Just over one interval, so the first window holds the neighbour on each side.
+    options.min_half_width_s = 1.01 * plan.sample_interval_s;
+    options.max_half_width_s = plan.level_max_half_width_s;
+    return SmoothKeepingSteps(columns.time_s, values, options);
+  };
+  out.choke_opening_frac = levels(columns.choke_opening_frac, plan.choke_noise_frac);
+  out.pump_flow_m3ps = levels(columns.pump_flow_m3ps, plan.pump_noise_m3ps);
+  out.outlet_pressure_pa = levels(columns.outlet_pressure_pa, plan.outlet_noise_pa);
+  return out;
+}
+
 std::vector<double> SmoothedPistonPosition(const LogInputColumns& columns, double smoothing_s) {
   return SmoothLocalQuadratic(columns.time_s, columns.piston_position_m, smoothing_s);
 }
 
 Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::string& path,
-                                        double smoothing_s) {
+                                        const InputReplayOptions& options) {
   const std::size_t n = columns.time_s.size();
   if (n < 2) return Status::Error(path + ": needs at least 2 samples");
   MPDRIG_CHECK(columns.piston_position_m.size() == n && columns.choke_opening_frac.size() == n &&
                columns.pump_flow_m3ps.size() == n && columns.outlet_pressure_pa.size() == n);
+  double smoothing_s = options.piston_smoothing_s;
+  if (options.reconstruct_inputs) {
+    columns = ReconstructInputColumns(columns, PlanInputReconstruction(columns));
+    smoothing_s = 0.0;  // the reconstruction has smoothed the piston
+  }
   std::vector<double> smoothed = SmoothedPistonPosition(columns, smoothing_s);
   // As RowPipeline (compare's replay): the mean over the first kInitialInputWindowS.
   InitialInputs initial;
@@ -135,11 +216,11 @@ Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::stri
 }
 
 Result<InputSignals> SignalsFromLog(const riglog::RigLog& log, const std::string& path,
-                                    double smoothing_s) {
+                                    const InputReplayOptions& options) {
   if (log.num_rows() < 2) return Status::Error(path + ": needs at least 2 samples");
   auto columns = InputColumnsFromLog(log, path);
   if (!columns.ok()) return columns.status();
-  return SignalsFromColumns(std::move(columns).value(), path, smoothing_s);
+  return SignalsFromColumns(std::move(columns).value(), path, options);
 }
 
 }  // namespace mpdrig

@@ -3,10 +3,13 @@
 //
 // Inputs (rig-log-format.md): piston_position and choke_position are required and must be
 // measured (finite) on every row; FT2 (pump flow q_b) and C1 (outlet pressure p_0) are optional:
-// absent means 0 and atmospheric, present means measured on every row. The piston position is a
-// noisy measurement, so it is smoothed by a local quadratic fit over `smoothing_s` (model/signal)
-// before the simulator differentiates it; the choke position is used as is (ChokeInput::kMeasured).
-// Between samples every input is linear in time, beyond the ends it is held.
+// absent means 0 and atmospheric, present means measured on every row. Every input is a noisy
+// measurement (errors in variables): by default a replay first reconstructs the inputs under the
+// noise (InputReconstruction below, model/signal/input_reconstruction.h), with the noise levels
+// and the piston's band estimated from the log itself. Without it (`--raw-inputs`) the inputs are
+// used as measured, but for the piston position, smoothed by a local quadratic fit over
+// `piston_smoothing_s` before the simulator differentiates it. The choke position is the opening
+// (ChokeInput::kMeasured). Between samples every input is linear in time, beyond the ends held.
 // The replay starts from the steady state (5.3.2) of the inputs' mean over the log's first
 // kInitialInputWindowS, not of its first row: one noisy sample of FT2 (0.4 % of 8 L/min) would
 // set the initial pressure 0.06 bar off, and that offset decays only at the pipe friction's rate
@@ -40,6 +43,15 @@ class InitialInputs {
   RigInputs sum_{0.0, 0.0, 0.0};
 };
 
+// How a replay feeds a log's inputs to the model.
+struct InputReplayOptions {
+  // Reconstruct the inputs under their measurement noise (InputReconstruction); false: as measured.
+  bool reconstruct_inputs = true;
+  // Without reconstruction: the window of the local quadratic that smooths the measured piston
+  // position before it is differentiated (0: none).
+  double piston_smoothing_s = 0.05;
+};
+
 // The input columns of a log, SI, one value per row of `time_s`.
 struct LogInputColumns {
   std::vector<double> time_s;
@@ -49,18 +61,55 @@ struct LogInputColumns {
   std::vector<double> outlet_pressure_pa;  // p_0 (C1), absolute; atmospheric if the log has none
 };
 
+// How a log's inputs are reconstructed: each input's white-noise level and the piston's band,
+// estimated from the log's first kReconstructionPlanSamples samples (all of a log up to 11 min at
+// 100 Hz; a longer one is assumed to keep its noise and band), and the smoothers' windows that
+// follow from them (model/signal/input_reconstruction.h):
+// - piston position: tricube local quadratic passing its highest carried frequency with < 0.1 %
+//   loss (one window: position and velocity stay consistent);
+// - choke opening, pump flow, outlet pressure: LPA-ICI local linear fits, left, right and centred,
+//   windows doubling from one sample interval to level_max_half_width_s (steps stay sharp).
+// An input whose noise is 0 (or that is absent: FT2, C1) passes unchanged.
+inline constexpr std::size_t kReconstructionPlanSamples = 65536;
+// The longest half window of either smoother: kMaxReconstructionHalfWidthS, or this many samples.
+inline constexpr double kMaxReconstructionHalfWidthS = 20.0;
+inline constexpr double kMaxReconstructionHalfWidthSamples = 2048;
+
+struct InputReconstruction {
+  double sample_interval_s = 0.0;  // median interval of the plan's samples
+  double piston_noise_m = 0.0;     // white-noise standard deviations, as estimated
+  double choke_noise_frac = 0.0;
+  double pump_noise_m3ps = 0.0;
+  double outlet_noise_pa = 0.0;
+  double piston_band_hz = 0.0;          // highest frequency the piston carries above its noise
+  double piston_half_width_s = 0.0;     // 0: the piston passes unchanged
+  double level_max_half_width_s = 0.0;  // ICI's longest window for choke, pump, outlet
+  // How far from a sample the samples it depends on lie (its longest half window).
+  double reach_s() const;
+  // One line for a person, in lab units.
+  std::string Describe() const;
+};
+
+// The plan from the first kReconstructionPlanSamples rows of `columns` (fewer if it has fewer).
+InputReconstruction PlanInputReconstruction(const LogInputColumns& columns);
+
+// The reconstructed columns (same times). Each value depends only on the samples within
+// plan.reach_s() of it, so blocks of a long log with that margin give the same doubles.
+LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
+                                        const InputReconstruction& plan);
+
 // Takes the input columns out of a whole log, checking them as described above. Errors name
 // `path`, the column and the data row.
 Result<LogInputColumns> InputColumnsFromLog(const riglog::RigLog& log, const std::string& path);
 
-// Time functions of the inputs; the columns are moved into shared storage (one copy of time).
-// Needs at least 2 rows.
+// Time functions of the inputs, reconstructed or smoothed as `options` say; the columns are moved
+// into shared storage (one copy of time). Needs at least 2 rows.
 Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::string& path,
-                                        double smoothing_s);
+                                        const InputReplayOptions& options);
 
 // InputColumnsFromLog + SignalsFromColumns.
 Result<InputSignals> SignalsFromLog(const riglog::RigLog& log, const std::string& path,
-                                    double smoothing_s);
+                                    const InputReplayOptions& options);
 
 // The smoothed piston position used by SignalsFromColumns (SmoothLocalQuadratic over
 // smoothing_s), for tools that need the same signal the model was fed.

@@ -20,7 +20,7 @@ struct CompareArgs {
   std::string log_path;
   std::string json_path;
   std::string report_path;
-  double piston_smoothing_s = 0.05;
+  InputReplayOptions replay;
   int residual_lags = 25;
   bool quiet = false;
 };
@@ -36,7 +36,8 @@ int RunCompare(const CompareArgs& args) {
   if (!sim_options.ok()) return Fail(name, sim_options.status());
 
   CompareOptions options;
-  options.piston_smoothing_s = args.piston_smoothing_s;
+  options.piston_smoothing_s = args.replay.piston_smoothing_s;
+  options.reconstruct_inputs = args.replay.reconstruct_inputs;
   options.residual_lags = args.residual_lags;
   int last_percent = -1;
   std::string last_stage;
@@ -115,11 +116,7 @@ void AddCompareCommand(CLI::App* app, int* exit_code) {
       ->check(CLI::ExistingFile);
   command->add_option("--json", args->json_path, "metrics as JSON ('-' for stdout)");
   command->add_option("--report", args->report_path, "self-contained HTML report");
-  command
-      ->add_option("--piston-smoothing-s", args->piston_smoothing_s,
-                   "window of the local quadratic fit that smooths the measured piston position "
-                   "(as simulate)")
-      ->capture_default_str();
+  AddInputReplayOptions(command, &args->replay);
   command
       ->add_option("--residual-lags", args->residual_lags,
                    "lags (samples) of the residual correlations, as MATLAB resid's M")

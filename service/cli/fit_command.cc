@@ -31,7 +31,7 @@ struct FitArgs {
   std::string out_config_path;
   int max_iterations = 30;
   double relative_step = 1.0e-3;
-  double piston_smoothing_s = 0.05;
+  InputReplayOptions replay;
   bool quiet = false;
 };
 
@@ -222,7 +222,7 @@ int RunFit(const FitArgs& args) {
 
   FitOptions options;
   options.simulation = *simulation;
-  options.replay.piston_smoothing_s = args.piston_smoothing_s;
+  options.replay = args.replay;
   options.max_iterations = args.max_iterations;
   options.relative_step = args.relative_step;
   if (!args.window.empty()) {
@@ -315,11 +315,7 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
                    "finite-difference step relative to the parameter (or 1% of its range)")
       ->check(CLI::Range(1.0e-7, 0.1))
       ->capture_default_str();
-  command
-      ->add_option("--piston-smoothing-s", args->piston_smoothing_s,
-                   "window of the local quadratic fit that smooths the measured piston position "
-                   "(as simulate and compare)")
-      ->capture_default_str();
+  AddInputReplayOptions(command, &args->replay);
   command->add_flag("--quiet", args->quiet, "no progress on stderr");
   command->callback([args, exit_code]() { *exit_code = RunFit(*args); });
 }

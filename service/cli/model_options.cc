@@ -96,4 +96,16 @@ int Fail(const std::string& command, const Status& status) {
   return 1;
 }
 
+void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
+  command->add_flag_callback(
+      "--raw-inputs", [options]() { options->reconstruct_inputs = false; },
+      "replay the log's inputs as measured; by default they are reconstructed under their noise "
+      "(noise levels and the piston's band estimated from the log, steps kept)");
+  command
+      ->add_option("--piston-smoothing-s", options->piston_smoothing_s,
+                   "with --raw-inputs: window of the local quadratic fit that smooths the measured "
+                   "piston position before it is differentiated (0: none)")
+      ->capture_default_str();
+}
+
 }  // namespace mpdrig::cli

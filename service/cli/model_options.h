@@ -13,6 +13,7 @@
 
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
+#include "model/sim/log_inputs.h"
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig::cli {
@@ -36,6 +37,10 @@ struct ModelOptions {
   // "quasilinear, 200 cells, characteristics (dt 5.29 ms)"
   std::string Describe(const RigParams& params) const;
 };
+
+// Registers --raw-inputs and --piston-smoothing-s: how a command that replays a log feeds its
+// inputs to the model (reconstructed under their noise by default; log_inputs.h).
+void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options);
 
 // Writes a command's text output (JSON, HTML, a config) to `path`, or to stdout for "-".
 Status WriteText(const std::string& path, const std::string& text);

@@ -24,7 +24,7 @@ struct SimulateArgs {
   double outlet_barg = 0.0;
   double duration_s = 20.0;
   double rate_hz = 100.0;
-  double piston_smoothing_s = 0.05;
+  InputReplayOptions replay;
   bool allow_negative_pressure = false;
   std::vector<double> pressure_at_m;
   std::string out_path;
@@ -46,7 +46,7 @@ int RunSimulate(const SimulateArgs& args) {
   if (!args.inputs_path.empty()) {
     auto log = riglog::ReadRigLog(args.inputs_path);
     if (!log.ok()) return Fail(name, log.status());
-    auto from_log = SignalsFromLog(*log, args.inputs_path, args.piston_smoothing_s);
+    auto from_log = SignalsFromLog(*log, args.inputs_path, args.replay);
     if (!from_log.ok()) return Fail(name, from_log.status());
     signals = *from_log;
     output_times = log->time_s;
@@ -158,11 +158,7 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--rate-hz", args->rate_hz, "output sample rate [Hz] (profiles)")
       ->capture_default_str();
-  command
-      ->add_option("--piston-smoothing-s", args->piston_smoothing_s,
-                   "window of the local quadratic fit that smooths a measured piston position "
-                   "before it is differentiated (0: none)")
-      ->capture_default_str();
+  AddInputReplayOptions(command, &args->replay);
   command
       ->add_option("--pressure-at", args->pressure_at_m,
                    "extra pressure outputs along the pipe, metres from the inlet, e.g. "

@@ -52,7 +52,7 @@ std::string WriteLabLog() {
   EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kPistonPosition), piston).ok());
   EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke).ok());
   EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kFT2), pump).ok());
-  auto signals = SignalsFromLog(log, "lab", 0.05);
+  auto signals = SignalsFromLog(log, "lab", ReplayOptions{});
   EXPECT_TRUE(signals.ok());
   SimulationOptions options;
   options.choke_input = ChokeInput::kMeasured;

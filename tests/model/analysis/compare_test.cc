@@ -74,7 +74,7 @@ SimulationOptions ReplayOptionsFor() {
 // The model's channels for the log's inputs at `times` (Simulate, as `mpdrig simulate --inputs`).
 std::vector<RigSample> SimulateLog(const riglog::RigLog& inputs, const RigParams& params,
                                    const std::vector<double>& times) {
-  auto signals = SignalsFromLog(inputs, "inputs", ReplayOptions{}.piston_smoothing_s);
+  auto signals = SignalsFromLog(inputs, "inputs", ReplayOptions{});
   EXPECT_TRUE(signals.ok()) << signals.status().message();
   auto run = Simulate(params, ReplayOptionsFor(), *signals, times);
   EXPECT_TRUE(run.ok()) << run.status().message();

@@ -80,7 +80,7 @@ bool IsFlow(Channel channel) {
 // noise (none if noise_scale is 0).
 MeasuredLog MakeLog(const RigParams& truth, double noise_scale, unsigned seed = 7) {
   const riglog::RigLog inputs = InputLog();
-  auto signals = SignalsFromLog(inputs, "inputs", ReplayOptions{}.piston_smoothing_s);
+  auto signals = SignalsFromLog(inputs, "inputs", ReplayOptions{});
   EXPECT_TRUE(signals.ok()) << signals.status().message();
   auto run = Simulate(truth, FitSimulation(), *signals, inputs.time_s);
   EXPECT_TRUE(run.ok()) << run.status().message();

@@ -1,4 +1,4 @@
-#include "model/analysis/spectrum.h"
+#include "model/signal/spectrum.h"
 
 #include <fftw3.h>
 
