@@ -206,7 +206,7 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
   }
   traces.inputs_reconstructed = replay.reconstruct_inputs;
   RowPipeline pipeline(
-      PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back()},
+      PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back(), replay.warmup},
       [&](const PipelineSample& sample) {
         for (std::size_t i = 0; i < log.channels.size(); ++i) {
           traces.values_si[i].push_back(sample.model->values[Index(log.channels[i].channel)]);
@@ -222,6 +222,56 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
   traces.steps = sampler->steps();
   traces.first_range_event = sampler->simulator().first_range_event();
   return traces;
+}
+
+namespace {
+
+// The rows of `log` with t <= t_end (inputs, reconstructed inputs, channels).
+MeasuredLog LogUntil(const MeasuredLog& log, double t_end) {
+  std::size_t n = 0;
+  while (n < log.time_s().size() && log.time_s()[n] <= t_end) ++n;
+  const auto head = [n](const std::vector<double>& v) {
+    return std::vector<double>(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n));
+  };
+  const auto head_columns = [&](const LogInputColumns& c) {
+    return LogInputColumns{head(c.time_s), head(c.piston_position_m), head(c.choke_opening_frac),
+                           head(c.pump_flow_m3ps), head(c.outlet_pressure_pa)};
+  };
+  MeasuredLog cut = log;
+  cut.inputs = head_columns(log.inputs);
+  cut.reconstructed_inputs = head_columns(log.reconstructed_inputs);
+  for (MeasuredChannel& channel : cut.channels) channel.values_si = head(channel.values_si);
+  return cut;
+}
+
+bool IsPressure(Channel channel) {
+  return channel != Channel::kFT1 && channel != Channel::kFT3 && channel != Channel::kFT4;
+}
+
+}  // namespace
+
+Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const RigParams& params,
+                                                   const SimulationOptions& sim_options,
+                                                   const ReplayOptions& replay) {
+  const std::optional<PeriodicWarmup> candidate =
+      PlanPeriodicWarmup(log.inputs, replay.reconstruct_inputs);
+  if (!candidate) return std::optional<PeriodicWarmup>{};
+  const MeasuredLog cut = LogUntil(log, log.time_s().front() + 2.0 * candidate->period_s);
+  double error[2] = {0.0, 0.0};
+  for (int warm = 0; warm < 2; ++warm) {
+    ReplayOptions start = replay;
+    start.warmup = warm ? candidate : std::nullopt;
+    auto traces = ReplayModel(cut, params, sim_options, start);
+    if (!traces.ok()) return traces.status();
+    for (std::size_t c = 0; c < cut.channels.size(); ++c) {
+      if (!IsPressure(cut.channels[c].channel)) continue;
+      for (std::size_t i = 0; i < cut.time_s().size(); ++i) {
+        const double d = traces->values_si[c][i] - cut.channels[c].values_si[i];
+        if (std::isfinite(d)) error[warm] += d * d;
+      }
+    }
+  }
+  return error[1] < error[0] ? candidate : std::nullopt;
 }
 
 // ---- Metrics ----------------------------------------------------------------------------------
@@ -333,10 +383,18 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   ReplayOptions replay;
   replay.reconstruct_inputs = options.reconstruct_inputs;
   replay.piston_smoothing_s = options.piston_smoothing_s;
+  if (options.choose_warmup) {
+    auto head = planner.HeadLog(source->channels(), path, atmospheric_pressure_pa);
+    if (!head.ok()) return head.status();
+    auto warmup = ChooseWarmup(*head, params, sim_options, replay);
+    if (!warmup.ok()) return warmup.status();
+    replay.warmup = *warmup;
+  }
   ComparisonAccumulator accumulator(*summary, options);
   std::vector<double> model_si(summary->channels.size());
   PercentProgress percent(progress, "replay", summary->samples);
-  RowPipeline pipeline(PipelineSmoothingS(replay), ReplaySetup{params, sim_options, summary->t1_s},
+  RowPipeline pipeline(PipelineSmoothingS(replay),
+                       ReplaySetup{params, sim_options, summary->t1_s, replay.warmup},
                        [&](const PipelineSample& sample) {
                          for (std::size_t c = 0; c < model_si.size(); ++c) {
                            model_si[c] = sample.model->values[Index(summary->channels[c].channel)];

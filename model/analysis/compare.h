@@ -129,6 +129,15 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
                                 const ReplayOptions& replay = {},
                                 const CompareProgress& progress = {});
 
+// Whether a replay of `log` should start after a periodic warm-up (PlanPeriodicWarmup,
+// log_inputs.h) or from the steady state: the inputs cannot tell a heave that was already running
+// when the recording started from one that started with it, the pressures can. Where the log's
+// start is periodic, both starts are replayed over its first two periods with `params`, and the
+// warm-up is chosen if its squared error over the measured pressure channels is smaller.
+Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const RigParams& params,
+                                                   const SimulationOptions& sim_options,
+                                                   const ReplayOptions& replay);
+
 struct CompareOptions {
   int residual_lags = 25;   // M, as MATLAB resid's default
   int max_harmonics = 3;    // f0, 2 f0, 3 f0
@@ -149,6 +158,8 @@ struct CompareOptions {
   // CompareLog: replay reconstructed inputs (ReplayOptions::reconstruct_inputs). CompareTraces
   // follows the traces it is given (ModelTraces::inputs_reconstructed).
   bool reconstruct_inputs = true;
+  // CompareLog: start the replay after a warm-up where ChooseWarmup says so.
+  bool choose_warmup = true;
   // Welch segment length (samples, >= 8): longer logs are averaged over segments this long.
   // Memory per compared channel is about 24 bytes times this (compare_accumulator.h): 3 MB.
   int welch_segment_samples = 1 << 17;

@@ -17,6 +17,9 @@ namespace {
 // Samples smoothed per SmoothLocalQuadratic call: the window's margins are computed twice, a few
 // percent of the work at 1 kHz; the pipeline holds about this many rows.
 constexpr std::size_t kSmoothingBlock = 4096;
+// Beyond the first period, what the warm-up's step inputs reach (half a solver step, which is at
+// most L / (2 c) for two cells: 0.6 s at 750 m/s).
+constexpr double kWarmupLookaheadS = 1.0;
 
 }  // namespace
 
@@ -152,6 +155,23 @@ void ReconstructionPlanner::Add(const LogRow& row) {
   head_.choke_opening_frac.push_back(row.choke_opening_frac);
   head_.pump_flow_m3ps.push_back(row.pump_flow_m3ps);
   head_.outlet_pressure_pa.push_back(row.outlet_pressure_pa);
+  measured_.push_back(row.measured_si);
+}
+
+Result<MeasuredLog> ReconstructionPlanner::HeadLog(const std::vector<SourceChannel>& channels,
+                                                   const std::string& path,
+                                                   double atmospheric_pressure_pa) const {
+  MeasuredLog log;
+  log.path = path;
+  log.atmospheric_pressure_pa = atmospheric_pressure_pa;
+  log.inputs = head_;
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    MeasuredChannel channel{channels[c].channel, channels[c].unit, {}};
+    for (const auto& row : measured_) channel.values_si.push_back(row[c]);
+    log.channels.push_back(std::move(channel));
+  }
+  ReconstructInputs(&log);
+  return log;
 }
 
 ReconstructingRowSource::ReconstructingRowSource(std::unique_ptr<LogRowSource> source,
@@ -336,6 +356,11 @@ Status RowPipeline::Emit() {
   while (emitted_ < smoothed_) {
     const long i = emitted_;
     const Entry& entry = At(i);
+    if (replay_ && !sampler_ && replay_->warmup && !finished_ &&
+        !(At(smoothed_ - 1).row.time_s >
+          first_.row.time_s + replay_->warmup->period_s + kWarmupLookaheadS)) {
+      break;  // the warm-up replays the first period: it must be here (and smoothed)
+    }
     if (replay_ && !sampler_) {
       // The initial steady state from the inputs' mean over the log's first
       // kInitialInputWindowS (log_inputs.h), not from its first, noisy row. Every row of the
@@ -347,8 +372,13 @@ Status RowPipeline::Emit() {
         initial.Add(held.row.time_s, {held.row.choke_opening_frac, held.row.pump_flow_m3ps,
                                       held.row.outlet_pressure_pa});
       }
-      auto simulator = RigSimulator::Create(replay_->params, replay_->options, initial.Mean(),
-                                            first_.smoothed_m, first_.row.time_s);
+      auto step_inputs = [this](double t_b, double dt) { return StepInputsAt(t_b, dt); };
+      auto simulator =
+          replay_->warmup
+              ? CreateWarmedUp(replay_->params, replay_->options, initial.Mean(), first_.smoothed_m,
+                               first_.row.time_s, *replay_->warmup, step_inputs)
+              : RigSimulator::Create(replay_->params, replay_->options, initial.Mean(),
+                                     first_.smoothed_m, first_.row.time_s);
       if (!simulator.ok()) return simulator.status();
       sampler_.emplace(std::move(simulator).value());
     }

@@ -108,9 +108,13 @@ class ReconstructionPlanner {
  public:
   void Add(const LogRow& row);
   InputReconstruction Plan() const { return PlanInputReconstruction(head_); }
+  // The rows collected, as a log in memory (for ChooseWarmup): `channels` as the source's.
+  Result<MeasuredLog> HeadLog(const std::vector<SourceChannel>& channels, const std::string& path,
+                              double atmospheric_pressure_pa) const;
 
  private:
   LogInputColumns head_;
+  std::vector<std::array<double, kComparedChannelCount>> measured_;
 };
 
 // Another source's rows with their inputs reconstructed (ReconstructInputColumns), in blocks of
@@ -147,6 +151,7 @@ struct ReplaySetup {
   RigParams params;
   SimulationOptions options;
   double end_time_s = 0.0;  // the log's last time: the piston velocity is one-sided there
+  std::optional<PeriodicWarmup> warmup;  // as SimulateEach with InputSignals::warmup
 };
 
 class RowPipeline {

@@ -8,6 +8,7 @@
 #include "model/common/units.h"
 #include "model/signal/input_reconstruction.h"
 #include "model/signal/smoothing.h"
+#include "model/signal/spectrum.h"
 
 namespace mpdrig {
 namespace {
@@ -184,6 +185,114 @@ LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
   return out;
 }
 
+namespace {
+
+// The columns' rows with t <= t_end.
+LogInputColumns RowsUntil(const LogInputColumns& columns, double t_end) {
+  std::size_t n = 0;
+  while (n < columns.time_s.size() && columns.time_s[n] <= t_end) ++n;
+  return {Head(columns.time_s, n), Head(columns.piston_position_m, n),
+          Head(columns.choke_opening_frac, n), Head(columns.pump_flow_m3ps, n),
+          Head(columns.outlet_pressure_pa, n)};
+}
+
+// The period of the largest line of the piston's spectrum (Hann window, zero-padded 4x), among
+// periods up to kMaxWarmupPeriodS; 0 if there is none.
+double DominantPeriodS(const std::vector<double>& position, double dt_s) {
+  const std::size_t n = position.size();
+  double mean = 0.0;
+  for (double x : position) mean += x;
+  mean /= static_cast<double>(n);
+  const std::vector<double> window = HannWindow(n);
+  std::vector<double> x(n);
+  for (std::size_t i = 0; i < n; ++i) x[i] = (position[i] - mean) * window[i];
+  const std::size_t size = FastFftSize(4 * n);
+  const std::vector<std::complex<double>> spectrum = RealDft(x, size);
+  const double df = 1.0 / (static_cast<double>(size) * dt_s);
+  const auto first = static_cast<std::size_t>(std::ceil(1.0 / (kMaxWarmupPeriodS * df)));
+  std::size_t best = 0;
+  for (std::size_t k = std::max<std::size_t>(first, 1); k < spectrum.size(); ++k) {
+    if (best == 0 || std::norm(spectrum[k]) > std::norm(spectrum[best])) best = k;
+  }
+  return best == 0 ? 0.0 : 1.0 / (static_cast<double>(best) * df);
+}
+
+// RMS over the samples in [t0, t0 + period] of values(t) - values(t + period).
+double PeriodicityError(const std::vector<double>& time_s, const std::vector<double>& values,
+                        double period_s) {
+  const PiecewiseLinear later(time_s, values);
+  double sum = 0.0;
+  long count = 0;
+  for (std::size_t i = 0; i < time_s.size() && time_s[i] <= time_s[0] + period_s; ++i) {
+    const double d = values[i] - later(time_s[i] + period_s);
+    sum += d * d, ++count;
+  }
+  return count > 0 ? std::sqrt(sum / static_cast<double>(count)) : 0.0;
+}
+
+double StandardDeviation(const std::vector<double>& values) {
+  double mean = 0.0, sq = 0.0;
+  for (double v : values) mean += v;
+  mean /= static_cast<double>(values.size());
+  for (double v : values) sq += (v - mean) * (v - mean);
+  return std::sqrt(sq / static_cast<double>(values.size()));
+}
+
+}  // namespace
+
+std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& columns, bool reconstruct) {
+  const std::size_t n = std::min(columns.time_s.size(), kReconstructionPlanSamples);
+  if (n < 64) return std::nullopt;
+  const double dt = MedianInterval(Head(columns.time_s, n));
+  if (!(dt > 0.0)) return std::nullopt;
+  const double rough_period_s = DominantPeriodS(Head(columns.piston_position_m, n), dt);
+  const double t0 = columns.time_s[0];
+  // The refinement looks up to 5 % beyond two periods.
+  const double needed_s = 2.0 * 1.05 * rough_period_s;
+  if (!(rough_period_s > 0.0) || columns.time_s[n - 1] - t0 < needed_s) return std::nullopt;
+  const InputReconstruction plan = PlanInputReconstruction(columns);
+  LogInputColumns part = RowsUntil(columns, t0 + needed_s + plan.reach_s());
+  if (reconstruct) part = ReconstructInputColumns(part, plan);
+  part = RowsUntil(part, t0 + needed_s);
+
+  // Least squares on the piston's own repetition: a scan over +-5 %, then a parabola through the
+  // best point and its neighbours (the period must be right to a fraction of a sample: each
+  // wrap of the warm-up would otherwise put a velocity step into the pipe).
+  constexpr int kScan = 100;
+  auto period_at = [&](int k) { return rough_period_s * (0.95 + 0.1 * k / kScan); };
+  std::vector<double> error(kScan + 1);
+  int best = 0;
+  for (int k = 0; k <= kScan; ++k) {
+    error[k] = PeriodicityError(part.time_s, part.piston_position_m, period_at(k));
+    if (error[k] < error[best]) best = k;
+  }
+  double period_s = period_at(best);
+  if (best > 0 && best < kScan) {
+    const double a = error[best - 1] * error[best - 1], b = error[best] * error[best],
+                 c = error[best + 1] * error[best + 1];
+    const double curvature = a - 2.0 * b + c;
+    if (curvature > 0.0) period_s += 0.5 * (a - c) / curvature * (period_at(1) - period_at(0));
+  }
+  const LogInputColumns two_periods = RowsUntil(part, t0 + 2.0 * period_s);
+  const double piston_std = StandardDeviation(two_periods.piston_position_m);
+  if (!(piston_std > 10.0 * plan.piston_noise_m) || piston_std == 0.0) return std::nullopt;
+  if (PeriodicityError(part.time_s, part.piston_position_m, period_s) >
+      0.05 * piston_std + 3.0 * std::sqrt(2.0) * plan.piston_noise_m) {
+    return std::nullopt;
+  }
+  const auto repeats = [&](const std::vector<double>& values, double noise) {
+    const double scale = std::fabs(values.front()) + 1.0;
+    return PeriodicityError(part.time_s, values, period_s) <=
+           3.0 * std::sqrt(2.0) * noise + 1e-9 * scale;
+  };
+  if (!repeats(part.choke_opening_frac, plan.choke_noise_frac) ||
+      !repeats(part.pump_flow_m3ps, plan.pump_noise_m3ps) ||
+      !repeats(part.outlet_pressure_pa, plan.outlet_noise_pa)) {
+    return std::nullopt;
+  }
+  return PeriodicWarmup{period_s, kReplayWarmupS};
+}
+
 std::vector<double> SmoothedPistonPosition(const LogInputColumns& columns, double smoothing_s) {
   return SmoothLocalQuadratic(columns.time_s, columns.piston_position_m, smoothing_s);
 }
@@ -212,6 +321,7 @@ Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::stri
   signals.piston_position_m = [shared](double t) { return shared->Piston(t); };
   signals.rig = [shared](double t) { return shared->Rig(t); };
   signals.initial = initial.Mean();
+  signals.warmup = options.warmup;
   return signals;
 }
 

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,12 @@ struct InputReplayOptions {
   // Without reconstruction: the window of the local quadratic that smooths the measured piston
   // position before it is differentiated (0: none).
   double piston_smoothing_s = 0.05;
+  // Start after this warm-up instead of from the steady state: for a log that starts in the middle
+  // of a periodic excitation (PlanPeriodicWarmup; ChooseWarmup in model/analysis/compare.h
+  // decides from the measured pressures).
+  std::optional<PeriodicWarmup> warmup;
+  // Commands that have the measured log let ChooseWarmup set `warmup`; false: always steady.
+  bool choose_warmup = true;
 };
 
 // The input columns of a log, SI, one value per row of `time_s`.
@@ -73,7 +80,7 @@ struct LogInputColumns {
 inline constexpr std::size_t kReconstructionPlanSamples = 65536;
 // The longest half window of either smoother: kMaxReconstructionHalfWidthS, or this many samples.
 inline constexpr double kMaxReconstructionHalfWidthS = 20.0;
-inline constexpr double kMaxReconstructionHalfWidthSamples = 2048;
+inline constexpr double kMaxReconstructionHalfWidthSamples = 1024;
 
 struct InputReconstruction {
   double sample_interval_s = 0.0;  // median interval of the plan's samples
@@ -97,6 +104,23 @@ InputReconstruction PlanInputReconstruction(const LogInputColumns& columns);
 // plan.reach_s() of it, so blocks of a long log with that margin give the same doubles.
 LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
                                         const InputReconstruction& plan);
+
+// A log that starts in the middle of a periodic excitation (a heave already running when the
+// recording started) is replayed after a warm-up (PeriodicWarmup, rig_simulator.h): the inputs of
+// its first period repeated for kReplayWarmupS. Periodic means: the piston moves (its standard
+// deviation over the first two periods is over 10 times its noise), its dominant period (largest
+// spectral line, refined by least squares on x(t) - x(t + P)) is at most kMaxWarmupPeriodS, and
+// over the first period every input repeats one period later to within 5 % of the piston's
+// standard deviation (piston) or three times its noise (choke, pump, outlet), reconstructed as
+// the replay will be. Otherwise (a log from rest, steps in the first periods) none: the replay
+// starts from the steady state, as a recording from rest does.
+// 30 s: the pipe's acoustic modes decay as exp(-f1 t / 2) under linear friction (f1 = 0.15 1/s,
+// Table 9.4.1): a start-up transient falls to 10 %, and the choke's damping takes most of the rest.
+inline constexpr double kReplayWarmupS = 30.0;
+inline constexpr double kMaxWarmupPeriodS = 20.0;
+
+// From the log's first kReconstructionPlanSamples rows, as measured; `reconstruct` as the replay.
+std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& head, bool reconstruct);
 
 // Takes the input columns out of a whole log, checking them as described above. Errors name
 // `path`, the column and the data row.

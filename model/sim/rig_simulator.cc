@@ -241,6 +241,32 @@ Result<RigSample> RigSampler::SampleAt(double time_s, const StepInputsFn& step_i
   return Interpolate(previous_, current_, time_s);
 }
 
+Result<RigSimulator> CreateWarmedUp(const RigParams& params, const SimulationOptions& options,
+                                    const RigInputs& initial_inputs,
+                                    double initial_piston_position_m, double t0,
+                                    const PeriodicWarmup& warmup,
+                                    const RigSampler::StepInputsFn& step_inputs) {
+  MPDRIG_CHECK(warmup.period_s > 0.0 && warmup.duration_s >= 0.0);
+  // The time step depends only on the parameters and the options: learn it from a first build.
+  auto probe = RigSimulator::Create(params, options, initial_inputs, initial_piston_position_m, t0);
+  if (!probe.ok()) return probe.status();
+  const double dt = probe->time_step_s();
+  const long steps = static_cast<long>(std::ceil(warmup.duration_s / dt));
+  if (steps == 0) return probe;
+  auto simulator = RigSimulator::Create(params, options, initial_inputs, initial_piston_position_m,
+                                        t0 - steps * dt);
+  if (!simulator.ok()) return simulator.status();
+  for (long k = 0; k < steps; ++k) {
+    const double t_b = simulator->next_step_end_s();
+    // Periods that bring t_b into [t0, t0 + period); the last step ends at t0 itself (to
+    // rounding), which maps to t0.
+    const double periods = std::max(0.0, std::ceil((t0 - t_b) / warmup.period_s - 1e-9));
+    auto stepped = simulator->Step(step_inputs(t_b + periods * warmup.period_s, dt));
+    if (!stepped.ok()) return stepped.Within("warm-up before t = " + std::to_string(t0) + " s");
+  }
+  return simulator;
+}
+
 Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions& options,
                                 const InputSignals& inputs, const std::vector<double>& output_times,
                                 const std::function<void(const RigSample&)>& sink,
@@ -253,10 +279,6 @@ Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions
   }
   const double t0 = output_times.front();
   const double t_end = output_times.back();
-  auto simulator = RigSimulator::Create(params, options, inputs.initial.value_or(inputs.rig(t0)),
-                                        inputs.piston_position_m(t0), t0);
-  if (!simulator.ok()) return simulator.status();
-  RigSampler sampler(std::move(simulator).value());
 
   // Inputs at the end of each step. The piston velocity there is the centred difference of the
   // position over [t_b - dt/2, t_b + dt/2]: second order, and the trapezoidal sum of these
@@ -277,6 +299,15 @@ Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions
     step.rig = inputs.rig(t_b);
     return step;
   };
+
+  const RigInputs initial = inputs.initial.value_or(inputs.rig(t0));
+  auto simulator =
+      inputs.warmup
+          ? CreateWarmedUp(params, options, initial, inputs.piston_position_m(t0), t0,
+                           *inputs.warmup, step_inputs)
+          : RigSimulator::Create(params, options, initial, inputs.piston_position_m(t0), t0);
+  if (!simulator.ok()) return simulator.status();
+  RigSampler sampler(std::move(simulator).value());
 
   double next_progress = 0.05;
   for (double t : output_times) {

@@ -155,6 +155,25 @@ class RigSampler {
   long steps_ = 0;
 };
 
+// A replay's warm-up for a log that starts in the middle of a periodic excitation (a heave
+// already running): the run starts duration_s before the first output time t0 and is driven over
+// that time by the inputs of [t0, t0 + period_s) repeated, the excitation's past if it is
+// periodic. At t0 the pipe then carries the periodic response (to within the decay of the
+// start-up transient over duration_s) instead of the steady state a run otherwise starts from.
+struct PeriodicWarmup {
+  double period_s = 0.0;
+  double duration_s = 0.0;
+};
+
+// A simulator at t0 after the warm-up: created at t0 - n dt (n dt >= duration_s, whole steps, so
+// its grid meets t0), stepped n times with step_inputs(t_b + k period, dt) for the smallest k
+// that maps t_b into [t0, t0 + period).
+Result<RigSimulator> CreateWarmedUp(const RigParams& params, const SimulationOptions& options,
+                                    const RigInputs& initial_inputs,
+                                    double initial_piston_position_m, double t0,
+                                    const PeriodicWarmup& warmup,
+                                    const RigSampler::StepInputsFn& step_inputs);
+
 // Time functions of the inputs for a batch run.
 struct InputSignals {
   std::function<double(double)> piston_position_m;  // continuous in time
@@ -162,6 +181,7 @@ struct InputSignals {
   // The inputs whose steady state the run starts from; rig(t0) if absent. A measured log's
   // replay gives its inputs' mean over the first moments (log_inputs.h).
   std::optional<RigInputs> initial;
+  std::optional<PeriodicWarmup> warmup;  // none: the run starts from the steady state at t0
 };
 
 struct RunResult {

@@ -38,6 +38,7 @@ int RunCompare(const CompareArgs& args) {
   CompareOptions options;
   options.piston_smoothing_s = args.replay.piston_smoothing_s;
   options.reconstruct_inputs = args.replay.reconstruct_inputs;
+  options.choose_warmup = args.replay.choose_warmup;
   options.residual_lags = args.residual_lags;
   int last_percent = -1;
   std::string last_stage;

@@ -101,6 +101,11 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
       "--raw-inputs", [options]() { options->reconstruct_inputs = false; },
       "replay the log's inputs as measured; by default they are reconstructed under their noise "
       "(noise levels and the piston's band estimated from the log, steps kept)");
+  command->add_flag_callback(
+      "--steady-start", [options]() { options->choose_warmup = false; },
+      "start the replay from the steady state even where the log starts in the middle of a "
+      "periodic heave (by default such a log is replayed after a 30 s warm-up on its first "
+      "period, if its pressures fit that start better)");
   command
       ->add_option("--piston-smoothing-s", options->piston_smoothing_s,
                    "with --raw-inputs: window of the local quadratic fit that smooths the measured "
