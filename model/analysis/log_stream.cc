@@ -17,9 +17,6 @@ namespace {
 // Samples smoothed per SmoothLocalQuadratic call: the window's margins are computed twice, a few
 // percent of the work at 1 kHz; the pipeline holds about this many rows.
 constexpr std::size_t kSmoothingBlock = 4096;
-// Beyond the first period, what the warm-up's step inputs reach (half a solver step, which is at
-// most L / (2 c) for two cells: 0.6 s at 750 m/s).
-constexpr double kWarmupLookaheadS = 1.0;
 
 }  // namespace
 
@@ -356,11 +353,6 @@ Status RowPipeline::Emit() {
   while (emitted_ < smoothed_) {
     const long i = emitted_;
     const Entry& entry = At(i);
-    if (replay_ && !sampler_ && replay_->warmup && !finished_ &&
-        !(At(smoothed_ - 1).row.time_s >
-          first_.row.time_s + replay_->warmup->period_s + kWarmupLookaheadS)) {
-      break;  // the warm-up replays the first period: it must be here (and smoothed)
-    }
     if (replay_ && !sampler_) {
       // The initial steady state from the inputs' mean over the log's first
       // kInitialInputWindowS (log_inputs.h), not from its first, noisy row. Every row of the
@@ -372,13 +364,11 @@ Status RowPipeline::Emit() {
         initial.Add(held.row.time_s, {held.row.choke_opening_frac, held.row.pump_flow_m3ps,
                                       held.row.outlet_pressure_pa});
       }
-      auto step_inputs = [this](double t_b, double dt) { return StepInputsAt(t_b, dt); };
-      auto simulator =
-          replay_->warmup
-              ? CreateWarmedUp(replay_->params, replay_->options, initial.Mean(), first_.smoothed_m,
-                               first_.row.time_s, *replay_->warmup, step_inputs)
-              : RigSimulator::Create(replay_->params, replay_->options, initial.Mean(),
-                                     first_.smoothed_m, first_.row.time_s);
+      auto simulator = replay_->warmup
+                           ? CreateWarmedUp(replay_->params, replay_->options, first_.row.time_s,
+                                            *replay_->warmup)
+                           : RigSimulator::Create(replay_->params, replay_->options, initial.Mean(),
+                                                  first_.smoothed_m, first_.row.time_s);
       if (!simulator.ok()) return simulator.status();
       sampler_.emplace(std::move(simulator).value());
     }

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
+
+#include <Eigen/Dense>
 #include <utility>
 
 #include "model/common/units.h"
@@ -238,6 +241,49 @@ double StandardDeviation(const std::vector<double>& values) {
   return std::sqrt(sq / static_cast<double>(values.size()));
 }
 
+// The warm-up's excitation: a Fourier series of kWarmupHarmonics harmonics of `period_s` fitted by
+// least squares to the piston over the whole periods `part` holds (up to kWarmupFitPeriods), the
+// other inputs at their means there. Repeating the measured period itself would repeat its noise
+// as a periodic forcing, which the pipe's resonances pick up.
+PeriodicWarmup FitPeriodicExcitation(const LogInputColumns& part, double period_s) {
+  const double t0 = part.time_s.front();
+  const double periods =
+      std::min<double>(kWarmupFitPeriods, std::floor((part.time_s.back() - t0) / period_s));
+  const LogInputColumns fitted = RowsUntil(part, t0 + periods * period_s);
+  const auto n = static_cast<Eigen::Index>(fitted.time_s.size());
+  constexpr int kColumns = 1 + 2 * kWarmupHarmonics;
+  Eigen::MatrixXd design(n, kColumns);
+  Eigen::VectorXd position(n);
+  const double w = 2.0 * std::numbers::pi / period_s;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double t = fitted.time_s[static_cast<std::size_t>(i)] - t0;
+    design(i, 0) = 1.0;
+    for (int k = 1; k <= kWarmupHarmonics; ++k) {
+      design(i, 2 * k - 1) = std::cos(k * w * t);
+      design(i, 2 * k) = std::sin(k * w * t);
+    }
+    position(i) = fitted.piston_position_m[static_cast<std::size_t>(i)];
+  }
+  const Eigen::VectorXd coefficients = design.colPivHouseholderQr().solve(position);
+  PeriodicWarmup warmup;
+  warmup.period_s = period_s;
+  warmup.duration_s = kReplayWarmupS;
+  warmup.mean_m = coefficients(0);
+  for (int k = 1; k <= kWarmupHarmonics; ++k) {
+    warmup.cos_m.push_back(coefficients(2 * k - 1));
+    warmup.sin_m.push_back(coefficients(2 * k));
+  }
+  const auto mean = [](const std::vector<double>& v) {
+    double sum = 0.0;
+    for (double x : v) sum += x;
+    return sum / static_cast<double>(v.size());
+  };
+  warmup.levels.choke_opening_frac = mean(fitted.choke_opening_frac);
+  warmup.levels.pump_flow_m3ps = mean(fitted.pump_flow_m3ps);
+  warmup.levels.outlet_pressure_pa = mean(fitted.outlet_pressure_pa);
+  return warmup;
+}
+
 }  // namespace
 
 std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& columns, bool reconstruct) {
@@ -251,9 +297,11 @@ std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& columns,
   const double needed_s = 2.0 * 1.05 * rough_period_s;
   if (!(rough_period_s > 0.0) || columns.time_s[n - 1] - t0 < needed_s) return std::nullopt;
   const InputReconstruction plan = PlanInputReconstruction(columns);
-  LogInputColumns part = RowsUntil(columns, t0 + needed_s + plan.reach_s());
+  // The checks need two periods; the fit takes up to kWarmupFitPeriods.
+  const double span_s = std::max(needed_s, kWarmupFitPeriods * 1.05 * rough_period_s);
+  LogInputColumns part = RowsUntil(columns, t0 + span_s + plan.reach_s());
   if (reconstruct) part = ReconstructInputColumns(part, plan);
-  part = RowsUntil(part, t0 + needed_s);
+  part = RowsUntil(part, t0 + span_s);
 
   // Least squares on the piston's own repetition: a scan over +-5 %, then a parabola through the
   // best point and its neighbours (the period must be right to a fraction of a sample: each
@@ -290,7 +338,7 @@ std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& columns,
       !repeats(part.outlet_pressure_pa, plan.outlet_noise_pa)) {
     return std::nullopt;
   }
-  return PeriodicWarmup{period_s, kReplayWarmupS};
+  return FitPeriodicExcitation(part, period_s);
 }
 
 std::vector<double> SmoothedPistonPosition(const LogInputColumns& columns, double smoothing_s) {

@@ -79,8 +79,8 @@ struct LogInputColumns {
 // An input whose noise is 0 (or that is absent: FT2, C1) passes unchanged.
 inline constexpr std::size_t kReconstructionPlanSamples = 65536;
 // The longest half window of either smoother: kMaxReconstructionHalfWidthS, or this many samples.
-inline constexpr double kMaxReconstructionHalfWidthS = 20.0;
-inline constexpr double kMaxReconstructionHalfWidthSamples = 1024;
+inline constexpr double kMaxReconstructionHalfWidthS = 40.0;
+inline constexpr double kMaxReconstructionHalfWidthSamples = 4096;
 
 struct InputReconstruction {
   double sample_interval_s = 0.0;  // median interval of the plan's samples
@@ -106,8 +106,9 @@ LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
                                         const InputReconstruction& plan);
 
 // A log that starts in the middle of a periodic excitation (a heave already running when the
-// recording started) is replayed after a warm-up (PeriodicWarmup, rig_simulator.h): the inputs of
-// its first period repeated for kReplayWarmupS. Periodic means: the piston moves (its standard
+// recording started) is replayed after a warm-up (PeriodicWarmup, rig_simulator.h): for
+// kReplayWarmupS, the piston's periodic excitation fitted to its first periods (kWarmupHarmonics
+// harmonics), the other inputs at their means. Periodic means: the piston moves (its standard
 // deviation over the first two periods is over 10 times its noise), its dominant period (largest
 // spectral line, refined by least squares on x(t) - x(t + P)) is at most kMaxWarmupPeriodS, and
 // over the first period every input repeats one period later to within 5 % of the piston's
@@ -118,6 +119,9 @@ LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
 // Table 9.4.1): a start-up transient falls to 10 %, and the choke's damping takes most of the rest.
 inline constexpr double kReplayWarmupS = 30.0;
 inline constexpr double kMaxWarmupPeriodS = 20.0;
+// The warm-up's piston: harmonics of the period fitted to up to this many periods of the log.
+inline constexpr int kWarmupHarmonics = 5;
+inline constexpr int kWarmupFitPeriods = 4;
 
 // From the log's first kReconstructionPlanSamples rows, as measured; `reconstruct` as the replay.
 std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& head, bool reconstruct);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <sstream>
 
 namespace mpdrig {
@@ -241,27 +242,39 @@ Result<RigSample> RigSampler::SampleAt(double time_s, const StepInputsFn& step_i
   return Interpolate(previous_, current_, time_s);
 }
 
+double PeriodicWarmup::PistonPositionM(double t, double t0) const {
+  const double w = 2.0 * std::numbers::pi / period_s;
+  double x = mean_m;
+  for (std::size_t k = 0; k < cos_m.size(); ++k) {
+    const double phase = static_cast<double>(k + 1) * w * (t - t0);
+    x += cos_m[k] * std::cos(phase) + sin_m[k] * std::sin(phase);
+  }
+  return x;
+}
+
 Result<RigSimulator> CreateWarmedUp(const RigParams& params, const SimulationOptions& options,
-                                    const RigInputs& initial_inputs,
-                                    double initial_piston_position_m, double t0,
-                                    const PeriodicWarmup& warmup,
-                                    const RigSampler::StepInputsFn& step_inputs) {
+                                    double t0, const PeriodicWarmup& warmup) {
   MPDRIG_CHECK(warmup.period_s > 0.0 && warmup.duration_s >= 0.0);
   // The time step depends only on the parameters and the options: learn it from a first build.
-  auto probe = RigSimulator::Create(params, options, initial_inputs, initial_piston_position_m, t0);
+  auto probe =
+      RigSimulator::Create(params, options, warmup.levels, warmup.PistonPositionM(t0, t0), t0);
   if (!probe.ok()) return probe.status();
   const double dt = probe->time_step_s();
   const long steps = static_cast<long>(std::ceil(warmup.duration_s / dt));
   if (steps == 0) return probe;
-  auto simulator = RigSimulator::Create(params, options, initial_inputs, initial_piston_position_m,
-                                        t0 - steps * dt);
+  const double start = t0 - static_cast<double>(steps) * dt;
+  auto simulator = RigSimulator::Create(params, options, warmup.levels,
+                                        warmup.PistonPositionM(start, t0), start);
   if (!simulator.ok()) return simulator.status();
   for (long k = 0; k < steps; ++k) {
     const double t_b = simulator->next_step_end_s();
-    // Periods that bring t_b into [t0, t0 + period); the last step ends at t0 itself (to
-    // rounding), which maps to t0.
-    const double periods = std::max(0.0, std::ceil((t0 - t_b) / warmup.period_s - 1e-9));
-    auto stepped = simulator->Step(step_inputs(t_b + periods * warmup.period_s, dt));
+    StepInputs step;
+    step.piston_position_m = warmup.PistonPositionM(t_b, t0);
+    step.piston_velocity_mps =
+        (warmup.PistonPositionM(t_b + 0.5 * dt, t0) - warmup.PistonPositionM(t_b - 0.5 * dt, t0)) /
+        dt;
+    step.rig = warmup.levels;
+    auto stepped = simulator->Step(step);
     if (!stepped.ok()) return stepped.Within("warm-up before t = " + std::to_string(t0) + " s");
   }
   return simulator;
@@ -301,11 +314,9 @@ Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions
   };
 
   const RigInputs initial = inputs.initial.value_or(inputs.rig(t0));
-  auto simulator =
-      inputs.warmup
-          ? CreateWarmedUp(params, options, initial, inputs.piston_position_m(t0), t0,
-                           *inputs.warmup, step_inputs)
-          : RigSimulator::Create(params, options, initial, inputs.piston_position_m(t0), t0);
+  auto simulator = inputs.warmup ? CreateWarmedUp(params, options, t0, *inputs.warmup)
+                                 : RigSimulator::Create(params, options, initial,
+                                                        inputs.piston_position_m(t0), t0);
   if (!simulator.ok()) return simulator.status();
   RigSampler sampler(std::move(simulator).value());
 

@@ -156,23 +156,26 @@ class RigSampler {
 };
 
 // A replay's warm-up for a log that starts in the middle of a periodic excitation (a heave
-// already running): the run starts duration_s before the first output time t0 and is driven over
-// that time by the inputs of [t0, t0 + period_s) repeated, the excitation's past if it is
-// periodic. At t0 the pipe then carries the periodic response (to within the decay of the
+// already running): the run starts duration_s before the first output time t0, driven by the
+// excitation's periodic past, x(t) = mean + sum_k a_k cos(k w (t - t0)) + b_k sin(k w (t - t0)),
+// w = 2 pi / period, with the other inputs held at `levels` (log_inputs.h fits it to the log's
+// first periods). At t0 the pipe then carries the periodic response (to within the decay of the
 // start-up transient over duration_s) instead of the steady state a run otherwise starts from.
 struct PeriodicWarmup {
   double period_s = 0.0;
   double duration_s = 0.0;
+  double mean_m = 0.0;
+  std::vector<double> cos_m, sin_m;  // a_k, b_k for k = 1, 2, ...
+  RigInputs levels;
+
+  double PistonPositionM(double t, double t0) const;
 };
 
 // A simulator at t0 after the warm-up: created at t0 - n dt (n dt >= duration_s, whole steps, so
-// its grid meets t0), stepped n times with step_inputs(t_b + k period, dt) for the smallest k
-// that maps t_b into [t0, t0 + period).
+// its grid meets t0) from the steady state of `levels`, stepped n times with the periodic piston
+// (its velocity the centred difference over each step, as a replay's).
 Result<RigSimulator> CreateWarmedUp(const RigParams& params, const SimulationOptions& options,
-                                    const RigInputs& initial_inputs,
-                                    double initial_piston_position_m, double t0,
-                                    const PeriodicWarmup& warmup,
-                                    const RigSampler::StepInputsFn& step_inputs);
+                                    double t0, const PeriodicWarmup& warmup);
 
 // Time functions of the inputs for a batch run.
 struct InputSignals {
