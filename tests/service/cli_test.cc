@@ -608,6 +608,8 @@ TEST_F(CliTest, ServeFastRunsForItsDurationAndReports) {
       Run("serve --clock fast --duration 2 --rate-hz 100 --rig a --rig b --domain " + domain);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(Contains(run.err, "loopback only")) << run.err;
+  EXPECT_TRUE(Contains(run.err, "sensor noise: lab, seed 1"))
+      << "the lab's by default: " << run.err;
   EXPECT_TRUE(Contains(run.err, "a ran 2.000 s of rig time, 200 samples")) << run.err;
   EXPECT_TRUE(Contains(run.err, "b ran 2.000 s of rig time, 200 samples")) << run.err;
 }
@@ -619,6 +621,10 @@ TEST_F(CliTest, ServeRefusesBadOptions) {
                               std::to_string(testing::ClaimTestDomain()));
   EXPECT_NE(twice.exit_code, 0);
   EXPECT_TRUE(Contains(twice.err, "given twice")) << twice.err;
+  const RunResult noise = Run("serve --clock fast --duration 1 --sensor-noise loud --domain " +
+                              std::to_string(testing::ClaimTestDomain()));
+  EXPECT_NE(noise.exit_code, 0);
+  EXPECT_TRUE(Contains(noise.err, "--sensor-noise") && Contains(noise.err, "'loud'")) << noise.err;
 }
 
 // Bad serve options are refused with a reason before anything runs (no DDS traffic: the checks
