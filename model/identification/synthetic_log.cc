@@ -104,6 +104,9 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   if (!(options.duration_s >= 10.0) || !(options.rate_hz >= 10.0)) {
     return Status::Error("synthetic log: duration >= 10 s and rate >= 10 Hz");
   }
+  if (options.sensor_noise) {
+    MPDRIG_RETURN_IF_ERROR(options.sensor_noise->Validate().Within("synthetic log"));
+  }
   Random random(options.seed);
   // The effect's strength comes from a stream of its own, so a seed gives the same base
   // parameters, excitation and noise with and without the hidden effect.
@@ -229,7 +232,6 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
 
   // ...and measured with noise (inputs too: the lab measures them).
   if (options.sensor_noise) {
-    MPDRIG_RETURN_IF_ERROR(options.sensor_noise->Validate());
     SensorNoiseApplier sensors(*options.sensor_noise, options.seed);
     for (auto& [channel, values] : clean) {
       sensors.MeasureColumn(channel, values);
