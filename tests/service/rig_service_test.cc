@@ -214,7 +214,7 @@ TEST_F(ServiceTest, StatusReportsTheActiveEffectsPerRig) {
 // The status names each rig's sensor noise, and the sensors carry it: at rest (the rig starts in
 // its steady state) the pressure transmitters scatter by the lab's 0.024 bar on rig-1 and not at
 // all on rig-2. Pooled over 14 transmitters x 300 samples, the sample standard deviation spreads
-// by 1 / sqrt(2 n) = 1.1 %; 4 of those is the tolerance. The profile topic is the model's.
+// by 1 / sqrt(2 n) = 1.1 %; 4 of those is the tolerance.
 TEST_F(ServiceTest, StatusNamesTheSensorNoiseAndTheSensorsCarryIt) {
   Start(std::nan(""), SensorOptions{SensorNoise::Lab(), 3});
   Step("rig-1", 300);
@@ -242,8 +242,7 @@ TEST_F(ServiceTest, StatusNamesTheSensorNoiseAndTheSensorsCarryIt) {
   const double tolerance = 4.0 / std::sqrt(2.0 * 14.0 * 299.0);
   EXPECT_NEAR(pooled_stddev(sensors["rig-1"]), 2400.0, tolerance * 2400.0);
   EXPECT_LT(pooled_stddev(sensors["rig-2"]), 10.0) << "a rig at rest without sensor noise";
-  // The choke feedback reads 31 deg with 0.1 deg of noise; the command is not noisy (the rig
-  // has not moved its choke: every sample scatters about 31 deg, none is exactly it).
+  // The choke feedback scatters about the 31 deg the choke holds (its mean to 4 sigma / sqrt(n)).
   double choke_sum = 0.0;
   for (const RigSample& s : sensors["rig-1"]) choke_sum += s[Channel::kChokePosition];
   EXPECT_NEAR(units::ChokeFracToDeg(choke_sum / 300.0), 31.0, 4.0 * 0.1 / std::sqrt(300.0));
