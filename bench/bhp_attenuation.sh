@@ -9,7 +9,8 @@
 #
 # Environment: BUILD_DIR (default <repo>/build, must hold service/mpdrig and clients/),
 # DOMAIN (DDS domain, default 77), DURATION (rig time per run [s], default 120),
-# MEASURE_LAST (the window measured [s], default 40), AMP_M (heave amplitude, default 0.1).
+# MEASURE_LAST (the window measured [s], default 40), AMP_M (heave amplitude, default 0.1),
+# SENSOR_NOISE (serve's --sensor-noise, default lab: thesis Table 4.1.1; none: noise-free).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$repo/build}"
@@ -25,6 +26,7 @@ amp="${AMP_M:-0.1}"
 pump="${PUMP_LPM:-5}"
 choke="${CHOKE_DEG:-31}"
 freqs="${FREQS:-0.1 0.15 0.2}"
+noise="${SENSOR_NOISE:-lab}"
 
 serve_pid=""
 cleanup() { [[ -n "$serve_pid" ]] && kill "$serve_pid" 2>/dev/null && wait "$serve_pid" 2>/dev/null; true; }
@@ -33,7 +35,7 @@ trap cleanup EXIT INT TERM
 printf '%-6s %-16s %12s %12s %10s %s\n' "f [Hz]" "mode" "PT1 amp [bar]" "mean [barg]" "vs fixed" "choke range [deg]"
 for f in $freqs; do
   "$mpdrig" serve --clock lockstep --rate-hz 100 --heave-amp-m "$amp" --heave-hz "$f" \
-    --pump-lpm "$pump" --choke-deg "$choke" --domain "$domain" \
+    --pump-lpm "$pump" --choke-deg "$choke" --domain "$domain" --sensor-noise "$noise" \
     --rig fixed --rig pi --rig pi-ff --rig pi-ff-est 2>/dev/null &
   serve_pid=$!
   common=(--lockstep --domain "$domain" --duration "$duration" --measure-last "$window" --timeout 60)

@@ -9,6 +9,7 @@
 #include "model/analysis/compare.h"
 #include "model/effects/effect.h"
 #include "model/sim/rig_simulator.h"
+#include "model/sim/sensor_noise.h"
 
 namespace mpdrig {
 namespace {
@@ -102,6 +103,9 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   if (!(options.duration_s >= 10.0) || !(options.rate_hz >= 10.0)) {
     return Status::Error("synthetic log: duration >= 10 s and rate >= 10 Hz");
+  }
+  if (options.sensor_noise) {
+    MPDRIG_RETURN_IF_ERROR(options.sensor_noise->Validate().Within("synthetic log"));
   }
   Random random(options.seed);
   // The effect's strength comes from a stream of its own, so a seed gives the same base
@@ -212,28 +216,43 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   }
   if (!run.ok()) return run.status().Within("synthetic log (" + result.description + ")");
 
-  // ...and measured with noise (inputs too: the lab measures them).
-  auto noisy = [&](std::vector<double> values, double sigma) {
-    for (double& v : values) v += sigma * random.Normal();
-    return values;
-  };
-  MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(Channel::kPistonPosition),
-                                       noisy(position, options.piston_noise_m)));
-  MPDRIG_RETURN_IF_ERROR(
-      log.AddColumn(riglog::LabColumn(Channel::kChokePosition),
-                    noisy(choke, units::ChokeDegToFrac(options.choke_noise_deg))));
-  MPDRIG_RETURN_IF_ERROR(
-      log.AddColumn(riglog::LabColumn(Channel::kFT2), noisy(pump, options.flow_noise_m3ps)));
-  MPDRIG_RETURN_IF_ERROR(
-      log.AddColumn(riglog::LabColumn(Channel::kC1), noisy(outlet, options.pressure_noise_pa)));
+  // The truth: the same run without sensor noise, column for column.
+  std::vector<std::pair<Channel, std::vector<double>>> clean = {
+      {Channel::kPistonPosition, std::move(position)},
+      {Channel::kChokePosition, std::move(choke)},
+      {Channel::kFT2, std::move(pump)},
+      {Channel::kC1, std::move(outlet)}};
   for (Channel channel : ComparedChannels()) {
     std::vector<double> values;
     values.reserve(run->samples.size());
     for (const RigSample& sample : run->samples) values.push_back(sample[channel]);
-    const bool is_flow = riglog::QuantityOf(channel) == riglog::Quantity::kFlow;
-    MPDRIG_RETURN_IF_ERROR(log.AddColumn(
-        riglog::LabColumn(channel),
-        noisy(std::move(values), is_flow ? options.flow_noise_m3ps : options.pressure_noise_pa)));
+    clean.emplace_back(channel, std::move(values));
+  }
+  result.truth_log = log;
+  for (const auto& [channel, values] : clean) {
+    MPDRIG_RETURN_IF_ERROR(result.truth_log.AddColumn(riglog::LabColumn(channel), values));
+  }
+
+  // ...and measured with noise (inputs too: the lab measures them).
+  if (options.sensor_noise) {
+    SensorNoiseApplier sensors(*options.sensor_noise, options.seed);
+    for (auto& [channel, values] : clean) {
+      sensors.MeasureColumn(channel, values);
+      MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(channel), std::move(values)));
+    }
+    return result;
+  }
+  // The quiet per-kind sigmas, drawn in this order from the excitation's stream (the logs the
+  // identification tests were tuned on).
+  for (auto& [channel, values] : clean) {
+    const riglog::Quantity quantity = riglog::QuantityOf(channel);
+    const double sigma = quantity == riglog::Quantity::kFlow       ? options.flow_noise_m3ps
+                         : quantity == riglog::Quantity::kPosition ? options.piston_noise_m
+                         : quantity == riglog::Quantity::kChokeOpening
+                             ? units::ChokeDegToFrac(options.choke_noise_deg)
+                             : options.pressure_noise_pa;
+    for (double& v : values) v += sigma * random.Normal();
+    MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(channel), std::move(values)));
   }
   return result;
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <thread>
 
@@ -13,6 +14,7 @@
 #include "model/identification/diagnose.h"
 #include "model/identification/synthetic_log.h"
 #include "model/riglog/rig_log.h"
+#include "model/sim/sensor_noise.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 #include "service/report/diagnosis_report.h"
@@ -109,18 +111,41 @@ int RunDiagnose(DiagnoseArgs args) {
 struct SynthArgs {
   SyntheticLogOptions options;
   std::string effect;
+  std::string sensor_noise = "lab";
+  // Overrides of one part of --sensor-noise (the former per-kind flags).
+  std::optional<double> pressure_noise_pa, flow_noise_m3ps, piston_noise_m, choke_noise_deg;
   std::string out_path;
+  std::string truth_out_path;
 };
 
 int RunSynth(const SynthArgs& args) {
   SyntheticLogOptions options = args.options;
   if (!args.effect.empty() && args.effect != "none") options.hidden_effect = args.effect;
+  auto noise = ParseSensorNoise(args.sensor_noise);
+  if (!noise.ok()) return Fail("synth", noise.status().Within("--sensor-noise"));
+  if (args.pressure_noise_pa) noise->pressure_pa = *args.pressure_noise_pa;
+  if (args.flow_noise_m3ps) noise->flow_m3ps = *args.flow_noise_m3ps;
+  if (args.piston_noise_m) noise->piston_m = *args.piston_noise_m;
+  if (args.choke_noise_deg) noise->choke_deg = *args.choke_noise_deg;
+  options.sensor_noise = *noise;
   auto made = MakeSyntheticLog(options);
   if (!made.ok()) return Fail("synth", made.status());
   made->log.metadata.push_back({"hidden", made->description});
+  made->log.metadata.push_back(
+      {"sensor_noise", noise->ToSpec() + ", seed " + std::to_string(options.seed)});
   const Status written = riglog::WriteRigLog(made->log, args.out_path);
   if (!written.ok()) return Fail("synth", written);
-  std::fprintf(stderr, "synth: %s -> %s\n", made->description.c_str(), args.out_path.c_str());
+  if (!args.truth_out_path.empty()) {
+    made->truth_log.metadata.push_back({"hidden", made->description});
+    made->truth_log.metadata.push_back(
+        {"sensor_noise", "none (the truth of " + args.out_path + ": the same run without noise)"});
+    const Status truth = riglog::WriteRigLog(made->truth_log, args.truth_out_path);
+    if (!truth.ok()) return Fail("synth", truth.Within("--truth-out"));
+  }
+  std::fprintf(stderr, "synth: %s; sensor noise %s -> %s%s%s\n", made->description.c_str(),
+               noise->ToSpec().c_str(), args.out_path.c_str(),
+               args.truth_out_path.empty() ? "" : ", noise-free truth -> ",
+               args.truth_out_path.c_str());
   return 0;
 }
 
@@ -172,9 +197,10 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "synth", "Write a synthetic lab log with a hidden effect (to try diagnose on)");
   synth_command->footer(
       "The model with one effect switched on at a random strength, perturbed base parameters,\n"
-      "piston sines and a sweep, choke and pump steps, and sensor noise. The truth is written\n"
-      "into the log's metadata (# hidden: ...). Same seed, same log.\n"
-      "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv");
+      "piston sines and a sweep, choke and pump steps, and the lab's sensor noise "
+      "(--sensor-noise).\n"
+      "The truth is written into the log's metadata (# hidden: ...). Same seed, same log.\n"
+      "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv --truth-out lag_truth.csv");
   synth_command->add_option("--effect", synth->effect, "hidden effect, or none")
       ->capture_default_str();
   synth_command->add_option("--seed", synth->options.seed, "random seed")->capture_default_str();
@@ -182,20 +208,29 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   synth_command->add_option("--rate-hz", synth->options.rate_hz, "sample rate [Hz]")
       ->capture_default_str();
-  // White noise on each kind of channel, as standard deviations (0: a clean log).
-  const auto add_noise = [&](const char* name, double* sigma, const char* what, const char* unit) {
+  synth_command
+      ->add_option("--sensor-noise", synth->sensor_noise,
+                   "sensor noise: none, lab (thesis Table 4.1.1) or a SPEC such as "
+                   "pressure=0.024bar,flow=2%+0.05lpm,piston=0.5mm,choke=0.1deg (README, "
+                   "Sensor noise)")
+      ->capture_default_str();
+  // The former per-kind flags: each overrides one part of --sensor-noise.
+  const auto add_noise = [&](const char* name, std::optional<double>* sigma, const char* what,
+                             const char* unit) {
     synth_command
         ->add_option(
             name, *sigma,
-            std::string("white noise on the ") + what + ", standard deviation [" + unit + "]")
-        ->capture_default_str()
+            std::string("override --sensor-noise: ") + what + ", standard deviation [" + unit + "]")
         ->check(CLI::NonNegativeNumber);
   };
-  add_noise("--pressure-noise-pa", &synth->options.pressure_noise_pa, "pressure transmitters",
-            "Pa");
-  add_noise("--flow-noise-m3ps", &synth->options.flow_noise_m3ps, "flow meters", "m^3/s");
-  add_noise("--piston-noise-m", &synth->options.piston_noise_m, "piston position", "m");
-  add_noise("--choke-noise-deg", &synth->options.choke_noise_deg, "choke position", "deg");
+  add_noise("--pressure-noise-pa", &synth->pressure_noise_pa, "pressure transmitters", "Pa");
+  add_noise("--flow-noise-m3ps", &synth->flow_noise_m3ps,
+            "flow meters, the part independent of the reading", "m^3/s");
+  add_noise("--piston-noise-m", &synth->piston_noise_m, "piston position", "m");
+  add_noise("--choke-noise-deg", &synth->choke_noise_deg, "choke position", "deg");
+  synth_command->add_option("--truth-out", synth->truth_out_path,
+                            "also write the same run without sensor noise (same seed, excitation "
+                            "and parameters): what a perfect model would say");
   synth_command->add_option("--out", synth->out_path, "rig log to write")->required();
   synth_command->callback([synth, exit_code]() { *exit_code = RunSynth(*synth); });
 }

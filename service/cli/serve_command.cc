@@ -1,6 +1,7 @@
 // mpdrig serve: the virtual rig as a DDS service (service/rig/rig_service.h).
 #include <chrono>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <ctime>
 #include <fstream>
@@ -8,6 +9,7 @@
 #include <memory>
 #include <sstream>
 
+#include "model/sim/sensor_noise.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 #include "service/rig/rig_service.h"
@@ -39,6 +41,8 @@ struct ServeArgs {
   double observer_start_hz = 0.2;
   std::vector<double> observer_pole{-40.0, 20.0};
   bool observer_linear_friction = false;
+  std::string sensor_noise = "lab";
+  std::uint64_t noise_seed = 1;
 };
 
 int RunServe(const ServeArgs& args) {
@@ -50,6 +54,9 @@ int RunServe(const ServeArgs& args) {
   for (int i = 0; i < args.profile_points; ++i) {
     options->pressure_positions_m.push_back(params->pipe_length_m * i / (args.profile_points - 1));
   }
+  auto noise = ParseSensorNoise(args.sensor_noise);
+  if (!noise.ok()) return Fail(name, noise.status().Within("--sensor-noise"));
+  const service::SensorOptions sensors{*noise, args.noise_seed};
   service::PistonCommandIn heave;
   if (args.heave_amp_m != 0.0) {
     heave.mode = service::PistonCommandIn::Mode::kSine;
@@ -59,8 +66,9 @@ int RunServe(const ServeArgs& args) {
 
   std::vector<service::RigHost> rigs;
   for (const std::string& id : args.rigs) {
-    auto rig = service::RigHost::Create(id, *params, *options, args.rate_hz,
-                                        {args.choke_deg, args.pump_lpm, args.outlet_barg});
+    auto rig =
+        service::RigHost::Create(id, *params, *options, args.rate_hz,
+                                 {args.choke_deg, args.pump_lpm, args.outlet_barg}, {}, sensors);
     if (!rig.ok()) return Fail(name, rig.status().Within("rig '" + id + "'"));
     if (args.heave_amp_m != 0.0) {
       const Status set = rig->SetPiston(heave);
@@ -104,9 +112,9 @@ int RunServe(const ServeArgs& args) {
       "  topics: mpdrig_sensors, mpdrig_estimate, mpdrig_pressure_profile, mpdrig_status (out); "
       "mpdrig_choke_command, "
       "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
-      "mpdrig_step_request (in)\n  stop with Ctrl-C\n",
+      "mpdrig_step_request (in)\n  sensor noise: %s\n  stop with Ctrl-C\n",
       ids.c_str(), args.domain, args.dds_config.empty() ? "loopback only" : "configured network",
-      args.clock.c_str(), args.rate_hz);
+      args.clock.c_str(), args.rate_hz, (*service)->rigs().front().DescribeSensorNoise().c_str());
   const auto started = std::chrono::steady_clock::now();
   const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
@@ -141,6 +149,8 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       "FT1 only: mpdrig_estimate carries the estimated bottom-hole pressure, heave velocity and\n"
       "the disturbance frequency it assumes (the commanded sine's, else tracked online);\n"
       "mpdrig_pressure_profile the pressure along the pipe, simulated and estimated.\n"
+      "The sensors carry the lab's noise (thesis Table 4.1.1; the observer sees it too), the\n"
+      "status says which; --sensor-noise none publishes the model's channels as they are.\n"
       "  mpdrig serve --rig rig-1 --rig rig-2 --rate-hz 100 --clock realtime\n"
       "  mpdrig serve --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 20 --choke-deg 45\n"
       "  mpdrig serve --clock lockstep --domain 7   # advances only on mpdrig_step_request\n"
@@ -215,6 +225,15 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       "--observer-linear-friction", args->observer_linear_friction,
       "the thesis's observer: linear friction only in its pipe copy (default: also "
       "the quadratic friction f2 u|u|, about 50x smaller BHP error at 0.1 m strokes)");
+  command
+      ->add_option("--sensor-noise", args->sensor_noise,
+                   "noise of the published sensor channels: none, lab (thesis Table 4.1.1) or "
+                   "a SPEC (README, Sensor noise)")
+      ->capture_default_str();
+  command
+      ->add_option("--noise-seed", args->noise_seed,
+                   "seed of the sensor noise (each rig mixes in its id)")
+      ->capture_default_str();
   command->callback([args, exit_code]() { *exit_code = RunServe(*args); });
 }
 

@@ -1,6 +1,7 @@
 // mpdrig simulate: drive the rig model with a log's inputs or with profiles; write a rig log.
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <memory>
 
@@ -9,6 +10,7 @@
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
 #include "model/sim/profile.h"
+#include "model/sim/sensor_noise.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 #include "service/cli/rig_log_output.h"
@@ -29,6 +31,8 @@ struct SimulateArgs {
   bool allow_negative_pressure = false;
   std::vector<double> pressure_at_m;
   std::string out_path;
+  std::string sensor_noise = "lab";
+  std::uint64_t noise_seed = 1;
 };
 
 int RunSimulate(const SimulateArgs& args) {
@@ -39,6 +43,9 @@ int RunSimulate(const SimulateArgs& args) {
   if (!options.ok()) return Fail(name, options.status());
   options->stop_on_range_violation = !args.allow_negative_pressure;
   options->pressure_positions_m = args.pressure_at_m;
+
+  auto noise = ParseSensorNoise(args.sensor_noise);
+  if (!noise.ok()) return Fail(name, noise.status().Within("--sensor-noise"));
 
   InputSignals signals;
   std::vector<double> output_times;
@@ -121,6 +128,14 @@ int RunSimulate(const SimulateArgs& args) {
   if (!args.model.config_path.empty()) metadata.emplace_back("config", args.model.config_path);
   for (const std::string& assignment : args.model.overrides)
     metadata.emplace_back("set", assignment);
+  // What the lab's sensors would read (sensor_noise.h); the extra --pressure-at outputs are the
+  // model's, not sensors, and stay noise-free. `none` writes the model's output untouched.
+  if (!noise->IsNone()) {
+    SensorNoiseApplier sensors(*noise, args.noise_seed);
+    for (RigSample& sample : run->samples) sensors.MeasureSample(&sample);
+    metadata.emplace_back("sensor_noise",
+                          noise->ToSpec() + ", seed " + std::to_string(args.noise_seed));
+  }
   if (run->first_range_event) {
     metadata.emplace_back("warning", run->first_range_event->Describe());
     std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
@@ -146,7 +161,8 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
   CLI::App* command =
       app->add_subcommand("simulate", "Run the rig model; write every lab channel as a rig log");
   command->footer(
-      "Writes a rig log (rig-log-format.md) with every lab channel.\n"
+      "Writes a rig log (rig-log-format.md) with every lab channel, as the lab's sensors read\n"
+      "it: with their noise (--sensor-noise, default lab; none: the model's output as is).\n"
       "Drive it with the inputs of a measured log (--inputs), or with profiles:\n"
       "  mpdrig simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 \\\n"
       "                  --outlet-barg 0 --duration 60 --out sim.csv\n"
@@ -184,6 +200,13 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
       ->delimiter(',');
   command->add_flag("--allow-negative-pressure", args->allow_negative_pressure,
                     "keep going when the absolute pressure falls to zero (reported as a warning)");
+  command
+      ->add_option("--sensor-noise", args->sensor_noise,
+                   "noise of the written sensor channels: none, lab (thesis Table 4.1.1) or a "
+                   "SPEC (README, Sensor noise)")
+      ->capture_default_str();
+  command->add_option("--noise-seed", args->noise_seed, "seed of the sensor noise")
+      ->capture_default_str();
   command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
   command->callback([args, exit_code, inputs, piston]() {
     if (inputs->count() == 0 && piston->count() == 0) {

@@ -29,11 +29,13 @@ bool Within(double value, double lo, double hi) { return value >= lo && value <=
 
 Result<RigHost> RigHost::Create(std::string rig_id, const RigParams& params,
                                 SimulationOptions options, double sensor_rate_hz,
-                                InitialCommands initial, CommandLimits limits) {
+                                InitialCommands initial, CommandLimits limits,
+                                SensorOptions sensors) {
   if (!(sensor_rate_hz > 0.0 && sensor_rate_hz <= 10000.0)) {
     return Status::Error("sensor rate must be in (0, 10000] Hz");
   }
   if (rig_id.empty()) return Status::Error("rig id must not be empty");
+  MPDRIG_RETURN_IF_ERROR(sensors.noise.Validate());
   // A running rig reports leaving the model's range instead of stopping (design.md, Errors).
   options.stop_on_range_violation = false;
   options.choke_input = ChokeInput::kReference;
@@ -56,17 +58,24 @@ Result<RigHost> RigHost::Create(std::string rig_id, const RigParams& params,
   auto simulator = RigSimulator::Create(params, options, inputs);
   if (!simulator.ok()) return simulator.status();
   return RigHost(std::move(rig_id), RigSampler(std::move(simulator).value()), 1.0 / sensor_rate_hz,
-                 limits, inputs, options.pressure_positions_m);
+                 limits, inputs, options.pressure_positions_m, sensors);
 }
 
 RigHost::RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
-                 RigInputs inputs, std::vector<double> positions_m)
+                 RigInputs inputs, std::vector<double> positions_m, SensorOptions sensors)
     : rig_id_(std::move(rig_id)),
       sampler_(std::move(sampler)),
       period_s_(period_s),
       limits_(limits),
       inputs_(inputs),
-      positions_m_(std::move(positions_m)) {}
+      positions_m_(std::move(positions_m)),
+      sensor_options_(sensors),
+      sensors_(sensors.noise, MixSeed(sensors.seed, rig_id_)) {}
+
+std::string RigHost::DescribeSensorNoise() const {
+  if (sensor_options_.noise.IsNone()) return "none";
+  return sensor_options_.noise.ToSpec() + ", seed " + std::to_string(sensor_options_.seed);
+}
 
 std::optional<double> RigHost::piston_sine_hz() const {
   if (piston_.mode == PistonCommandIn::Mode::kSine && piston_.frequency_hz > 0.0 &&
@@ -211,6 +220,7 @@ Result<RigSample> RigHost::Tick() {
   sample->values[Index(Channel::kFT2)] = inputs_.pump_flow_m3ps;
   sample->values[Index(Channel::kFT3)] = (*sample)[Channel::kFT1] + inputs_.pump_flow_m3ps;
   sample->values[Index(Channel::kC1)] = inputs_.outlet_pressure_pa;
+  sensors_.MeasureSample(&*sample);
   time_s_ = target;
   ++counters_.samples;
   return sample;

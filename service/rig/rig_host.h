@@ -18,6 +18,7 @@
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/sim/rig_simulator.h"
+#include "model/sim/sensor_noise.h"
 
 namespace mpdrig::service {
 
@@ -49,6 +50,18 @@ struct InitialCommands {
   double outlet_barg = 0.0;
 };
 
+// What the rig's sensors add to the model's channels (model/sim/sensor_noise.h): every channel
+// of a sample (Tick) is what a sensor reads, the observer beside the rig and every client see
+// the same noisy values, as on the real rig; the commands and the model's state never carry
+// noise. The default here is none (the model's output as is: what the service's physics tests
+// check); `mpdrig serve` defaults to the lab's (thesis Table 4.1.1).
+struct SensorOptions {
+  SensorNoise noise;
+  // Each rig draws its own noise from this seed and its rig id (MixSeed), so two rigs of one
+  // service do not read the same numbers, and a rig reads the same ones in every run.
+  std::uint64_t seed = 1;
+};
+
 struct RigCounters {
   std::uint64_t samples = 0;
   std::uint64_t rejected_commands = 0;
@@ -60,13 +73,17 @@ class RigHost {
  public:
   static Result<RigHost> Create(std::string rig_id, const RigParams& params,
                                 SimulationOptions options, double sensor_rate_hz,
-                                InitialCommands initial = {}, CommandLimits limits = {});
+                                InitialCommands initial = {}, CommandLimits limits = {},
+                                SensorOptions sensors = {});
 
   const std::string& rig_id() const { return rig_id_; }
   double sensor_period_s() const { return period_s_; }
   double time_s() const { return time_s_; }
   const RigCounters& counters() const { return counters_; }
   const RigParams& params() const { return sampler_.simulator().params(); }
+  const SensorOptions& sensor_options() const { return sensor_options_; }
+  // "none", or the noise's text form and the seed: "lab, seed 1" (the status topic).
+  std::string DescribeSensorNoise() const;
 
   // Each returns OK if the command is now in force, or the reason it was refused (also counted
   // and kept in counters().last_rejection).
@@ -95,14 +112,15 @@ class RigHost {
   const std::vector<double>& pressure_positions_m() const { return positions_m_; }
   static constexpr int kDefaultProfilePoints = 19;  // every 50 m on the 900 m pipe
 
-  // Advances one sensor period with the commands in force and returns every channel then.
+  // Advances one sensor period with the commands in force and returns every channel then, as
+  // the sensors read it (SensorOptions; the extra pressure positions stay the model's).
   // Fails only when the simulation itself fails (solver, or the model range if the options stop
   // on it); the caller reports that and may keep the rig's last state.
   Result<RigSample> Tick();
 
  private:
   RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
-          RigInputs inputs, std::vector<double> positions_m);
+          RigInputs inputs, std::vector<double> positions_m, SensorOptions sensors);
   double PistonPositionAt(double time_s) const;
 
   std::string rig_id_;
@@ -116,6 +134,8 @@ class RigHost {
   double time_s_ = 0.0;
   RigCounters counters_;
   std::vector<double> positions_m_;
+  SensorOptions sensor_options_;
+  SensorNoiseApplier sensors_;
 };
 
 }  // namespace mpdrig::service

@@ -257,6 +257,8 @@ struct RigService::Impl {
         static_cast<std::uint32_t>(owner_ptrs.size());
     wire.actuator_owners._buffer = owner_ptrs.empty() ? nullptr : owner_ptrs.data();
     wire.actuator_owners._release = false;
+    const std::string sensor_noise = rig.DescribeSensorNoise();
+    wire.sensor_noise = const_cast<char*>(sensor_noise.c_str());
     return status->Write(wire);
   }
 

@@ -13,7 +13,9 @@
 // Several controllers may command one rig: each actuator's topic uses exclusive ownership, so
 // the strongest live writer wins and the next takes over when it goes; when none is left, the
 // actuator goes to its safe state (ServeOptions) and the status says so.
-// Beside each rig runs the backstepping observer on the rig's topside channels; its estimate
+// Sensors read with the rig's noise (RigHost's SensorOptions); the status names it.
+// Beside each rig runs the backstepping observer on the rig's topside channels, as the sensors
+// read them (with their noise, as on the real rig); its estimate
 // (bottom-hole pressure, heave velocity, the disturbance frequency it uses) goes out on
 // mpdrig_estimate right after the sensor sample it belongs to, and the pressure along the pipe,
 // simulated and estimated, on mpdrig_pressure_profile at a lower rate.

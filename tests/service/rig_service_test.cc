@@ -32,7 +32,8 @@ dds_domainid_t TestDomain() {
 // The service on a thread, and a client participant in the same domain.
 class ServiceTest : public ::testing::Test {
  protected:
-  void Start(double safe_choke_deg = std::nan("")) {
+  // rig-1's sensors read with `rig1_sensors` (default: no noise); rig-2's never have noise.
+  void Start(double safe_choke_deg = std::nan(""), SensorOptions rig1_sensors = {}) {
     std::vector<RigHost> rigs;
     for (const char* id : {"rig-1", "rig-2"}) {
       // rig-2 runs with a physical effect, which its status reports.
@@ -40,7 +41,8 @@ class ServiceTest : public ::testing::Test {
       if (std::string(id) == "rig-2") {
         ASSERT_TRUE(ApplyEffectSpec(&params, "sensor_lag:time_constant_s=0.2").ok());
       }
-      auto rig = RigHost::Create(id, params, SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
+      auto rig = RigHost::Create(id, params, SimulationOptions(), 100.0, {31.0, 5.0, 0.0}, {},
+                                 std::string(id) == "rig-1" ? rig1_sensors : SensorOptions{});
       ASSERT_TRUE(rig.ok()) << rig.status().message();
       rigs.push_back(std::move(rig).value());
     }
@@ -125,6 +127,7 @@ class ServiceTest : public ::testing::Test {
           for (std::uint32_t i = 0; i < s.active_effects._length; ++i) {
             last_effects_ += std::string(s.active_effects._buffer[i]) + "\n";
           }
+          last_sensor_noise_ = s.sensor_noise;
         }
       });
     }
@@ -150,6 +153,7 @@ class ServiceTest : public ::testing::Test {
   std::uint64_t request_id_ = 0;
   std::string last_warnings_;
   std::string last_effects_;
+  std::string last_sensor_noise_;  // sensor_noise of the last completed step's status
   std::string
       last_owners_;  // actuator_owners of the last completed step's status  // active_effects of
                      // the last completed step's status  // of the last completed step's status
@@ -205,6 +209,43 @@ TEST_F(ServiceTest, StatusReportsTheActiveEffectsPerRig) {
   EXPECT_EQ(last_effects_, "");
   Step("rig-2", 1);
   EXPECT_EQ(last_effects_, "sensor_lag time_constant_s=0.200000\n");
+}
+
+// The status names each rig's sensor noise, and the sensors carry it: at rest (the rig starts in
+// its steady state) the pressure transmitters scatter by the lab's 0.024 bar on rig-1 and not at
+// all on rig-2. Pooled over 14 transmitters x 300 samples, the sample standard deviation spreads
+// by 1 / sqrt(2 n) = 1.1 %; 4 of those is the tolerance.
+TEST_F(ServiceTest, StatusNamesTheSensorNoiseAndTheSensorsCarryIt) {
+  Start(std::nan(""), SensorOptions{SensorNoise::Lab(), 3});
+  Step("rig-1", 300);
+  EXPECT_EQ(last_sensor_noise_, "lab, seed 3");
+  Step("rig-2", 300);
+  EXPECT_EQ(last_sensor_noise_, "none");
+  auto sensors = TakeSensors();
+  ASSERT_EQ(sensors["rig-1"].size(), 300u);
+  ASSERT_EQ(sensors["rig-2"].size(), 300u);
+  auto pooled_stddev = [](const std::vector<RigSample>& samples) {
+    double sum = 0.0;
+    std::size_t n = 0;
+    for (Channel channel :
+         {Channel::kP1, Channel::kP2, Channel::kPT1, Channel::kPT2, Channel::kPT3, Channel::kPT4,
+          Channel::kPT5, Channel::kPT6, Channel::kPT7, Channel::kPT8, Channel::kPT9, Channel::kPT10,
+          Channel::kC1, Channel::kC2}) {
+      double mean = 0.0;
+      for (const RigSample& s : samples) mean += s[channel];
+      mean /= static_cast<double>(samples.size());
+      for (const RigSample& s : samples) sum += (s[channel] - mean) * (s[channel] - mean);
+      n += samples.size() - 1;
+    }
+    return std::sqrt(sum / static_cast<double>(n));
+  };
+  const double tolerance = 4.0 / std::sqrt(2.0 * 14.0 * 299.0);
+  EXPECT_NEAR(pooled_stddev(sensors["rig-1"]), 2400.0, tolerance * 2400.0);
+  EXPECT_LT(pooled_stddev(sensors["rig-2"]), 10.0) << "a rig at rest without sensor noise";
+  // The choke feedback scatters about the 31 deg the choke holds (its mean to 4 sigma / sqrt(n)).
+  double choke_sum = 0.0;
+  for (const RigSample& s : sensors["rig-1"]) choke_sum += s[Channel::kChokePosition];
+  EXPECT_NEAR(units::ChokeFracToDeg(choke_sum / 300.0), 31.0, 4.0 * 0.1 / std::sqrt(300.0));
 }
 
 TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
