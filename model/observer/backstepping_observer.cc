@@ -98,16 +98,16 @@ Status BacksteppingObserver::SetMeasurementNoise(const MeasurementNoise& noise) 
   return Status::Ok();
 }
 
-Status BacksteppingObserver::Step(const TopsideMeasurement& measured) {
-  if (!std::isfinite(measured.outlet_pressure_pa) || !std::isfinite(measured.outlet_flow_m3ps)) {
+Status BacksteppingObserver::Step(const TopsideMeasurement& raw) {
+  if (!std::isfinite(raw.outlet_pressure_pa) || !std::isfinite(raw.outlet_flow_m3ps)) {
     std::ostringstream out;
     out << "observer: non-finite measurement at t = " << time_s() + dt_s_ << " s";
     return Status::Error(out.str());
   }
   const double tau = gains_.design.prefilter_tau_s;
   TopsideMeasurement at_end;
-  at_end.outlet_pressure_pa = pressure_filter_.Step(measured.outlet_pressure_pa, dt_s_, tau);
-  at_end.outlet_flow_m3ps = flow_filter_.Step(measured.outlet_flow_m3ps, dt_s_, tau);
+  at_end.outlet_pressure_pa = pressure_filter_.Step(raw.outlet_pressure_pa, dt_s_, tau);
+  at_end.outlet_flow_m3ps = flow_filter_.Step(raw.outlet_flow_m3ps, dt_s_, tau);
   const int n = options_.cells;
   const double hdt = 0.5 * dt_s_;
   const std::vector<double>& p1 = gains_.p1;

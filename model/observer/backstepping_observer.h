@@ -73,8 +73,9 @@ class BacksteppingObserver {
   const ObserverGains& gains() const { return gains_; }
   const ObserverOptions& options() const { return options_; }
 
-  // Advances one step; `at_end` is the measurement at time_s() + time_step_s().
-  Status Step(const TopsideMeasurement& at_end);
+  // Advances one step; `raw` is the measurement at time_s() + time_step_s(), as measured (the
+  // prefilter of GainDesign::kNoise, when on, is applied here).
+  Status Step(const TopsideMeasurement& raw);
   // New disturbance frequency: recomputes L, exp(A a) L and p1, p2 (the kernels depend on the
   // friction only and are kept). The state is kept. New rig parameters (c, l, f1, areas) change
   // the grid, the time step and the kernels: create a new observer (gains are computed there).

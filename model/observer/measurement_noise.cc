@@ -38,7 +38,13 @@ double RobustNoiseSigma(const std::vector<double>& values) {
   for (std::size_t k = 1; k + 1 < values.size(); ++k) {
     d2[k - 1] = std::fabs(values[k + 1] - 2.0 * values[k] + values[k - 1]);
   }
-  return 1.4826 * Median(std::move(d2)) / std::sqrt(6.0);
+  double mean_abs = 0.0;
+  for (double d : d2) mean_abs += d / d2.size();
+  const double median = Median(std::move(d2));
+  // A channel held between updates (a meter slower than the log) has mostly zero differences:
+  // then the mean absolute difference, E|d2| = sqrt(2 / pi) sqrt(6) sigma for Gaussian noise.
+  if (median == 0.0) return std::sqrt(M_PI / 2.0) * mean_abs / std::sqrt(6.0);
+  return 1.4826 * median / std::sqrt(6.0);
 }
 
 Result<MeasurementNoise> EstimateTopsideNoise(const std::vector<double>& time_s,

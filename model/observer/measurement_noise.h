@@ -52,7 +52,8 @@ struct MeasurementNoise {
   Status Validate() const;
 };
 
-// sigma = 1.4826 median(|s_{k+1} - 2 s_k + s_{k-1}|) / sqrt(6); 0 for fewer than 3 values.
+// sigma = 1.4826 median(|s_{k+1} - 2 s_k + s_{k-1}|) / sqrt(6); 0 for fewer than 3 values. If
+// the median is 0 (a held or quantised channel), sqrt(pi / 2) mean(|d2|) / sqrt(6) instead.
 double RobustNoiseSigma(const std::vector<double>& values);
 
 // The noise of C2 and FT1 in a topside record (uniformly sampled; dt = median sample period).

@@ -34,6 +34,12 @@ TEST(MeasurementNoiseTest, RobustSigmaSeesTheNoiseNotTheHeave) {
   // The sine alone: d2 = 100 (2 pi 0.2 0.01)^2 sin = 0.016 at most.
   EXPECT_LT(RobustNoiseSigma(clean), 0.02);
   EXPECT_EQ(RobustNoiseSigma({1.0, 2.0}), 0.0);
+  // A channel that repeats each value 4 times (a meter updating at a quarter of the log's rate):
+  // not 0, and of the order of the noise (the held samples make it neither white nor exact).
+  std::vector<double> held(s.size());
+  for (std::size_t k = 0; k < s.size(); ++k) held[k] = s[k - k % 4];
+  EXPECT_GT(RobustNoiseSigma(held), 0.3);
+  EXPECT_LT(RobustNoiseSigma(held), 1.5);
 }
 
 // F(s) = (1 + 2 tau s) / (1 + tau s)^2: no lag on a ramp (1 - F has a double zero at s = 0), and
