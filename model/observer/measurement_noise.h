@@ -32,7 +32,7 @@
 //     so its estimate is F applied to the unfiltered one: the error at the heave frequency is
 //     |1 - F(j omega)| <= (omega tau)^2 = prefilter_error, tau = sqrt(prefilter_error) / omega.
 //     It passes 5 dt / (4 tau) of the white noise's variance (at 0.2 Hz, 100 Hz logging and
-//     prefilter_error = 1 %: 16 %, i.e. 0.4 of its standard deviation).
+//     prefilter_error = 2 %: 11 %, i.e. 0.33 of its standard deviation).
 #pragma once
 
 #include <array>

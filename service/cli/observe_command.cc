@@ -225,9 +225,9 @@ void AddObserveCommand(CLI::App* app, int* exit_code) {
       "or --pressure-noise-bar / --flow-noise-lpm), the disturbance gain is the steady-state\n"
       "Kalman gain of the heave model (process noise: the heave velocity amplitude may drift 1 %\n"
       "per period) for that noise, and C2, FT1 pass a zero-lag filter (1 + 2 tau s)/(1 + tau s)^2\n"
-      "whose error at the heave frequency is <= 1 %. With negligible noise the Kalman poles would\n"
+      "whose error at the heave frequency is <= 2 %. With negligible noise the Kalman poles would\n"
       "be faster than the thesis's: then the thesis's poles are used, unfiltered.\n"
-      "Lab noise (Table 4.1.1): BHP fit 93-98 % after 20 s at 0.1-0.33 Hz. --gains thesis or\n"
+      "Lab noise (Table 4.1.1): BHP fit 94-98 % after 20 s at 0.1-0.33 Hz. --gains thesis or\n"
       "--pole RE IM: the poles as given (the thesis's: --pole -40 20), no filter.\n"
       "  mpdrig observe run.csv --disturbance-hz 0.2 --out est.csv");
   AddObserverOptions(command, args.get());

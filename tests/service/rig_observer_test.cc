@@ -51,7 +51,7 @@ ServiceRun RunService(const mpdrig::testing::TopsideLog& log,
 }
 
 // At lab noise, 0.2 Hz heave (the case) and 0.1 / 0.33 Hz: BHP fit >= 90 % after 20 s
-// with the service's defaults (measured 94-98 %; the noise is estimated over the first 5 s, so
+// with the service's defaults (measured 94.3-96.8 %; the noise is estimated over the first 5 s, so
 // the first 5 s run the thesis's poles, well before the scored window). On the noise-free rig
 // (the service today) the estimate keeps the thesis's poles and the fit is the noise-free one.
 TEST(RigObserverNoiseTest, DefaultsFitTheTrueBhpAtLabNoiseAndWithoutNoise) {
