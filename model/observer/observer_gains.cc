@@ -106,6 +106,9 @@ Result<NoiseDesign> DesignForNoise(const RigParams& params, const ObserverOption
   const double v = options.heave_stroke_m * omega;
   const double drift = options.heave_drift_per_period * v;
   const double q = drift * drift * options.disturbance_hz;
+  // The Kalman filter's faster pole is close to -sqrt(q / r): far beyond the thesis's the noise is
+  // negligible and the Riccati equation ill-conditioned (the Hamiltonian spans many decades).
+  if (r == 0.0 || std::sqrt(q / r) > 10.0 * std::abs(options.pole)) return design;
   auto kalman = KalmanPoles(omega, q, r);
   if (!kalman.ok()) return kalman.status();
   design.kalman = *kalman;

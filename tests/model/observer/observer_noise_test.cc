@@ -170,9 +170,11 @@ TEST(ObserverAtLabNoiseTest, NoiseFreeLogKeepsTheThesisDesign) {
   ObserverOptions options = Defaults(0.2, log.truth, true);
   auto design = DesignForNoise(RigParams(), options);
   ASSERT_TRUE(design.ok());
-  std::printf("noise-free log: estimated C2 %.3g Pa, FT1 %.3g L/min; Kalman poles %.3g, %.3g\n",
+  // (Its Kalman filter's faster pole would be about -700 rad/s: not even computed, NaN.)
+  std::printf("noise-free log: estimated C2 %.3g Pa, FT1 %.3g L/min; poles %g%+gi\n",
               options.noise.outlet_pressure_pa, units::M3psToLpm(options.noise.outlet_flow_m3ps),
-              design->kalman[0].real(), design->kalman[1].real());
+              design->poles[0].real(), design->poles[0].imag());
+  EXPECT_TRUE(std::isnan(design->kalman[0].real()));
   EXPECT_EQ(design->poles[0], std::complex<double>(-40, 20));
   EXPECT_EQ(design->prefilter_tau_s, 0.0);
   const RigParams params;
@@ -197,6 +199,16 @@ TEST(ObserverAtLabNoiseTest, LessNoiseFitsBetterAndBadNoiseIsRefused) {
   std::printf("0.2 Hz, 45 deg: fit at 0.1x lab noise %.1f %%, at lab noise %.1f %%\n", fit_quiet,
               fit_lab);
   EXPECT_GE(fit_quiet, fit_lab);
+  // Vanishing noise (down to the last bits of a double) is negligible, never an error.
+  for (double sigma : {1e-300, 1e-20, 1e-9, 1e-3}) {
+    ObserverOptions tiny;
+    tiny.noise.outlet_pressure_pa = sigma;
+    tiny.noise.outlet_flow_m3ps = sigma * 1e-10;
+    auto design = DesignForNoise(RigParams(), tiny);
+    ASSERT_TRUE(design.ok()) << sigma << ": " << design.status().message();
+    EXPECT_EQ(design->poles[0], std::complex<double>(-40, 20)) << sigma;
+    EXPECT_EQ(design->prefilter_tau_s, 0.0) << sigma;
+  }
   ObserverOptions bad;
   bad.noise.outlet_pressure_pa = -1.0;
   EXPECT_FALSE(bad.Validate().ok());
