@@ -55,6 +55,8 @@ Result<BacksteppingObserver> BacksteppingObserver::Create(const RigParams& param
   obs.v_.assign(n + 1, 0.0);
   obs.u_next_.assign(n + 1, 0.0);
   obs.v_next_.assign(n + 1, 0.0);
+  obs.pressure_filter_.Reset(initial.outlet_pressure_pa);
+  obs.flow_filter_.Reset(initial.outlet_flow_m3ps);
   obs.v_[n] = obs.MeasuredDown(initial);
   obs.error_ = obs.MeasuredUp(initial) - obs.u_[n];
   if (options.track_frequency) {
@@ -86,12 +88,26 @@ Status BacksteppingObserver::SetDisturbanceFrequency(double frequency_hz) {
   return Status::Ok();
 }
 
-Status BacksteppingObserver::Step(const TopsideMeasurement& at_end) {
-  if (!std::isfinite(at_end.outlet_pressure_pa) || !std::isfinite(at_end.outlet_flow_m3ps)) {
+Status BacksteppingObserver::SetMeasurementNoise(const MeasurementNoise& noise) {
+  ObserverOptions options = options_;
+  options.noise = noise;
+  auto gains = ObserverGains::Compute(params_, options, kernel_);
+  if (!gains.ok()) return gains.status();
+  gains_ = std::move(gains).value();
+  options_ = options;
+  return Status::Ok();
+}
+
+Status BacksteppingObserver::Step(const TopsideMeasurement& raw) {
+  if (!std::isfinite(raw.outlet_pressure_pa) || !std::isfinite(raw.outlet_flow_m3ps)) {
     std::ostringstream out;
     out << "observer: non-finite measurement at t = " << time_s() + dt_s_ << " s";
     return Status::Error(out.str());
   }
+  const double tau = gains_.design.prefilter_tau_s;
+  TopsideMeasurement at_end;
+  at_end.outlet_pressure_pa = pressure_filter_.Step(raw.outlet_pressure_pa, dt_s_, tau);
+  at_end.outlet_flow_m3ps = flow_filter_.Step(raw.outlet_flow_m3ps, dt_s_, tau);
   const int n = options_.cells;
   const double hdt = 0.5 * dt_s_;
   const std::vector<double>& p1 = gains_.p1;

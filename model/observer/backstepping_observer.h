@@ -24,6 +24,9 @@
 // With ObserverOptions::track_frequency a FrequencyTracker follows the measured up-going wave y
 // and the gains are recomputed (SetDisturbanceFrequency) when its estimate moves.
 //
+// With GainDesign::kNoise and a noise that limits the design (measurement_noise.h), C2 and FT1
+// pass through the zero-lag prefilter before anything else.
+//
 // Estimates: p^(x) at any x (PT1..PT10, BHP = p^(0)), the inlet flow FT4^ = q^(0), the piston
 // velocity v_d^ = C_bar X^ and position -X^_1 / omega (zero-mean part of the heave).
 #pragma once
@@ -70,12 +73,16 @@ class BacksteppingObserver {
   const ObserverGains& gains() const { return gains_; }
   const ObserverOptions& options() const { return options_; }
 
-  // Advances one step; `at_end` is the measurement at time_s() + time_step_s().
-  Status Step(const TopsideMeasurement& at_end);
+  // Advances one step; `raw` is the measurement at time_s() + time_step_s(), as measured (the
+  // prefilter of GainDesign::kNoise, when on, is applied here).
+  Status Step(const TopsideMeasurement& raw);
   // New disturbance frequency: recomputes L, exp(A a) L and p1, p2 (the kernels depend on the
   // friction only and are kept). The state is kept. New rig parameters (c, l, f1, areas) change
   // the grid, the time step and the kernels: create a new observer (gains are computed there).
   Status SetDisturbanceFrequency(double frequency_hz);
+  // New measurement noise (e.g. estimated over a start-up window): recomputes the gains and the
+  // prefilter as SetDisturbanceFrequency does. The state (and the prefilter's) is kept.
+  Status SetMeasurementNoise(const MeasurementNoise& noise);
 
   ObserverEstimate Estimate() const;
   double PressureAtPa(double x_m) const;  // absolute, linear between nodes
@@ -103,8 +110,9 @@ class BacksteppingObserver {
   std::vector<double> q_;        // scratch: q^ at the nodes, old level
   std::vector<double> u_, v_, u_next_, v_next_;
   Eigen::Vector2d x_hat_{0.0, 0.0};
-  double error_ = 0.0;                       // y - u^(1) at the current time
-  std::optional<FrequencyTracker> tracker_;  // ObserverOptions::track_frequency
+  double error_ = 0.0;                           // y - u^(1) at the current time
+  std::optional<FrequencyTracker> tracker_;      // ObserverOptions::track_frequency
+  ZeroLagFilter pressure_filter_, flow_filter_;  // GainDesign::kNoise prefilter on C2, FT1
 };
 
 // A topside record (e.g. from a rig log): strictly increasing times, finite values.

@@ -30,6 +30,12 @@ Result<Eigen::Vector2d> PlacePoles2(const Eigen::Matrix2d& a, const Eigen::RowVe
 Result<SinusoidDisturbance> SinusoidDisturbance::Create(double frequency_hz,
                                                         double displacement_area_m2,
                                                         std::complex<double> pole) {
+  return CreateWithPoles(frequency_hz, displacement_area_m2, {pole, std::conj(pole)});
+}
+
+Result<SinusoidDisturbance> SinusoidDisturbance::CreateWithPoles(
+    double frequency_hz, double displacement_area_m2,
+    const std::array<std::complex<double>, 2>& poles) {
   if (!(std::isfinite(frequency_hz) && frequency_hz > 0.0 && frequency_hz < 1e3)) {
     std::ostringstream out;
     out << "disturbance frequency must be in (0, 1000) Hz, got " << frequency_hz;
@@ -38,19 +44,26 @@ Result<SinusoidDisturbance> SinusoidDisturbance::Create(double frequency_hz,
   if (!(displacement_area_m2 > 0.0)) {
     return Status::Error("piston displacement area A_d - A_d2 must be positive");
   }
-  if (!(std::isfinite(pole.real()) && std::isfinite(pole.imag()) && pole.real() < 0.0)) {
-    std::ostringstream out;
-    out << "observer poles must have a negative real part, got " << pole.real() << " +- "
-        << std::fabs(pole.imag()) << "i";
-    return Status::Error(out.str());
+  const std::complex<double> sum = poles[0] + poles[1], product = poles[0] * poles[1];
+  for (const std::complex<double>& pole : poles) {
+    if (!(std::isfinite(pole.real()) && std::isfinite(pole.imag()) && pole.real() < 0.0)) {
+      std::ostringstream out;
+      out << "observer poles must have a negative real part, got " << pole.real() << " +- "
+          << std::fabs(pole.imag()) << "i";
+      return Status::Error(out.str());
+    }
+  }
+  if (std::fabs(sum.imag()) > 1e-9 * std::abs(sum) ||
+      std::fabs(product.imag()) > 1e-9 * std::abs(product)) {
+    return Status::Error("observer poles must be a conjugate pair or both real");
   }
   SinusoidDisturbance d;
   d.omega_radps = 2.0 * M_PI * frequency_hz;
   d.a << 0.0, -d.omega_radps, d.omega_radps, 0.0;
   d.c_bar << 0.0, 1.0;
   d.c = -displacement_area_m2 * d.c_bar;
-  // (s - p)(s - conj p) = s^2 - 2 Re(p) s + |p|^2
-  auto l = PlacePoles2(d.a, d.c, -2.0 * pole.real(), std::norm(pole));
+  // (s - p1)(s - p2) = s^2 - (p1 + p2) s + p1 p2
+  auto l = PlacePoles2(d.a, d.c, -sum.real(), product.real());
   if (!l.ok()) return l.status();
   d.l = *l;
   return d;

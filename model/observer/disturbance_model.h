@@ -14,6 +14,7 @@
 // observable pair (A, C)); default poles -40 +- 20i rad/s as in thesis 10.3.
 #pragma once
 
+#include <array>
 #include <complex>
 
 #include <Eigen/Dense>
@@ -36,6 +37,10 @@ struct SinusoidDisturbance {
   // `pole` (Re < 0); the second pole is its conjugate (Im may be 0: a double real pole).
   static Result<SinusoidDisturbance> Create(double frequency_hz, double displacement_area_m2,
                                             std::complex<double> pole);
+  // The same for any stable pair: conjugate, or two real poles.
+  static Result<SinusoidDisturbance> CreateWithPoles(
+      double frequency_hz, double displacement_area_m2,
+      const std::array<std::complex<double>, 2>& poles);
 };
 
 // Ackermann's formula for a 2-state single-output pair: L such that A - L C has the

@@ -27,6 +27,14 @@ Status ObserverOptions::Validate() const {
         << std::fabs(pole.imag()) << "i";
     return Status::Error(out.str());
   }
+  MPDRIG_RETURN_IF_ERROR(noise.Validate());
+  if (!(std::isfinite(heave_stroke_m) && heave_stroke_m > 0.0 &&
+        std::isfinite(heave_drift_per_period) && heave_drift_per_period > 0.0)) {
+    return Status::Error("observer heave_stroke_m and heave_drift_per_period must be > 0");
+  }
+  if (!(prefilter_error >= 0.0 && prefilter_error < 0.5)) {
+    return Status::Error("observer prefilter_error must be in [0, 0.5)");
+  }
   if (!(retune_fraction >= 0.0 && retune_fraction < 1.0)) {
     return Status::Error("observer retune_fraction must be in [0, 1)");
   }
@@ -78,6 +86,39 @@ double ObserverCoordinates::Flow(double x, double u, double v) const {
   return u * std::exp(-sigma * x) + v * std::exp(sigma * x);
 }
 
+Result<NoiseDesign> DesignForNoise(const RigParams& params, const ObserverOptions& options) {
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  NoiseDesign design;
+  design.poles = {options.pole, std::conj(options.pole)};
+  const std::complex<double> nan(std::nan(""), std::nan(""));
+  design.kalman = {nan, nan};
+  if (options.gain_design == GainDesign::kPoles || options.noise.IsZero()) return design;
+  const double f1 =
+      std::isnan(options.friction_f1_per_s) ? params.friction_f1_per_s : options.friction_f1_per_s;
+  const ObserverCoordinates co = ObserverCoordinates::Create(params, f1);
+  const double omega = 2.0 * M_PI * options.disturbance_hz;
+  // In units of X [m/s]: the injected error measures C X = -(A_d - A_d2) X2.
+  const double area = params.PistonDisplacementAreaM2();
+  const double k = co.impedance_m3ps_per_pa;
+  const double sq = options.noise.outlet_flow_m3ps, sp = options.noise.outlet_pressure_pa;
+  const double var_y = 0.25 * std::exp(2.0 * co.sigma) * (sq * sq + k * k * sp * sp);
+  const double r = var_y * options.noise.sample_period_s / (area * area);
+  const double v = options.heave_stroke_m * omega;
+  const double drift = options.heave_drift_per_period * v;
+  const double q = drift * drift * options.disturbance_hz;
+  // The Kalman filter's faster pole is close to -sqrt(q / r): far beyond the thesis's the noise is
+  // negligible and the Riccati equation ill-conditioned (the Hamiltonian spans many decades).
+  if (r == 0.0 || std::sqrt(q / r) > 10.0 * std::abs(options.pole)) return design;
+  auto kalman = KalmanPoles(omega, q, r);
+  if (!kalman.ok()) return kalman.status();
+  design.kalman = *kalman;
+  if (std::max(std::abs((*kalman)[0]), std::abs((*kalman)[1])) < std::abs(options.pole)) {
+    design.poles = *kalman;
+    design.prefilter_tau_s = std::sqrt(options.prefilter_error) / omega;
+  }
+  return design;
+}
+
 Result<ObserverGains> ObserverGains::Compute(const RigParams& params,
                                              const ObserverOptions& options) {
   MPDRIG_RETURN_IF_ERROR(options.Validate());
@@ -101,8 +142,11 @@ Result<ObserverGains> ObserverGains::Compute(const RigParams& params,
   if (kernel.cells() != options.cells || std::fabs(kernel.sigma() - g.coordinates.sigma) > 1e-12) {
     return Status::Error("kernel solution does not match the observer's grid or friction");
   }
-  auto disturbance = SinusoidDisturbance::Create(options.disturbance_hz,
-                                                 params.PistonDisplacementAreaM2(), options.pole);
+  auto design = DesignForNoise(params, options);
+  if (!design.ok()) return design.status();
+  g.design = *design;
+  auto disturbance = SinusoidDisturbance::CreateWithPoles(
+      options.disturbance_hz, params.PistonDisplacementAreaM2(), g.design.poles);
   if (!disturbance.ok()) return disturbance.status();
   g.disturbance = *disturbance;
   const double travel_s = params.pipe_length_m / params.wave_speed_mps;

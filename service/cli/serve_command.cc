@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 
+#include "model/common/units.h"
 #include "model/sim/sensor_noise.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
@@ -40,6 +41,9 @@ struct ServeArgs {
   int profile_points = service::RigHost::kDefaultProfilePoints;
   double observer_start_hz = 0.2;
   std::vector<double> observer_pole{-40.0, 20.0};
+  bool observer_pole_given = false;
+  std::vector<double> observer_noise{0.0, 0.0};  // C2 [bar], FT1 [L/min]
+  double observer_noise_window_s = 5.0;
   bool observer_linear_friction = false;
   std::string sensor_noise = "lab";
   std::uint64_t noise_seed = 1;
@@ -88,6 +92,13 @@ int RunServe(const ServeArgs& args) {
   serve.profile_hz = args.profile_hz;
   serve.observer_options.observer.disturbance_hz = args.observer_start_hz;
   serve.observer_options.observer.pole = {args.observer_pole[0], args.observer_pole[1]};
+  if (args.observer_pole_given) {
+    serve.observer_options.observer.gain_design = observer::GainDesign::kPoles;
+  }
+  serve.observer_options.observer.noise.outlet_pressure_pa = units::BarToPa(args.observer_noise[0]);
+  serve.observer_options.observer.noise.outlet_flow_m3ps = units::LpmToM3ps(args.observer_noise[1]);
+  serve.observer_options.observer.noise.sample_period_s = 1.0 / args.rate_hz;
+  serve.observer_options.noise_window_s = args.observer_noise_window_s;
   serve.observer_options.observer.quadratic_friction = !args.observer_linear_friction;
   if (!args.dds_config.empty()) {
     std::ifstream file(args.dds_config);
@@ -218,8 +229,25 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   command
       ->add_option("--observer-pole", args->observer_pole,
-                   "poles of A - LC [rad/s]: RE IM for RE +- IM i (thesis 10.3: -40 20)")
+                   "place the poles of A - LC at RE +- IM i [rad/s] instead of choosing them from "
+                   "the noise (thesis 10.3: -40 20). Default: the steady-state Kalman gain for "
+                   "the sensor noise (configured, or estimated over --observer-noise-window-s), "
+                   "the thesis's poles when it is negligible (README, Observer)")
       ->expected(2)
+      ->each([args](const std::string&) { args->observer_pole_given = true; });
+  command
+      ->add_option("--observer-noise", args->observer_noise,
+                   "the sensors' noise the observer designs for: C2_BAR FT1_LPM (standard "
+                   "deviations per sample; lab: 0.024 0.07); the estimate from the start-up "
+                   "window can only raise it")
+      ->expected(2)
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      ->add_option("--observer-noise-window-s", args->observer_noise_window_s,
+                   "rig time over which the observer estimates the noise of C2 and FT1 at start "
+                   "(0: only --observer-noise)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_flag(
       "--observer-linear-friction", args->observer_linear_friction,

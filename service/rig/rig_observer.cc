@@ -34,7 +34,35 @@ Result<RigObserver> RigObserver::Create(const RigParams& params, const RigObserv
       created->gains().coordinates.UpWave(1.0, m.outlet_pressure_pa, m.outlet_flow_m3ps, 0.0);
   auto tracker = observer::FrequencyTracker::Create(tracking, first.time_s, y0);
   if (!tracker.ok()) return tracker.status();
-  return RigObserver(std::move(created).value(), std::move(tracker).value(), first.time_s, m);
+  RigObserver rig_observer(std::move(created).value(), std::move(tracker).value(), first.time_s, m,
+                           options.noise_window_s);
+  rig_observer.noise_estimated_ =
+      !(options.noise_window_s > 0.0) || o.gain_design != observer::GainDesign::kNoise;
+  if (!rig_observer.noise_estimated_) {
+    rig_observer.window_time_s_.push_back(first.time_s);
+    rig_observer.window_pressure_pa_.push_back(m.outlet_pressure_pa);
+    rig_observer.window_flow_m3ps_.push_back(m.outlet_flow_m3ps);
+  }
+  return rig_observer;
+}
+
+Status RigObserver::EstimateNoise() {
+  noise_estimated_ = true;
+  auto estimated =
+      observer::EstimateTopsideNoise(window_time_s_, window_pressure_pa_, window_flow_m3ps_);
+  window_time_s_ = {};
+  window_pressure_pa_ = {};
+  window_flow_m3ps_ = {};
+  if (!estimated.ok()) return Status::Ok();  // too few samples: keep the configured noise
+  const observer::MeasurementNoise& in_use = observer_.options().noise;
+  observer::MeasurementNoise noise = *estimated;
+  noise.outlet_pressure_pa = std::max(noise.outlet_pressure_pa, in_use.outlet_pressure_pa);
+  noise.outlet_flow_m3ps = std::max(noise.outlet_flow_m3ps, in_use.outlet_flow_m3ps);
+  if (noise.outlet_pressure_pa == in_use.outlet_pressure_pa &&
+      noise.outlet_flow_m3ps == in_use.outlet_flow_m3ps) {
+    return Status::Ok();
+  }
+  return observer_.SetMeasurementNoise(noise);
 }
 
 Status RigObserver::Update(const RigSample& sample, std::optional<double> commanded_sine_hz) {
@@ -55,6 +83,12 @@ Status RigObserver::Update(const RigSample& sample, std::optional<double> comman
     }
     last_time_s_ = sample.time_s;
     last_ = now;
+    if (!noise_estimated_) {
+      window_time_s_.push_back(sample.time_s);
+      window_pressure_pa_.push_back(now.outlet_pressure_pa);
+      window_flow_m3ps_.push_back(now.outlet_flow_m3ps);
+      if (sample.time_s >= noise_window_end_s_) MPDRIG_RETURN_IF_ERROR(EstimateNoise());
+    }
   }
 
   // The frequency in use: the commanded sine's, else the tracker's once locked, else unchanged.

@@ -16,6 +16,14 @@
 //     frequency in use (the tracker's starting guess at first).
 // The gains are retuned (BacksteppingObserver::SetDisturbanceFrequency) when the frequency in use
 // moves by more than ObserverOptions::retune_fraction.
+//
+// Measurement noise (GainDesign::kNoise, measurement_noise.h): the observer starts with the
+// configured noise (ObserverOptions::noise; zero by default: the thesis's poles). Over the first
+// noise_window_s of samples it collects C2 and FT1; at the window's end it estimates their noise
+// (1.4826 median|second difference| / sqrt(6)) and, per channel, takes the larger of the
+// configured and the estimated level; if that differs from what is in use, the gains and the
+// prefilter are recomputed (BacksteppingObserver::SetMeasurementNoise). On a noise-free rig the
+// estimate is far below anything that would slow the thesis's poles, so they stay.
 #pragma once
 
 #include <optional>
@@ -34,6 +42,7 @@ struct RigObserverOptions {
   // The service's default runs the plant's quadratic friction in the observer's pipe copy
   // (README, Observer: 0.07 % instead of 3.6 % BHP error at 0.1 m strokes).
   observer::ObserverOptions observer;
+  double noise_window_s = 5.0;  // start-up window for the noise estimate; 0: configured only
   RigObserverOptions() { observer.quadratic_friction = true; }
 };
 
@@ -56,15 +65,19 @@ class RigObserver {
   Status Update(const RigSample& sample, std::optional<double> commanded_sine_hz);
 
   RigObserverEstimate Estimate() const;
+  const observer::ObserverGains& gains() const { return observer_.gains(); }
+  const observer::ObserverOptions& options() const { return observer_.options(); }
   double PressureAtPa(double x_m) const { return observer_.PressureAtPa(x_m); }
 
  private:
   RigObserver(observer::BacksteppingObserver observer, observer::FrequencyTracker tracker,
-              double time_s, observer::TopsideMeasurement last)
+              double time_s, observer::TopsideMeasurement last, double noise_window_s)
       : observer_(std::move(observer)),
         tracker_(std::move(tracker)),
         last_time_s_(time_s),
-        last_(last) {}
+        last_(last),
+        noise_window_end_s_(time_s + noise_window_s) {}
+  Status EstimateNoise();
   static observer::TopsideMeasurement Topside(const RigSample& sample);
   double UpWave(const observer::TopsideMeasurement& m) const;
 
@@ -73,6 +86,10 @@ class RigObserver {
   double last_time_s_;
   observer::TopsideMeasurement last_;
   FrequencySource source_ = FrequencySource::kUnlocked;
+  // Start-up window of topside samples for the noise estimate (emptied when it is done).
+  double noise_window_end_s_;
+  bool noise_estimated_ = false;
+  std::vector<double> window_time_s_, window_pressure_pa_, window_flow_m3ps_;
 };
 
 }  // namespace mpdrig::service

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <regex>
 #include <sstream>
 #include <string>
@@ -588,6 +589,74 @@ TEST_F(CliTest, ObserveEstimatesBottomHolePressureFromTopsideChannels) {
       Run("observe " + Quote(no_c2) + " --disturbance-hz 0.2 --out " + Quote(est));
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_TRUE(Contains(bad.err, "C2")) << bad.err;
+}
+
+// Issue 11, part 5: `observe` at the lab's sensor noise (Table 4.1.1: C2 0.024 bar, FT1 2 % of
+// reading + 0.05 L/min, white per 100 Hz sample), 0.2 Hz heave. With its defaults (noise
+// estimated from the log, Kalman gain, zero-lag prefilter) the BHP fit against the noise-free
+// PT1 after 20 s is >= 90 % (measured 97 %; the model tests cover 0.1-0.33 Hz, two chokes, three
+// seeds); the thesis's poles (--pole -40 20, or --gains thesis) give about 42 %.
+TEST_F(CliTest, ObserveDefaultsHoldAtLabNoise) {
+  const std::string clean = Path("clean.csv");
+  ASSERT_EQ(Run("simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 45 --pump-lpm 20 "
+                "--outlet-barg 1 --duration 60 --out " +
+                Quote(clean))
+                .exit_code,
+            0);
+  riglog::RigLog log = ReadLog(clean);
+  const std::vector<double> truth = *log.Find("PT1");
+  const auto c2_column = log.FindColumn("C2");
+  const auto ft1_column = log.FindColumn("FT1");
+  ASSERT_TRUE(c2_column.has_value());
+  ASSERT_TRUE(ft1_column.has_value());
+  std::vector<double>* c2 = &log.values_si[*c2_column];
+  std::vector<double>* ft1 = &log.values_si[*ft1_column];
+  std::mt19937 rng(21);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  for (std::size_t i = 0; i < log.num_rows(); ++i) {
+    (*c2)[i] += 2400.0 * n01(rng);
+    (*ft1)[i] += (0.02 * std::fabs((*ft1)[i]) + units::LpmToM3ps(0.05)) * n01(rng);
+  }
+  const std::string noisy = Path("noisy.csv");
+  ASSERT_TRUE(riglog::WriteRigLog(log, noisy).ok());
+  auto fit = [&](const std::string& flags) {
+    const std::string est = Path("est_noisy.csv");
+    const RunResult run =
+        Run("observe " + Quote(noisy) + " --disturbance-hz 0.2 " + flags + " --out " + Quote(est));
+    EXPECT_EQ(run.exit_code, 0) << run.err;
+    const riglog::RigLog out = ReadLog(est);
+    const std::vector<double>& y = truth;
+    const std::vector<double>& yhat = *out.Find("BHP_est");
+    double mean = 0.0, e2 = 0.0, d2 = 0.0;
+    int n = 0;
+    for (std::size_t i = 0; i < out.num_rows(); ++i) {
+      if (out.time_s[i] > 20.0) mean += y[i], ++n;
+    }
+    mean /= n;
+    for (std::size_t i = 0; i < out.num_rows(); ++i) {
+      if (out.time_s[i] <= 20.0) continue;
+      e2 += std::pow(y[i] - yhat[i], 2);
+      d2 += std::pow(y[i] - mean, 2);
+    }
+    return std::make_pair(100.0 * (1.0 - std::sqrt(e2 / d2)), run.out);
+  };
+  const auto [by_noise, said] = fit("");
+  const auto [thesis, said_thesis] = fit("--pole -40 20");
+  const auto [thesis_named, unused] = fit("--gains thesis");
+  const auto [told, said_told] = fit("--pressure-noise-bar 0.024 --flow-noise-lpm 0.07");
+  std::printf(
+      "observe at lab noise, 0.2 Hz: fit %.1f %% (told the noise: %.1f %%), thesis's poles "
+      "%.1f %%\n%s",
+      by_noise, told, thesis, said.c_str());
+  EXPECT_GE(by_noise, 90.0);
+  EXPECT_GE(told, 90.0);
+  EXPECT_LT(thesis, 85.0);
+  EXPECT_EQ(thesis, thesis_named);
+  EXPECT_TRUE(Contains(said, "Kalman")) << said;
+  EXPECT_TRUE(Contains(said_thesis, "(given)")) << said_thesis;
+  const RunResult help = Run("observe --help");
+  EXPECT_TRUE(Contains(help.out, "Kalman")) << help.out;
+  EXPECT_TRUE(Contains(help.out, "--gains")) << help.out;
 }
 
 TEST_F(CliTest, GainsWritesTheInjectionGainsAlongThePipe) {
