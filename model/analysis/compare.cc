@@ -205,6 +205,7 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
     replayed = &reconstructed;
   }
   traces.inputs_reconstructed = replay.reconstruct_inputs;
+  traces.warmup = replay.warmup;
   RowPipeline pipeline(
       PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back(), replay.warmup},
       [&](const PipelineSample& sample) {
@@ -346,6 +347,7 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
   if (result.ok()) {
     result->atmospheric_pressure_pa = log.atmospheric_pressure_pa;
     if (model.inputs_reconstructed) result->input_reconstruction = replayed_log->reconstruction;
+    result->warmup = model.warmup;
   }
   return result;
 }
@@ -422,6 +424,7 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   if (result.ok()) {
     result->atmospheric_pressure_pa = atmospheric_pressure_pa;
     result->input_reconstruction = plan;
+    result->warmup = replay.warmup;
   }
   return result;
 }

@@ -116,7 +116,8 @@ using ReplayOptions = InputReplayOptions;
 // but only the compared channels are kept: 8 bytes per sample and channel.
 struct ModelTraces {
   std::vector<std::vector<double>> values_si;
-  bool inputs_reconstructed = false;  // fed MeasuredLog::reconstructed_inputs
+  bool inputs_reconstructed = false;     // fed MeasuredLog::reconstructed_inputs
+  std::optional<PeriodicWarmup> warmup;  // the start, as ReplayOptions::warmup
   std::optional<RangeEvent> first_range_event;
   long steps = 0;
   double time_step_s = 0.0;
@@ -263,6 +264,8 @@ struct Comparison {
   double atmospheric_pressure_pa = units::kStandardAtmospherePa;  // the log's, for the edges
   // How the replayed inputs were reconstructed; absent when replayed as measured.
   std::optional<InputReconstruction> input_reconstruction;
+  // The warm-up the replay started after; absent: from the steady state.
+  std::optional<PeriodicWarmup> warmup;
 
   const ChannelMetrics* Find(Channel channel) const;
 };

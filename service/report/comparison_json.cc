@@ -1,5 +1,7 @@
 #include "service/report/comparison_json.h"
 
+#include "model/common/units.h"
+
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -91,6 +93,27 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
   json.Key("max_lag_s").Number(comparison.max_lag_s);
   json.Key("spectrum_segments").Integer(comparison.spectrum_segments);
   json.Key("spectrum_segment_s").Number(comparison.spectrum_segment_s);
+  // How the inputs reached the model (log_inputs.h): reconstructed under their noise, in lab
+  // units, or as measured; and whether the replay started after a warm-up.
+  json.Key("inputs").BeginObject();
+  json.Key("reconstructed").Bool(comparison.input_reconstruction.has_value());
+  if (const auto& plan = comparison.input_reconstruction) {
+    json.Key("noise").BeginObject();
+    json.Key("piston_position_mm").Number(plan->piston_noise_m * 1e3);
+    json.Key("choke_position_deg").Number(units::ChokeFracToDeg(plan->choke_noise_frac));
+    json.Key("FT2_lpm").Number(units::M3psToLpm(plan->pump_noise_m3ps));
+    json.Key("C1_bar").Number(plan->outlet_noise_pa * 1e-5);
+    json.EndObject();
+    json.Key("piston_band_hz").Number(plan->piston_band_hz);
+    json.Key("piston_window_s").Number(2.0 * plan->piston_half_width_s);
+    json.Key("level_max_window_s").Number(2.0 * plan->level_max_half_width_s);
+  }
+  json.Key("warmup").Bool(comparison.warmup.has_value());
+  if (comparison.warmup) {
+    json.Key("warmup_period_s").Number(comparison.warmup->period_s);
+    json.Key("warmup_s").Number(comparison.warmup->duration_s);
+  }
+  json.EndObject();
   if (comparison.first_range_event) {
     json.Key("warning").Text(comparison.first_range_event->Describe());
   }

@@ -194,7 +194,12 @@ TEST(ReportTest, StreamedAndInMemoryComparisonsRenderTheSame) {
     ASSERT_TRUE(streamed.ok()) << streamed.status().message();
     auto log = LoadMeasuredLog(path);
     ASSERT_TRUE(log.ok()) << log.status().message();
-    auto model = ReplayModel(*log, RigParams{}, SimulationOptions{});
+    // As CompareLog: the start (steady or warmed up) chosen from the measured pressures.
+    ReplayOptions replay;
+    auto warmup = ChooseWarmup(*log, RigParams{}, SimulationOptions{}, replay);
+    ASSERT_TRUE(warmup.ok()) << warmup.status().message();
+    replay.warmup = *warmup;
+    auto model = ReplayModel(*log, RigParams{}, SimulationOptions{}, replay);
     ASSERT_TRUE(model.ok()) << model.status().message();
     auto in_memory = CompareTraces(*log, *model, options);
     ASSERT_TRUE(in_memory.ok()) << in_memory.status().message();

@@ -517,6 +517,9 @@ TEST(CompareTest, StreamingAndInMemoryPathsAgreeExactly) {
     ASSERT_TRUE(log.ok()) << log.status().message();
     ReplayOptions replay;
     replay.piston_smoothing_s = options.piston_smoothing_s;
+    auto warmup = ChooseWarmup(*log, RigParams{}, SimulationOptions{}, replay);
+    ASSERT_TRUE(warmup.ok()) << warmup.status().message();
+    replay.warmup = *warmup;
     auto model = ReplayModel(*log, RigParams{}, SimulationOptions{}, replay);
     ASSERT_TRUE(model.ok()) << model.status().message();
     auto in_memory = CompareTraces(*log, *model, options);
