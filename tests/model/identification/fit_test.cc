@@ -6,14 +6,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <random>
 
 #include <gtest/gtest.h>
 
 #include "model/common/units.h"
+#include "model/identification/synthetic_log.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
+#include "model/sim/sensor_noise.h"
 
 namespace mpdrig {
 namespace {
@@ -187,6 +190,34 @@ TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
   auto comparison = CompareTraces(log, *replay);
   ASSERT_TRUE(comparison.ok());
   EXPECT_NEAR(comparison->error, fit->error_after, 1e-12);
+}
+
+// The acceptance for fitting at the lab's noise (thesis Table 4.1.1 on every channel,
+// inputs too): on effect-free synthetic logs (120 s at 100 Hz, the lab's excitation, random base
+// parameters), the wave speed within 1 % and both friction coefficients within 20 %, as the
+// thesis tuned them (Table 9.4.1). Replayed as measured, the input noise biases them far more
+// (f1 up to twice its value, c stuck near its start): the reconstruction is what makes this hold.
+TEST(FitTest, WaveSpeedAndFrictionAtLabNoise) {
+  for (std::uint64_t seed = 3; seed <= 8; ++seed) {
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    SyntheticLogOptions synth;
+    synth.seed = seed;
+    synth.sensor_noise = SensorNoise::Lab();
+    auto made = MakeSyntheticLog(synth);
+    ASSERT_TRUE(made.ok()) << made.status().message();
+    auto log = MeasuredLogFromRigLog(made->log, "lab noise");
+    ASSERT_TRUE(log.ok()) << log.status().message();
+    FitOptions options;
+    options.simulation.cells = synth.cells;
+    auto fit = FitParameters(*log, RigParams{},
+                             Defaults({"wave_speed_mps", "friction_f1_per_s", "friction_f2_per_m"}),
+                             options);
+    ASSERT_TRUE(fit.ok()) << fit.status().message();
+    const RigParams& truth = made->truth;
+    EXPECT_NEAR(fit->estimates[0], truth.wave_speed_mps, 0.01 * truth.wave_speed_mps);
+    EXPECT_NEAR(fit->estimates[1], truth.friction_f1_per_s, 0.2 * truth.friction_f1_per_s);
+    EXPECT_NEAR(fit->estimates[2], truth.friction_f2_per_m, 0.2 * truth.friction_f2_per_m);
+  }
 }
 
 // While the choke is open (31 deg until 15 s) its characteristic is above the leak, G =
