@@ -225,25 +225,31 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
   return traces;
 }
 
-namespace {
-
-// The rows of `log` with t <= t_end (inputs, reconstructed inputs, channels).
-MeasuredLog LogUntil(const MeasuredLog& log, double t_end) {
-  std::size_t n = 0;
-  while (n < log.time_s().size() && log.time_s()[n] <= t_end) ++n;
+MeasuredLog MeasuredLogUntil(const MeasuredLog& log, double t_end) {
+  const std::vector<double>& t = log.time_s();
+  const auto n = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), t_end) - t.begin());
   const auto head = [n](const std::vector<double>& v) {
-    return std::vector<double>(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n));
+    return std::vector<double>(v.begin(),
+                               v.begin() + static_cast<std::ptrdiff_t>(std::min(n, v.size())));
   };
   const auto head_columns = [&](const LogInputColumns& c) {
     return LogInputColumns{head(c.time_s), head(c.piston_position_m), head(c.choke_opening_frac),
                            head(c.pump_flow_m3ps), head(c.outlet_pressure_pa)};
   };
-  MeasuredLog cut = log;
+  MeasuredLog cut;
+  cut.path = log.path;
+  cut.metadata = log.metadata;
+  cut.atmospheric_pressure_pa = log.atmospheric_pressure_pa;
   cut.inputs = head_columns(log.inputs);
   cut.reconstructed_inputs = head_columns(log.reconstructed_inputs);
-  for (MeasuredChannel& channel : cut.channels) channel.values_si = head(channel.values_si);
+  cut.reconstruction = log.reconstruction;
+  for (const MeasuredChannel& channel : log.channels) {
+    cut.channels.push_back({channel.channel, channel.unit, head(channel.values_si)});
+  }
   return cut;
 }
+
+namespace {
 
 bool IsPressure(Channel channel) {
   return channel != Channel::kFT1 && channel != Channel::kFT3 && channel != Channel::kFT4;
@@ -257,7 +263,7 @@ Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const
   const std::optional<PeriodicWarmup> candidate =
       PlanPeriodicWarmup(log.inputs, replay.reconstruct_inputs);
   if (!candidate) return std::optional<PeriodicWarmup>{};
-  const MeasuredLog cut = LogUntil(log, log.time_s().front() + 2.0 * candidate->period_s);
+  const MeasuredLog cut = MeasuredLogUntil(log, log.time_s().front() + 2.0 * candidate->period_s);
   double error[2] = {0.0, 0.0};
   for (int warm = 0; warm < 2; ++warm) {
     ReplayOptions start = replay;

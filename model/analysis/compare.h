@@ -104,6 +104,10 @@ struct MeasuredLog {
 Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress = {});
 // The same from a log already in memory (tests, tools that build logs).
 Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& log, const std::string& path);
+// The samples of `log` with t <= t_end; the reconstructed inputs are the whole log's, cut (a
+// replay of the head sees what a replay of the whole log sees there).
+MeasuredLog MeasuredLogUntil(const MeasuredLog& log, double t_end);
+
 // Plans and makes log->reconstructed_inputs from log->inputs (both loaders do it; call it again
 // after changing the inputs by hand).
 void ReconstructInputs(MeasuredLog* log);
