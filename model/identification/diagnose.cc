@@ -293,6 +293,72 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
   return fit;
 }
 
+// The strengths of an effect parameter over which detectability is scanned: its plausible range
+// where the catalogue gives one, else [default / 4, 4 default], within its bounds; log-spaced.
+std::vector<double> StrengthScan(const FitParameter& parameter, double default_value) {
+  double lo = default_value / 4.0, hi = default_value * 4.0;
+  if (const EffectParamInfo* info = PlausibleRange(parameter.key)) {
+    lo = info->plausible_min, hi = info->plausible_max;
+  }
+  if (!(default_value > 0.0) && PlausibleRange(parameter.key) == nullptr) {
+    lo = parameter.lower + 0.01 * (parameter.upper - parameter.lower);
+    hi = parameter.lower + 0.5 * (parameter.upper - parameter.lower);
+  }
+  lo = std::max(lo, parameter.lower), hi = std::min(hi, parameter.upper);
+  std::vector<double> strengths;
+  if (!(lo > 0.0) || !(hi > lo)) return strengths;
+  for (int k = 0; k < kDetectabilityPoints; ++k) {
+    strengths.push_back(lo *
+                        std::pow(hi / lo, static_cast<double>(k) / (kDetectabilityPoints - 1)));
+  }
+  return strengths;
+}
+
+// See kDetectabilityPoints: the first strength whose change of the baseline's channels on the
+// scoring data reaches the detectable share of the baseline's error there.
+void EstimateDetectability(const MeasuredLog& log, const RigParams& baseline,
+                           const ModelTraces& baseline_traces, double baseline_error,
+                           const SimulationOptions& simulation, const FitParameter& parameter,
+                           double default_value, double score_begin, double score_end,
+                           CandidateResult* candidate, int* replays) {
+  candidate->strength_key = parameter.key;
+  // The baseline as the "measurement": the change is measured against its own variation.
+  MeasuredLog reference = log;
+  for (std::size_t c = 0; c < reference.channels.size(); ++c) {
+    std::vector<double>& values = reference.channels[c].values_si;
+    for (std::size_t n = 0; n < values.size(); ++n) {
+      if (std::isfinite(values[n])) values[n] = baseline_traces.values_si[c][n];
+    }
+  }
+  const double needed =
+      baseline_error *
+      std::sqrt(1.0 / ((1.0 - kMinRelativeImprovement) * (1.0 - kMinRelativeImprovement)) - 1.0);
+  RigParams params = baseline;
+  params.effects.push_back({candidate->effect, {}});
+  const std::vector<double> strengths = StrengthScan(parameter, default_value);
+  std::vector<double> change(strengths.size(), 0.0);
+  for (std::size_t k = 0; k < strengths.size(); ++k) {
+    if (!SetParamValue(&params, parameter.key, strengths[k]).ok()) return;
+    auto traces = ReplayModel(log, params, simulation);
+    ++*replays;
+    if (traces.ok()) change[k] = WindowError(reference, *traces, score_begin, score_end);
+  }
+  if (strengths.empty()) return;
+  // Most parameters grow with the effect (a friction factor, a time constant); some shrink (a
+  // bulk modulus): the weak end is the one with the smaller change.
+  candidate->strength_inverse = change.front() > change.back();
+  candidate->strength_scan_limit =
+      candidate->strength_inverse ? strengths.front() : strengths.back();
+  for (std::size_t j = 0; j < strengths.size(); ++j) {
+    const std::size_t k = candidate->strength_inverse ? strengths.size() - 1 - j : j;
+    if (change[k] >= needed) {
+      candidate->detectable_from = strengths[k];
+      candidate->detectable_at_weakest = j == 0;
+      return;
+    }
+  }
+}
+
 }  // namespace
 
 double EstimateNoiseFloor(const MeasuredLog& log) {
@@ -500,6 +566,17 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
       candidate.extra_params =
           static_cast<int>(candidate_parameters[i].size() - base_parameters.size());
       candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
+      if (candidate_parameters[i].size() > base_parameters.size()) {
+        const FitParameter& strength = candidate_parameters[i][base_parameters.size()];
+        double default_value = 0.0;
+        for (const EffectParamInfo& param : info.params) {
+          if (strength.key == candidate.effect + "." + std::string(param.key)) {
+            default_value = param.default_value;
+          }
+        }
+        EstimateDetectability(log, base_fit->params, *base_traces, baseline.error, simulation,
+                              strength, default_value, score_begin, t_end, &candidate, &replays[i]);
+      }
       RigParams params = base_fit->params;
       params.effects.push_back({candidate.effect, {}});
       FitOptions candidate_options = fit_options;
@@ -616,6 +693,27 @@ std::string DescribeCandidate(const CandidateResult& candidate, const CandidateR
     }
   }
   if (best > 0.0) out << ", most on " << riglog::ChannelName(best_channel);
+  if (!candidate.significant && !candidate.strength_key.empty()) {
+    out << "; " << DescribeDetectability(candidate);
+  }
+  return out.str();
+}
+
+std::string DescribeDetectability(const CandidateResult& candidate) {
+  if (candidate.strength_key.empty()) return "";
+  std::ostringstream out;
+  out.precision(2);
+  const char* stronger = candidate.strength_inverse ? " <= " : " >= ";
+  if (candidate.detectable_from && candidate.detectable_at_weakest) {
+    out << "detectable at this noise even at " << candidate.strength_key << " = "
+        << *candidate.detectable_from << " (the weakest tried)";
+  } else if (candidate.detectable_from) {
+    out << "detectable at this noise from " << candidate.strength_key << stronger
+        << *candidate.detectable_from;
+  } else {
+    out << "not detectable at this noise even at " << candidate.strength_key << " = "
+        << candidate.strength_scan_limit;
+  }
   return out.str();
 }
 

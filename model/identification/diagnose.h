@@ -54,6 +54,14 @@ inline constexpr double kSignificanceZ = 2.0;
 // The leading candidates (by penalised error) whose fits are polished with the baseline's
 // iterations before the final ranking.
 inline constexpr std::size_t kPolishedCandidates = 3;
+// Detectability: an effect of strength s changes the fitted base model's channels by d(s) (mean
+// NRMSE of the change, relative to the baseline's own variation). If the base parameters cannot
+// absorb it, the baseline's error rises from e0 to sqrt(e0^2 + d^2) and the candidate removes
+// that: a gain above kMinRelativeImprovement needs d > e0 sqrt(1 / (1 - 0.1)^2 - 1) = 0.484 e0.
+// The smallest strength on a log-spaced scan of kDetectabilityPoints over the plausible range
+// that reaches it is the smallest detectable strength at this log's noise and excitation (a
+// lower bound: absorption by the base parameters raises it).
+inline constexpr int kDetectabilityPoints = 9;
 // The baseline's wave speed starts from the best of a scan over start +-kWaveSpeedScanSpan...
 inline constexpr int kWaveSpeedScanPoints = 25;
 inline constexpr double kWaveSpeedScanSpan = 0.3;
@@ -106,6 +114,13 @@ struct CandidateResult {
   double improvement_std_error = 0.0;  // of the absolute improvement, from the blocks
   bool significant = false;
   std::string failure;  // non-empty when the candidate could not be fitted (e.g. range left)
+  // The smallest strength of the effect's first fitted parameter that this log could show
+  // (kDetectabilityPoints); absent when none in its plausible range could, or not computed.
+  std::string strength_key;  // "unsteady_friction.k"
+  std::optional<double> detectable_from;
+  bool detectable_at_weakest = false;  // already at the weakest strength scanned
+  bool strength_inverse = false;       // the effect grows as the parameter falls (a bulk modulus)
+  double strength_scan_limit = 0.0;    // the strongest value scanned
   // Per channel: error (NRMSE) on the scoring data, baseline and this candidate.
   std::vector<std::pair<Channel, double>> channel_errors;
   RigParams fitted;
@@ -133,6 +148,11 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
 // A sentence on what the candidate explains, with its numbers ("removes ...: error 4.1% -> 1.2%
 // on the scoring data").
 std::string DescribeCandidate(const CandidateResult& candidate, const CandidateResult& baseline);
+
+// What this log could show of the candidate (kDetectabilityPoints): "detectable at this noise
+// from unsteady_friction.k >= 0.02" or "not detectable at this noise even at ... = 0.5"; empty
+// where not computed.
+std::string DescribeDetectability(const CandidateResult& candidate);
 
 // Mean over the compared channels of sigma_noise / std(y), sigma_noise from second differences
 // (std(d2 y) / sqrt(6)): the error a perfect model would have on this log.

@@ -81,6 +81,12 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
         << ",\"description\":" << Quote(DescribeCandidate(c, b))
         << ",\"channels\":" << ChannelsJson(c.channel_errors);
     if (!c.failure.empty()) out << ",\"failure\":" << Quote(c.failure);
+    if (!c.strength_key.empty()) {
+      out << ",\"strength_key\":" << Quote(c.strength_key) << ",\"detectable_from\":"
+          << (c.detectable_from ? Num(*c.detectable_from) : std::string("null"))
+          << ",\"strength_inverse\":" << (c.strength_inverse ? "true" : "false")
+          << ",\"strength_scan_limit\":" << Num(c.strength_scan_limit);
+    }
     out << "}";
   }
   out << "],\"verdict\":" << (d.verdict ? Quote(*d.verdict) : std::string("null"));
@@ -213,6 +219,9 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
          << (c.significant ? "yes\">yes" : "no\">no") << "</td><td class=\"l\">" << params
          << "</td><td class=\"l\">"
          << EscapeHtml(c.failure.empty() ? c.explains : "not fitted: " + c.failure)
+         << (c.significant || c.strength_key.empty()
+                 ? std::string()
+                 : "<br><small>" + EscapeHtml(DescribeDetectability(c)) + "</small>")
          << "</td></tr>\n";
   }
   html << "</table>\n";
