@@ -213,7 +213,8 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
   };
   std::vector<Point> points;
   auto consider = [&](const RigParams& trial) {
-    auto traces = ReplayModel(*context.fit_log, trial, context.simulation);
+    auto traces =
+        ReplayModel(*context.fit_log, trial, context.simulation, context.fit_options.replay);
     ++*replays;
     if (!traces.ok()) return;
     const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
@@ -318,9 +319,9 @@ std::vector<double> StrengthScan(const FitParameter& parameter, double default_v
 // scoring data reaches the detectable share of the baseline's error there.
 void EstimateDetectability(const MeasuredLog& log, const RigParams& baseline,
                            const ModelTraces& baseline_traces, double baseline_error,
-                           const SimulationOptions& simulation, const FitParameter& parameter,
-                           double default_value, double score_begin, double score_end,
-                           CandidateResult* candidate, int* replays) {
+                           const SimulationOptions& simulation, const ReplayOptions& replay,
+                           const FitParameter& parameter, double default_value, double score_begin,
+                           double score_end, CandidateResult* candidate, int* replays) {
   candidate->strength_key = parameter.key;
   // The baseline as the "measurement": the change is measured against its own variation.
   MeasuredLog reference = log;
@@ -339,7 +340,7 @@ void EstimateDetectability(const MeasuredLog& log, const RigParams& baseline,
   std::vector<double> change(strengths.size(), 0.0);
   for (std::size_t k = 0; k < strengths.size(); ++k) {
     if (!SetParamValue(&params, parameter.key, strengths[k]).ok()) return;
-    auto traces = ReplayModel(log, params, simulation);
+    auto traces = ReplayModel(log, params, simulation, replay);
     ++*replays;
     if (traces.ok()) change[k] = WindowError(reference, *traces, score_begin, score_end);
   }
@@ -438,6 +439,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
   simulation.stop_on_range_violation = false;
   FitOptions fit_options;
   fit_options.simulation = simulation;
+  fit_options.replay = options.replay;
   fit_options.window_end_s = diagnosis.fit_end_s;
   fit_options.max_iterations = options.max_iterations;
   const double steps = 1.0 + candidates.size();
@@ -468,7 +470,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
       for (int k = 0; k < points; ++k) {
         RigParams trial = start;
         trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
-        auto traces = ReplayModel(fit_log, trial, simulation);
+        auto traces = ReplayModel(fit_log, trial, simulation, options.replay);
         ++diagnosis.replays;
         if (!traces.ok()) continue;
         const double error = WindowError(fit_log, *traces, t_begin, diagnosis.fit_end_s);
@@ -490,7 +492,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
         RigParams trial = trial_start;
         trial.wave_speed_mps =
             c * (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
-        auto traces = ReplayModel(fit_log, trial, simulation);
+        auto traces = ReplayModel(fit_log, trial, simulation, options.replay);
         ++diagnosis.replays;
         if (!traces.ok()) continue;
         const double error = WindowError(fit_log, *traces, t_begin, diagnosis.fit_end_s);
@@ -526,7 +528,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
       base_fit = std::move(second);
     }
   }
-  auto base_traces = ReplayModel(log, base_fit->params, simulation);
+  auto base_traces = ReplayModel(log, base_fit->params, simulation, options.replay);
   if (!base_traces.ok()) return base_traces.status();
   ++diagnosis.replays;
   const Scored base_score = Score(log, *base_traces, score_begin, t_end);
@@ -575,7 +577,8 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
           }
         }
         EstimateDetectability(log, base_fit->params, *base_traces, baseline.error, simulation,
-                              strength, default_value, score_begin, t_end, &candidate, &replays[i]);
+                              options.replay, strength, default_value, score_begin, t_end,
+                              &candidate, &replays[i]);
       }
       RigParams params = base_fit->params;
       params.effects.push_back({candidate.effect, {}});
@@ -588,7 +591,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
         candidate.failure = fit.status().message();
         return;
       }
-      auto traces = ReplayModel(log, fit->params, simulation);
+      auto traces = ReplayModel(log, fit->params, simulation, options.replay);
       ++replays[i];
       if (!traces.ok()) {
         candidate.failure = traces.status().message();
@@ -634,7 +637,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
     if (!polished.ok()) continue;
     diagnosis.replays += polished->replays;
     if (!(polished->error_after < candidate.fit_error)) continue;
-    auto traces = ReplayModel(log, polished->params, simulation);
+    auto traces = ReplayModel(log, polished->params, simulation, options.replay);
     ++diagnosis.replays;
     if (!traces.ok()) continue;
     candidate.params = Named(*polished);
@@ -659,7 +662,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,
     }
     diagnosis.verdict = winner.effect;
     report("compare", steps - 0.5);
-    auto traces = ReplayModel(log, winner.fitted, simulation);
+    auto traces = ReplayModel(log, winner.fitted, simulation, options.replay);
     if (traces.ok()) {
       ++diagnosis.replays;
       auto winner_comparison = CompareTraces(log, *traces);

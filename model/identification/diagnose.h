@@ -77,6 +77,7 @@ inline constexpr double kSecondStartSpan = 0.0075;
 
 struct DiagnoseOptions {
   SimulationOptions simulation;  // cells: kDiagnoseCells unless set
+  ReplayOptions replay;  // how the log's inputs are fed (reconstructed by default) and started
   std::vector<std::string> base_params = {"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"};
   double fit_fraction = 0.6;
   int max_iterations = 25;       // the baseline's fit

@@ -136,6 +136,7 @@ double InputReconstruction::reach_s() const {
 
 std::string InputReconstruction::Describe() const {
   std::ostringstream out;
+  out.precision(3);
   out << "inputs reconstructed (noise estimated from the log): piston " << piston_noise_m * 1e3
       << " mm, band " << piston_band_hz << " Hz, window +-" << piston_half_width_s << " s; choke "
       << units::ChokeFracToDeg(choke_noise_frac) << " deg; FT2 "

@@ -31,6 +31,7 @@ struct DiagnoseArgs {
   std::vector<std::string> candidates;
   double fit_fraction = 0.6;
   int max_iterations = 25;
+  InputReplayOptions replay;
   bool quiet = false;
 };
 
@@ -51,6 +52,10 @@ int RunDiagnose(DiagnoseArgs args) {
   options.candidates = args.candidates;
   options.fit_fraction = args.fit_fraction;
   options.max_iterations = args.max_iterations;
+  options.replay = args.replay;
+  const Status prepared =
+      PrepareReplay(*log, *params, options.simulation, &options.replay, args.quiet);
+  if (!prepared.ok()) return Fail(name, prepared);
   if (!args.quiet) {
     options.progress = [](std::string_view stage, double fraction) {
       std::fprintf(stderr, "diagnose: %3.0f%% %.*s\n", 100.0 * fraction,
@@ -189,6 +194,7 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
   command->add_option("--max-iterations", args->max_iterations, "solver iterations per fit")
       ->check(CLI::Range(1, 500))
       ->capture_default_str();
+  AddInputReplayOptions(command, &args->replay);
   command->add_flag("--quiet", args->quiet, "no progress on stderr");
   command->callback([args, exit_code]() { *exit_code = RunDiagnose(*args); });
 

@@ -113,4 +113,24 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
       ->capture_default_str();
 }
 
+Status PrepareReplay(const MeasuredLog& log, const RigParams& params,
+                     const SimulationOptions& simulation, InputReplayOptions* options, bool quiet) {
+  if (options->choose_warmup) {
+    auto warmup = ChooseWarmup(log, params, simulation, *options);
+    if (!warmup.ok()) return warmup.status();
+    options->warmup = *warmup;
+  }
+  if (quiet) return Status::Ok();
+  if (options->reconstruct_inputs) {
+    std::fprintf(stderr, "%s\n", log.reconstruction.Describe().c_str());
+  }
+  if (options->warmup) {
+    std::fprintf(stderr,
+                 "the log starts mid-heave: replayed after a %.0f s warm-up on its periodic "
+                 "excitation (period %.4f s)\n",
+                 options->warmup->duration_s, options->warmup->period_s);
+  }
+  return Status::Ok();
+}
+
 }  // namespace mpdrig::cli

@@ -11,6 +11,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "model/analysis/compare.h"
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/sim/log_inputs.h"
@@ -41,6 +42,11 @@ struct ModelOptions {
 // Registers --raw-inputs and --piston-smoothing-s: how a command that replays a log feeds its
 // inputs to the model (reconstructed under their noise by default; log_inputs.h).
 void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options);
+
+// For a command that replays `log`: lets ChooseWarmup set options->warmup (unless
+// --steady-start) and tells stderr how the inputs are fed (unless `quiet`).
+Status PrepareReplay(const MeasuredLog& log, const RigParams& params,
+                     const SimulationOptions& simulation, InputReplayOptions* options, bool quiet);
 
 // Writes a command's text output (JSON, HTML, a config) to `path`, or to stdout for "-".
 Status WriteText(const std::string& path, const std::string& text);

@@ -56,20 +56,9 @@ int RunSimulate(const SimulateArgs& args) {
     if (!log.ok()) return Fail(name, log.status());
     // A log that starts mid-heave starts after a warm-up, where its pressures say so (as compare).
     InputReplayOptions replay = args.replay;
-    auto measured = MeasuredLogFromRigLog(*log, args.inputs_path);
-    if (replay.choose_warmup && measured.ok()) {
-      auto warmup = ChooseWarmup(*measured, *params, *options, replay);
-      if (!warmup.ok()) return Fail(name, warmup.status());
-      replay.warmup = *warmup;
-    }
-    if (measured.ok() && replay.reconstruct_inputs) {
-      std::fprintf(stderr, "%s\n", measured->reconstruction.Describe().c_str());
-    }
-    if (replay.warmup) {
-      std::fprintf(stderr,
-                   "the log starts mid-heave: replayed after a %.0f s warm-up on its first period "
-                   "(%.4f s)\n",
-                   replay.warmup->duration_s, replay.warmup->period_s);
+    if (auto measured = MeasuredLogFromRigLog(*log, args.inputs_path); measured.ok()) {
+      const Status prepared = PrepareReplay(*measured, *params, *options, &replay, false);
+      if (!prepared.ok()) return Fail(name, prepared);
     }
     auto from_log = SignalsFromLog(*log, args.inputs_path, replay);
     if (!from_log.ok()) return Fail(name, from_log.status());
