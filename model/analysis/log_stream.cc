@@ -179,14 +179,20 @@ Result<bool> ReconstructingRowSource::Next(LogRow* row) {
   while (ready_.empty()) {
     if (source_done_ && pending_ >= held_.size()) return false;
     if (!source_done_) {
-      for (std::size_t k = 0; k < kSmoothingBlock; ++k) {
-        LogRow next;
-        auto more = source_->Next(&next);
+      // Blocks of at least 4 reaches: each pass recomputes the margins (about 1.5x the work).
+      const std::size_t block =
+          std::max(kSmoothingBlock, 4 * static_cast<std::size_t>(plan_.level_reach_samples()));
+      for (std::size_t k = 0; k < block; ++k) {
+        Held next;
+        auto more = source_->Next(&next.row);
         if (!more.ok()) return more.status();
         if (!*more) {
           source_done_ = true;
           break;
         }
+        next.choke = choke_sums_.Push(next.row.choke_opening_frac);
+        next.pump = pump_sums_.Push(next.row.pump_flow_m3ps);
+        next.outlet = outlet_sums_.Push(next.row.outlet_pressure_pa);
         held_.push_back(next);
       }
     }
@@ -198,24 +204,33 @@ Result<bool> ReconstructingRowSource::Next(LogRow* row) {
 }
 
 // A row's reconstruction is the whole log's when every row within reach of it is held: those
-// behind it are kept below, those ahead are there once the last held row lies beyond reach (or
-// the source has ended).
+// behind it are kept below, those ahead are there once enough rows follow it (or the source has
+// ended).
 void ReconstructingRowSource::ReconstructHeld(bool last_block) {
   if (pending_ >= held_.size()) return;
-  const double reach = plan_.reach_s();
+  const double piston_reach_s = plan_.piston_half_width_s;
+  const auto level_reach = static_cast<std::size_t>(plan_.level_reach_samples());
   LogInputColumns raw;
-  for (const LogRow& row : held_) {
+  LevelInputSums sums;
+  for (const Held& held : held_) {
+    const LogRow& row = held.row;
     raw.time_s.push_back(row.time_s);
     raw.piston_position_m.push_back(row.piston_position_m);
     raw.choke_opening_frac.push_back(row.choke_opening_frac);
     raw.pump_flow_m3ps.push_back(row.pump_flow_m3ps);
     raw.outlet_pressure_pa.push_back(row.outlet_pressure_pa);
+    sums.choke.push_back(held.choke), sums.pump.push_back(held.pump);
+    sums.outlet.push_back(held.outlet);
   }
-  const LogInputColumns done = ReconstructInputColumns(raw, plan_);
-  const double last_time = held_.back().time_s;
+  sums.choke.push_back(choke_sums_.Next()), sums.pump.push_back(pump_sums_.Next());
+  sums.outlet.push_back(outlet_sums_.Next());
+  const LogInputColumns done = ReconstructInputBlock(raw, sums, front_index_, plan_);
+  const double last_time = held_.back().row.time_s;
   while (pending_ < held_.size()) {
-    if (!last_block && !(last_time - held_[pending_].time_s > reach)) break;
-    LogRow row = held_[pending_];
+    const bool reach_held = held_.size() - 1 - pending_ >= level_reach &&
+                            last_time - held_[pending_].row.time_s > piston_reach_s;
+    if (!last_block && !reach_held) break;
+    LogRow row = held_[pending_].row;
     row.piston_position_m = done.piston_position_m[pending_];
     row.choke_opening_frac = done.choke_opening_frac[pending_];
     row.pump_flow_m3ps = done.pump_flow_m3ps[pending_];
@@ -224,10 +239,12 @@ void ReconstructingRowSource::ReconstructHeld(bool last_block) {
     ++pending_;
   }
   // Keep what the next pending row reaches back to (or, all done, what a later one could).
-  const double from_s = pending_ < held_.size() ? held_[pending_].time_s : last_time;
-  while (!held_.empty() && pending_ > 0 && from_s - held_.front().time_s > reach) {
+  const double from_s = pending_ < held_.size() ? held_[pending_].row.time_s : last_time;
+  while (!held_.empty() && pending_ > level_reach &&
+         from_s - held_.front().row.time_s > piston_reach_s) {
     held_.pop_front();
     --pending_;
+    ++front_index_;
   }
 }
 

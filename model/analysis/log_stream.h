@@ -117,9 +117,11 @@ class ReconstructionPlanner {
   std::vector<std::array<double, kComparedChannelCount>> measured_;
 };
 
-// Another source's rows with their inputs reconstructed (ReconstructInputColumns), in blocks of
-// 4096 rows with plan.reach_s() of margin on each side: the same doubles as reconstructing the
-// whole log, in memory that does not grow with it.
+// Another source's rows with their inputs reconstructed (ReconstructInputBlock), in blocks of
+// 4096 rows or four level reaches with the reconstruction's reach as margin on each side (the
+// piston's half width in time, the level windows in rows) and the level inputs' running sums
+// carried from the first row: the same doubles as reconstructing the whole log, in memory that does
+// not grow with it.
 class ReconstructingRowSource final : public LogRowSource {
  public:
   ReconstructingRowSource(std::unique_ptr<LogRowSource> source, InputReconstruction plan);
@@ -127,11 +129,17 @@ class ReconstructingRowSource final : public LogRowSource {
   Result<bool> Next(LogRow* row) override;
 
  private:
+  struct Held {
+    LogRow row;
+    RunningSum choke, pump, outlet;  // the level inputs' running sums before this row
+  };
   void ReconstructHeld(bool last_block);
   std::unique_ptr<LogRowSource> source_;
   InputReconstruction plan_;
-  std::deque<LogRow> held_;   // raw rows: the margin behind, the pending ones, the margin ahead
-  std::size_t pending_ = 0;   // index in held_ of the first row not yet reconstructed
+  std::deque<Held> held_;    // raw rows: the margin behind, the pending ones, the margin ahead
+  long front_index_ = 0;     // the log row index of held_.front()
+  std::size_t pending_ = 0;  // index in held_ of the first row not yet reconstructed
+  RunningSums choke_sums_, pump_sums_, outlet_sums_;
   std::deque<LogRow> ready_;  // reconstructed, to hand out
   bool source_done_ = false;
 };

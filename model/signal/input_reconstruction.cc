@@ -14,7 +14,10 @@
 namespace mpdrig {
 namespace {
 
-constexpr std::size_t kBandSegmentSamples = 4096;
+// Welch segments for the piston's band: about 40 s (resolution 0.025 Hz), 4096..65536 samples.
+constexpr double kBandSegmentS = 40.0;
+constexpr std::size_t kMinBandSegmentSamples = 4096;
+constexpr std::size_t kMaxBandSegmentSamples = 65536;
 
 double Tricube(double u) {
   const double a = 1.0 - std::fabs(u) * u * u;
@@ -47,17 +50,10 @@ double PassbandEdge() {
   return lo;
 }
 
-// Sums of a local linear least-squares fit in tau = t_j - t_i: the estimate at tau = 0 and its
-// variance in units of the noise variance.
+// The sums of a local linear least-squares fit in the sample offset d = m - i: the estimate at
+// d = 0 and its variance in units of the noise variance.
 struct LinearSums {
   double s0 = 0.0, s1 = 0.0, s2 = 0.0, y0 = 0.0, y1 = 0.0;
-  void Add(double tau, double y) { s0 += 1.0, s1 += tau, s2 += tau * tau, y0 += y, y1 += tau * y; }
-  LinearSums operator+(const LinearSums& o) const {
-    return {s0 + o.s0, s1 + o.s1, s2 + o.s2, y0 + o.y0, y1 + o.y1};
-  }
-  LinearSums operator-(const LinearSums& o) const {
-    return {s0 - o.s0, s1 - o.s1, s2 - o.s2, y0 - o.y0, y1 - o.y1};
-  }
   // Intercept and its variance factor; a local mean where the slope is not determined.
   void Estimate(double* value, double* variance) const {
     const double det = s0 * s2 - s1 * s1;
@@ -70,6 +66,10 @@ struct LinearSums {
     }
   }
 };
+
+// sum_{d=1}^{x} d^2, extended to x < 0 so that sum_{d=lo}^{hi} d^2 = SquareSum(hi) -
+// SquareSum(lo - 1) for any integers lo <= hi + 1.
+double SquareSum(double x) { return x * (x + 1.0) * (2.0 * x + 1.0) / 6.0; }
 
 // The ICI rule over one side's nested windows: the largest window whose confidence interval
 // still meets all the smaller ones'.
@@ -115,7 +115,12 @@ double HighestSignalFrequencyHz(const std::vector<double>& values, double dt_s, 
   const std::size_t n = values.size();
   if (n < 16) return 0.0;
   if (!(sigma > 0.0)) return 0.5 / dt_s;  // noise-free: every band is above the floor
-  const std::size_t length = std::min(kBandSegmentSamples, n);
+  std::size_t segment_length = kMinBandSegmentSamples;
+  while (segment_length < kMaxBandSegmentSamples &&
+         static_cast<double>(segment_length) * dt_s < kBandSegmentS) {
+    segment_length *= 2;
+  }
+  const std::size_t length = std::min(segment_length, n);
   const std::size_t hop = length / 2;
   std::vector<double> window(length);
   double window_power = 0.0;
@@ -194,55 +199,93 @@ std::vector<double> SmoothBandLimited(const std::vector<double>& time_s,
   return smoothed;
 }
 
-std::vector<double> SmoothKeepingSteps(const std::vector<double>& time_s,
-                                       const std::vector<double>& values,
+RunningSum RunningSums::Push(double y) {
+  RunningSum entry = Next();
+  if (count_ % kSumSegmentSamples == 0) y_ = ny_ = 0.0;
+  y_ += y;
+  ny_ += static_cast<double>(count_ % kSumSegmentSamples) * y;
+  ++count_;
+  return entry;
+}
+
+RunningSum RunningSums::Next() const {
+  RunningSum entry;
+  if (count_ % kSumSegmentSamples == 0) {
+    entry.prev_y = y_, entry.prev_ny = ny_;  // y, ny stay 0: a new segment starts here
+  } else {
+    entry.y = y_, entry.ny = ny_;
+  }
+  return entry;
+}
+
+std::vector<double> SmoothKeepingSteps(const std::vector<double>& values,
+                                       const std::vector<RunningSum>& sums, long first_index,
                                        const StepKeepingOptions& options) {
-  MPDRIG_CHECK(time_s.size() == values.size());
-  const std::size_t n = values.size();
-  if (!(options.sigma > 0.0) || !(options.min_half_width_s > 0.0) ||
-      options.max_half_width_s < options.min_half_width_s || n < 3) {
-    return values;
-  }
-  std::vector<double> widths;
-  for (double h = options.min_half_width_s; h <= options.max_half_width_s * (1.0 + 1e-12);
-       h *= 2.0) {
-    widths.push_back(h);
-  }
-  std::vector<double> smoothed(n);
-  std::vector<LinearSums> left(widths.size()), right(widths.size()), centred(widths.size());
-  for (std::size_t i = 0; i < n; ++i) {
-    // Nested windows, each side walked outwards once; the sample itself is in all three.
-    LinearSums own;
-    own.Add(0.0, values[i]);
-    LinearSums sums = own;
-    std::size_t j = i;
-    for (std::size_t k = 0; k < widths.size(); ++k) {
-      while (j > 0 && time_s[i] - time_s[j - 1] <= widths[k]) {
-        --j;
-        sums.Add(time_s[j] - time_s[i], values[j]);
-      }
-      left[k] = sums;
+  const long n = static_cast<long>(values.size());
+  MPDRIG_CHECK(static_cast<long>(sums.size()) == n + 1);
+  if (!(options.sigma > 0.0) || options.max_half_width_samples < 2 || n < 3) return values;
+  constexpr long kSegment = kSumSegmentSamples;
+  MPDRIG_CHECK(2 * options.max_half_width_samples < kSegment);
+  // Sum of y and of (m - i) y over local samples [a, b), from the running sums; a window spans
+  // at most two segments.
+  auto window = [&](long a, long b, long i) {
+    LinearSums w;
+    const double lo = static_cast<double>(a - i), hi = static_cast<double>(b - 1 - i);
+    w.s0 = static_cast<double>(b - a);
+    w.s1 = 0.5 * (lo + hi) * w.s0;
+    w.s2 = SquareSum(hi) - SquareSum(lo - 1.0);
+    const long ga = first_index + a, gb = first_index + b, gi = first_index + i;
+    auto part = [&](long from, long to) {  // local [from, to), one segment
+      const long segment_start = ((first_index + from) / kSegment) * kSegment;
+      const bool ends_at_next = (first_index + to) % kSegment == 0 && to > from;
+      const double end_y = ends_at_next ? sums[to].prev_y : sums[to].y;
+      const double end_ny = ends_at_next ? sums[to].prev_ny : sums[to].ny;
+      const double y0 = end_y - sums[from].y;
+      w.y0 += y0;
+      w.y1 += (end_ny - sums[from].ny) - static_cast<double>(gi - segment_start) * y0;
+    };
+    const long next_segment = (ga / kSegment + 1) * kSegment;
+    if (gb <= next_segment) {
+      part(a, b);
+    } else {
+      const long c = next_segment - first_index;
+      part(a, c);
+      part(c, b);
     }
-    sums = own;
-    j = i;
-    for (std::size_t k = 0; k < widths.size(); ++k) {
-      while (j + 1 < n && time_s[j + 1] - time_s[i] <= widths[k]) {
-        ++j;
-        sums.Add(time_s[j] - time_s[i], values[j]);
-      }
-      right[k] = sums;
+    return w;
+  };
+  std::vector<long> halves;
+  for (long half = 2; half <= options.max_half_width_samples; half *= 2) halves.push_back(half);
+  std::vector<double> smoothed(values.size());
+  std::vector<LinearSums> left(halves.size()), right(halves.size()), centred(halves.size());
+  const double half_width_per_std = options.threshold * options.sigma;
+  for (long i = 0; i < n; ++i) {
+    for (std::size_t k = 0; k < halves.size(); ++k) {
+      const long a = std::max(0L, i - halves[k] + 1), b = std::min(n, i + halves[k]);
+      left[k] = window(a, i + 1, i);
+      right[k] = window(i, b, i);
+      centred[k] = window(a, b, i);
     }
-    for (std::size_t k = 0; k < widths.size(); ++k) centred[k] = left[k] + right[k] - own;
     // Fuse the three sides by inverse variance.
     double weighted = 0.0, weights = 0.0;
     for (const auto* side : {&left, &right, &centred}) {
-      const IciChoice choice = Ici(*side, options.threshold * options.sigma);
+      const IciChoice choice = Ici(*side, half_width_per_std);
       weighted += choice.value / choice.variance;
       weights += 1.0 / choice.variance;
     }
-    smoothed[i] = weighted / weights;
+    smoothed[static_cast<std::size_t>(i)] = weighted / weights;
   }
   return smoothed;
+}
+
+std::vector<double> SmoothKeepingSteps(const std::vector<double>& values,
+                                       const StepKeepingOptions& options) {
+  RunningSums running;
+  std::vector<RunningSum> sums;
+  sums.reserve(values.size() + 1);
+  for (double y : values) sums.push_back(running.Push(y));
+  sums.push_back(running.Next());
+  return SmoothKeepingSteps(values, sums, 0, options);
 }
 
 }  // namespace mpdrig

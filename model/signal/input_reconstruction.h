@@ -42,7 +42,8 @@ double WhiteNoiseSigma(const std::vector<double>& values);
 // The highest frequency [Hz] at which `values` (sampled every dt_s) carries power above
 // kBandDetectionRatio times the floor of white noise of standard deviation `sigma`: Welch's
 // averaged periodogram with a 4-term Blackman-Harris window (-92 dB side lobes, so a large slow
-// heave does not leak into the bands above it), segments of at most 4096 samples. 0 when no band
+// heave does not leak into the bands above it), segments of about 40 s (a power of two of
+// 4096..65536 samples), the whole series if shorter. 0 when no band
 // does (a piston at rest).
 double HighestSignalFrequencyHz(const std::vector<double>& values, double dt_s, double sigma);
 
@@ -56,17 +57,47 @@ double BandLimitedHalfWidthS(double f_hz);
 std::vector<double> SmoothBandLimited(const std::vector<double>& time_s,
                                       const std::vector<double>& values, double half_width_s);
 
+// Running sums of a series, for SmoothKeepingSteps's window sums in O(1): the sum of y and of
+// (n - s) y over the samples of its segment before this one, segments of kSumSegmentSamples
+// counted from the series' first sample (s the segment's first index), and at a segment's first
+// sample the previous segment's totals. Built in order from the first sample, so a long series
+// reconstructed in blocks carries them on and every window sum is the same double as over the
+// whole series; segments keep the sums' magnitude, and so their rounding, bounded.
+inline constexpr long kSumSegmentSamples = 65536;
+struct RunningSum {
+  double y = 0.0, ny = 0.0;            // within the segment, before this sample
+  double prev_y = 0.0, prev_ny = 0.0;  // at a segment's first sample: the previous segment's
+};
+class RunningSums {
+ public:
+  // This sample's entry (the sums before it), then counts it.
+  RunningSum Push(double y);
+  // The entry a next sample would get.
+  RunningSum Next() const;
+
+ private:
+  long count_ = 0;
+  double y_ = 0.0, ny_ = 0.0;
+};
+
 struct StepKeepingOptions {
-  double sigma = 0.0;             // the white noise's standard deviation; <= 0 returns the input
-  double min_half_width_s = 0.0;  // the first window (about one sample interval)
-  double max_half_width_s = 0.0;  // windows double up to this
+  double sigma = 0.0;  // the white noise's standard deviation; <= 0 returns the input
+  // Windows of 2, 4, 8, ... samples on a side, up to this many.
+  long max_half_width_samples = 0;
   // ICI threshold Gamma: windows grow while the intervals estimate +- Gamma std intersect.
   double threshold = 2.5;
 };
 
-// LPA-ICI: see the header comment. Reads the samples within max_half_width_s of each sample.
-std::vector<double> SmoothKeepingSteps(const std::vector<double>& time_s,
-                                       const std::vector<double>& values,
+// LPA-ICI (see the header comment) in the sample index: local linear fits over windows counted in
+// samples (the log's sampling is near uniform), from the left, the right and centred. `sums` has
+// one entry per value (RunningSums::Push) and one more after the last (RunningSums::Next);
+// first_index is values[0]'s index in the series the sums were built over. Value i depends only
+// on values within max_half_width_samples of it.
+std::vector<double> SmoothKeepingSteps(const std::vector<double>& values,
+                                       const std::vector<RunningSum>& sums, long first_index,
+                                       const StepKeepingOptions& options);
+// The same for a whole series (builds its sums).
+std::vector<double> SmoothKeepingSteps(const std::vector<double>& values,
                                        const StepKeepingOptions& options);
 
 }  // namespace mpdrig

@@ -130,10 +130,6 @@ std::vector<double> Head(const std::vector<double>& values, std::size_t n) {
 
 }  // namespace
 
-double InputReconstruction::reach_s() const {
-  return std::max(piston_half_width_s, level_max_half_width_s);
-}
-
 std::string InputReconstruction::Describe() const {
   std::ostringstream out;
   out.precision(3);
@@ -141,7 +137,7 @@ std::string InputReconstruction::Describe() const {
       << " mm, band " << piston_band_hz << " Hz, window +-" << piston_half_width_s << " s; choke "
       << units::ChokeFracToDeg(choke_noise_frac) << " deg; FT2 "
       << units::M3psToLpm(pump_noise_m3ps) << " L/min; C1 " << outlet_noise_pa * 1e-5
-      << " bar; steps kept, windows up to +-" << level_max_half_width_s << " s";
+      << " bar; steps kept, windows up to +-" << level_max_half_width_samples << " samples";
   return out.str();
 }
 
@@ -155,38 +151,56 @@ InputReconstruction PlanInputReconstruction(const LogInputColumns& columns) {
   plan.choke_noise_frac = WhiteNoiseSigma(Head(columns.choke_opening_frac, n));
   plan.pump_noise_m3ps = WhiteNoiseSigma(Head(columns.pump_flow_m3ps, n));
   plan.outlet_noise_pa = WhiteNoiseSigma(Head(columns.outlet_pressure_pa, n));
-  const double max_half_width_s = std::min(
-      kMaxReconstructionHalfWidthS, kMaxReconstructionHalfWidthSamples * plan.sample_interval_s);
-  plan.level_max_half_width_s = max_half_width_s;
+  // Windows double: the first power of two that spans kMaxLevelHalfWidthS, within the cap.
+  plan.level_max_half_width_samples = 2;
+  while (plan.level_max_half_width_samples < kMaxLevelHalfWidthSamples &&
+         static_cast<double>(plan.level_max_half_width_samples) * plan.sample_interval_s <
+             kMaxLevelHalfWidthS) {
+    plan.level_max_half_width_samples *= 2;
+  }
   if (plan.piston_noise_m > 0.0) {
     plan.piston_band_hz = HighestSignalFrequencyHz(Head(columns.piston_position_m, n),
                                                    plan.sample_interval_s, plan.piston_noise_m);
-    const double half_width_s =
-        std::min(BandLimitedHalfWidthS(plan.piston_band_hz), max_half_width_s);
+    const double half_width_s = std::min(BandLimitedHalfWidthS(plan.piston_band_hz),
+                                         kMaxPistonHalfWidthSamples * plan.sample_interval_s);
     // Below two sample intervals a tricube window holds too few points to smooth anything.
     plan.piston_half_width_s = half_width_s >= 2.0 * plan.sample_interval_s ? half_width_s : 0.0;
   }
   return plan;
 }
 
-LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
-                                        const InputReconstruction& plan) {
+LogInputColumns ReconstructInputBlock(const LogInputColumns& block, const LevelInputSums& sums,
+                                      long first_index, const InputReconstruction& plan) {
   LogInputColumns out;
-  out.time_s = columns.time_s;
+  out.time_s = block.time_s;
   out.piston_position_m =
-      SmoothBandLimited(columns.time_s, columns.piston_position_m, plan.piston_half_width_s);
-  auto levels = [&](const std::vector<double>& values, double sigma) {
+      SmoothBandLimited(block.time_s, block.piston_position_m, plan.piston_half_width_s);
+  auto levels = [&](const std::vector<double>& values, const std::vector<RunningSum>& level_sums,
+                    double sigma) {
     StepKeepingOptions options;
     options.sigma = sigma;
-    // Just over one interval, so the first window holds the neighbour on each side.
-    options.min_half_width_s = 1.01 * plan.sample_interval_s;
-    options.max_half_width_s = plan.level_max_half_width_s;
-    return SmoothKeepingSteps(columns.time_s, values, options);
+    options.max_half_width_samples = plan.level_max_half_width_samples;
+    return SmoothKeepingSteps(values, level_sums, first_index, options);
   };
-  out.choke_opening_frac = levels(columns.choke_opening_frac, plan.choke_noise_frac);
-  out.pump_flow_m3ps = levels(columns.pump_flow_m3ps, plan.pump_noise_m3ps);
-  out.outlet_pressure_pa = levels(columns.outlet_pressure_pa, plan.outlet_noise_pa);
+  out.choke_opening_frac = levels(block.choke_opening_frac, sums.choke, plan.choke_noise_frac);
+  out.pump_flow_m3ps = levels(block.pump_flow_m3ps, sums.pump, plan.pump_noise_m3ps);
+  out.outlet_pressure_pa = levels(block.outlet_pressure_pa, sums.outlet, plan.outlet_noise_pa);
   return out;
+}
+
+LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
+                                        const InputReconstruction& plan) {
+  LevelInputSums sums;
+  auto build = [](const std::vector<double>& values, std::vector<RunningSum>* out) {
+    RunningSums running;
+    out->reserve(values.size() + 1);
+    for (double y : values) out->push_back(running.Push(y));
+    out->push_back(running.Next());
+  };
+  build(columns.choke_opening_frac, &sums.choke);
+  build(columns.pump_flow_m3ps, &sums.pump);
+  build(columns.outlet_pressure_pa, &sums.outlet);
+  return ReconstructInputBlock(columns, sums, 0, plan);
 }
 
 namespace {
@@ -300,7 +314,7 @@ std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& columns,
   const InputReconstruction plan = PlanInputReconstruction(columns);
   // The checks need two periods; the fit takes up to kWarmupFitPeriods.
   const double span_s = std::max(needed_s, kWarmupFitPeriods * 1.05 * rough_period_s);
-  LogInputColumns part = RowsUntil(columns, t0 + span_s + plan.reach_s());
+  LogInputColumns part = RowsUntil(columns, t0 + span_s + plan.piston_half_width_s);
   if (reconstruct) part = ReconstructInputColumns(part, plan);
   part = RowsUntil(part, t0 + span_s);
 

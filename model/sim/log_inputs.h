@@ -23,6 +23,7 @@
 
 #include "model/common/status.h"
 #include "model/riglog/rig_log.h"
+#include "model/signal/input_reconstruction.h"
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
@@ -75,12 +76,16 @@ struct LogInputColumns {
 // - piston position: tricube local quadratic passing its highest carried frequency with < 0.1 %
 //   loss (one window: position and velocity stay consistent);
 // - choke opening, pump flow, outlet pressure: LPA-ICI local linear fits, left, right and centred,
-//   windows doubling from one sample interval to level_max_half_width_s (steps stay sharp).
+//   windows doubling from 2 samples to level_max_half_width_samples (steps stay sharp).
 // An input whose noise is 0 (or that is absent: FT2, C1) passes unchanged.
 inline constexpr std::size_t kReconstructionPlanSamples = 65536;
-// The longest half window of either smoother: kMaxReconstructionHalfWidthS, or this many samples.
-inline constexpr double kMaxReconstructionHalfWidthS = 40.0;
-inline constexpr double kMaxReconstructionHalfWidthSamples = 4096;
+// The level windows: up to kMaxLevelHalfWidthS on a side, and at most this many samples (the
+// window sums are O(1), so the cap is about the sums' segments, kSumSegmentSamples).
+inline constexpr double kMaxLevelHalfWidthS = 40.0;
+inline constexpr long kMaxLevelHalfWidthSamples = 8192;
+// The piston's window: at most this many samples on a side (its cost grows with it; a 0.2 Hz
+// heave at 100 Hz wants 57).
+inline constexpr double kMaxPistonHalfWidthSamples = 256;
 
 struct InputReconstruction {
   double sample_interval_s = 0.0;  // median interval of the plan's samples
@@ -88,11 +93,12 @@ struct InputReconstruction {
   double choke_noise_frac = 0.0;
   double pump_noise_m3ps = 0.0;
   double outlet_noise_pa = 0.0;
-  double piston_band_hz = 0.0;          // highest frequency the piston carries above its noise
-  double piston_half_width_s = 0.0;     // 0: the piston passes unchanged
-  double level_max_half_width_s = 0.0;  // ICI's longest window for choke, pump, outlet
-  // How far from a sample the samples it depends on lie (its longest half window).
-  double reach_s() const;
+  double piston_band_hz = 0.0;            // highest frequency the piston carries above its noise
+  double piston_half_width_s = 0.0;       // 0: the piston passes unchanged
+  long level_max_half_width_samples = 0;  // ICI's longest window for choke, pump, outlet
+  // How far from a sample the samples it depends on lie: within the piston's half width in time
+  // and within the level windows' in samples.
+  long level_reach_samples() const { return level_max_half_width_samples; }
   // One line for a person, in lab units.
   std::string Describe() const;
 };
@@ -101,9 +107,19 @@ struct InputReconstruction {
 InputReconstruction PlanInputReconstruction(const LogInputColumns& columns);
 
 // The reconstructed columns (same times). Each value depends only on the samples within
-// plan.reach_s() of it, so blocks of a long log with that margin give the same doubles.
+// plan.piston_half_width_s and plan.level_reach_samples() of it.
 LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
                                         const InputReconstruction& plan);
+
+// The running sums of the level inputs (RunningSums, model/signal/input_reconstruction.h) for a
+// block of a long log: one entry per row and one after the last, built from the log's first row.
+struct LevelInputSums {
+  std::vector<RunningSum> choke, pump, outlet;
+};
+// A block of a log (its rows from global index first_index) with every row that a row to be kept
+// depends on: the same doubles as ReconstructInputColumns on the whole log there.
+LogInputColumns ReconstructInputBlock(const LogInputColumns& block, const LevelInputSums& sums,
+                                      long first_index, const InputReconstruction& plan);
 
 // A log that starts in the middle of a periodic excitation (a heave already running when the
 // recording started) is replayed after a warm-up (PeriodicWarmup, rig_simulator.h): for

@@ -106,7 +106,9 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
     json.EndObject();
     json.Key("piston_band_hz").Number(plan->piston_band_hz);
     json.Key("piston_window_s").Number(2.0 * plan->piston_half_width_s);
-    json.Key("level_max_window_s").Number(2.0 * plan->level_max_half_width_s);
+    json.Key("level_max_window_s")
+        .Number(2.0 * static_cast<double>(plan->level_max_half_width_samples) *
+                plan->sample_interval_s);
   }
   json.Key("warmup").Bool(comparison.warmup.has_value());
   if (comparison.warmup) {

@@ -117,9 +117,8 @@ TEST(SmoothKeepingSteps, KeepsAStepSharpAndAveragesTheFlats) {
   }
   StepKeepingOptions options;
   options.sigma = sigma;
-  options.min_half_width_s = 1.01 * kDt;
-  options.max_half_width_s = 10.24;
-  const std::vector<double> y = SmoothKeepingSteps(t, noisy, options);
+  options.max_half_width_samples = 1024;
+  const std::vector<double> y = SmoothKeepingSteps(noisy, options);
   // Three samples from the step the estimate is already on the right level: a centred moving
   // average of the same reach would be half way (2.5 deg off).
   EXPECT_NEAR(y[step + 3], 33.0, 3.0 * sigma);
@@ -143,21 +142,48 @@ TEST(SmoothKeepingSteps, FollowsARampWithoutLag) {
   }
   StepKeepingOptions options;
   options.sigma = sigma;
-  options.min_half_width_s = 1.01 * kDt;
-  options.max_half_width_s = 10.24;
-  const std::vector<double> y = SmoothKeepingSteps(t, noisy, options);
+  options.max_half_width_samples = 1024;
+  const std::vector<double> y = SmoothKeepingSteps(noisy, options);
   EXPECT_LT(Rms(y, x, 1450, 1750), sigma / 2.0);  // across the ramp and its corners
   EXPECT_LT(Rms(y, x, 0, n), sigma / 4.0);
 }
 
 TEST(SmoothKeepingSteps, NoNoiseMeansNoChange) {
-  const std::vector<double> t = Times(100);
   std::vector<double> x(100);
   for (std::size_t i = 0; i < x.size(); ++i) x[i] = std::sin(0.1 * static_cast<double>(i));
   StepKeepingOptions options;  // sigma 0
-  options.min_half_width_s = 1.01 * kDt;
-  options.max_half_width_s = 1.0;
-  EXPECT_EQ(SmoothKeepingSteps(t, x, options), x);
+  options.max_half_width_samples = 64;
+  EXPECT_EQ(SmoothKeepingSteps(x, options), x);
+}
+
+// A long series reconstructed in blocks (each with the windows' reach as margin, the running sums
+// carried from the first sample) gives the same doubles as the whole series, also where the
+// windows straddle a segment of the sums (kSumSegmentSamples).
+TEST(SmoothKeepingSteps, BlocksGiveTheWholeSeriesDoubles) {
+  const long n = kSumSegmentSamples + 5000;
+  const std::vector<double> e = Noise(static_cast<std::size_t>(n), 0.2, 6);
+  std::vector<double> x(static_cast<std::size_t>(n));
+  for (long i = 0; i < n; ++i) x[static_cast<std::size_t>(i)] = (i / 3000 % 2 ? 8.0 : 5.0) + e[i];
+  StepKeepingOptions options;
+  options.sigma = 0.2;
+  options.max_half_width_samples = 1024;
+  const std::vector<double> whole = SmoothKeepingSteps(x, options);
+  RunningSums running;
+  std::vector<RunningSum> sums;
+  for (double y : x) sums.push_back(running.Push(y));
+  sums.push_back(running.Next());
+  const long reach = options.max_half_width_samples;
+  for (long begin : {0L, 30000L, kSumSegmentSamples - 2000, kSumSegmentSamples - 1}) {
+    const long end = std::min(n, begin + 3000);
+    const long from = std::max(0L, begin - reach), to = std::min(n, end + reach);
+    const std::vector<double> block(x.begin() + from, x.begin() + to);
+    std::vector<RunningSum> block_sums(sums.begin() + from, sums.begin() + to + 1);
+    const std::vector<double> part = SmoothKeepingSteps(block, block_sums, from, options);
+    for (long i = begin; i < end; ++i) {
+      ASSERT_EQ(part[static_cast<std::size_t>(i - from)], whole[static_cast<std::size_t>(i)])
+          << "sample " << i << ", block from " << from;
+    }
+  }
 }
 
 }  // namespace
