@@ -52,6 +52,7 @@
 // each channel's unit in the log.
 #pragma once
 
+#include <array>
 #include <complex>
 #include <functional>
 #include <optional>
@@ -214,6 +215,12 @@ struct TraceWindow {
   std::vector<double> time_s, measured, model;  // SI; measured NaN where not measured
 };
 
+inline constexpr std::size_t kInputCloseUpSamples = 2000;
+struct InputCloseUp {
+  std::vector<double> time_s;
+  std::array<std::vector<double>, 4> measured, replayed;
+};
+
 struct ChannelMetrics {
   Channel channel = Channel::kP1;
   riglog::Unit unit = riglog::Unit::kBarg;
@@ -266,6 +273,9 @@ struct Comparison {
   long spectrum_segments = 1;       // Welch segments K
   double spectrum_segment_s = 0.0;  // their length, L times the mean interval
   double atmospheric_pressure_pa = units::kStandardAtmospherePa;  // the log's, for the edges
+  // The log's first kInputCloseUpSamples samples of each input (piston, choke, pump, outlet: SI,
+  // absolute pressure), as measured and as the model was fed them.
+  InputCloseUp input_close_up;
   // How the replayed inputs were reconstructed; absent when replayed as measured.
   std::optional<InputReconstruction> input_reconstruction;
   // The warm-up the replay started after; absent: from the steady state.

@@ -402,6 +402,15 @@ ComparisonAccumulator::~ComparisonAccumulator() = default;
 void ComparisonAccumulator::Add(const PipelineSample& sample, const double* model_si) {
   const LogRow& row = *sample.row;
   const long n = added_++;
+  if (input_close_up_.time_s.size() < kInputCloseUpSamples) {
+    input_close_up_.time_s.push_back(row.time_s);
+    const std::array<double, 4> replayed = {row.piston_position_m, row.choke_opening_frac,
+                                            row.pump_flow_m3ps, row.outlet_pressure_pa};
+    for (std::size_t k = 0; k < 4; ++k) {
+      input_close_up_.measured[k].push_back(row.measured_inputs[k]);
+      input_close_up_.replayed[k].push_back(replayed[k]);
+    }
+  }
   const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
   // Residual inputs, mean removed.
   const std::array<double, kResidualInputCount> raw = {
@@ -598,6 +607,7 @@ Result<Comparison> ComparisonAccumulator::Finish(
   Comparison result;
   result.path = path;
   result.samples = n;
+  result.input_close_up = input_close_up_;
   result.duration_s = summary_.t1_s - summary_.t0_s;
   result.sample_interval_s = dt;
   result.uniform_sampling = summary_.uniform_sampling;

@@ -104,6 +104,7 @@ class ComparisonAccumulator {
   const LogSummary& summary_;
   CompareOptions options_;
   long added_ = 0;
+  InputCloseUp input_close_up_;
   // Shared by the channels.
   std::vector<std::pair<double, int>> band_centres_;  // frequency, harmonic (0: further peak)
   double max_lag_s_ = 0.0;

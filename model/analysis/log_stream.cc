@@ -94,6 +94,8 @@ Result<bool> FileRowSource::Next(LogRow* row) {
   row->choke_opening_frac = values_[choke_];
   row->pump_flow_m3ps = pump_ ? values_[*pump_] : 0.0;
   row->outlet_pressure_pa = outlet_ ? values_[*outlet_] : reader_.atmospheric_pressure_pa();
+  row->measured_inputs = {row->piston_position_m, row->choke_opening_frac, row->pump_flow_m3ps,
+                          row->outlet_pressure_pa};
   for (std::size_t i = 0; i < compared_columns_.size(); ++i) {
     row->measured_si[i] = values_[compared_columns_[i]];
   }
@@ -137,6 +139,9 @@ Result<bool> MemoryRowSource::Next(LogRow* row) {
   row->choke_opening_frac = in.choke_opening_frac[i];
   row->pump_flow_m3ps = in.pump_flow_m3ps[i];
   row->outlet_pressure_pa = in.outlet_pressure_pa[i];
+  const LogInputColumns& raw = log_.inputs;
+  row->measured_inputs = {raw.piston_position_m[i], raw.choke_opening_frac[i],
+                          raw.pump_flow_m3ps[i], raw.outlet_pressure_pa[i]};
   for (std::size_t c = 0; c < log_.channels.size(); ++c) {
     row->measured_si[c] = log_.channels[c].values_si[i];
   }

@@ -40,6 +40,9 @@ struct LogRow {
   double pump_flow_m3ps = 0.0;
   double outlet_pressure_pa = 0.0;
   std::array<double, kComparedChannelCount> measured_si{};
+  // The inputs as measured (piston, choke, pump, outlet), where the four above are reconstructed;
+  // the same values otherwise.
+  std::array<double, 4> measured_inputs{};
 };
 
 struct SourceChannel {

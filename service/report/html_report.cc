@@ -1,5 +1,7 @@
 #include "service/report/html_report.h"
 
+#include "model/common/units.h"
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -153,6 +155,60 @@ std::string TransferSection(const Comparison& comparison) {
   return html;
 }
 
+// The inputs as measured and as the model was fed them (reconstructed under their noise, or as
+// measured), over the log's first kInputCloseUpSamples samples, in lab units.
+std::string InputsSection(const Comparison& comparison) {
+  const InputCloseUp& inputs = comparison.input_close_up;
+  if (inputs.time_s.size() < 2) return "";
+  std::string html = "<h2>Inputs: as measured and as replayed</h2><p>";
+  if (const auto& plan = comparison.input_reconstruction) {
+    html +=
+        "The model was fed the inputs reconstructed under their noise, estimated from the log: "
+        "piston " +
+        FormatValue(plan->piston_noise_m * 1e3, 3) + " mm (band up to " +
+        FormatValue(plan->piston_band_hz, 3) + " Hz), choke " +
+        FormatValue(units::ChokeFracToDeg(plan->choke_noise_frac), 3) + " deg, FT2 " +
+        FormatValue(units::M3psToLpm(plan->pump_noise_m3ps), 3) + " L/min, C1 " +
+        FormatValue(plan->outlet_noise_pa * 1e-5, 3) + " bar (standard deviations).";
+  } else {
+    html += "The model was fed the inputs as measured (--raw-inputs).";
+  }
+  if (comparison.warmup) {
+    html += " The log starts mid-heave: the replay started after a " +
+            FormatValue(comparison.warmup->duration_s, 3) + " s warm-up on its periodic " +
+            "excitation (period " + FormatValue(comparison.warmup->period_s, 4) + " s).";
+  }
+  html += " First " + FormatValue(inputs.time_s.back() - inputs.time_s.front(), 3) +
+          " s.</p><div class=row>";
+  struct Input {
+    const char* name;
+    const char* unit;
+    double (*lab)(double, double);
+  };
+  const Input kInputs[] = {
+      {"piston_position", "mm", [](double v, double) { return v * 1e3; }},
+      {"choke_position", "deg", [](double v, double) { return units::ChokeFracToDeg(v); }},
+      {"FT2", "L/min", [](double v, double) { return units::M3psToLpm(v); }},
+      {"C1", "barg", [](double v, double atm) { return (v - atm) * 1e-5; }},
+  };
+  for (std::size_t k = 0; k < 4; ++k) {
+    auto lab = [&](const std::vector<double>& v) {
+      std::vector<double> out(v.size());
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        out[i] = kInputs[k].lab(v[i], comparison.atmospheric_pressure_pa);
+      }
+      return out;
+    };
+    SvgPlot plot(570, 200, "time [s]", std::string(kInputs[k].name) + " [" + kInputs[k].unit + "]");
+    plot.Line(inputs.time_s, lab(inputs.measured[k]), kMeasuredColor, 0.8);
+    plot.Line(inputs.time_s, lab(inputs.replayed[k]), kModelColor, 1.6);
+    plot.Legend("measured", kMeasuredColor);
+    plot.Legend("replayed", kModelColor);
+    html += plot.Render();
+  }
+  return html + "</div>";
+}
+
 std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& context) {
   const std::string name = Name(channel.channel);
   const riglog::Unit unit = channel.unit;
@@ -298,6 +354,7 @@ std::string ComparisonHtml(const Comparison& comparison, const ReportContext& co
           "mean(y)||. Lag from the cross-correlation peak (positive: the model is late). Bands: "
           "&plusmn;" +
           "3 bins around the piston's dominant frequencies and harmonics.</small></p>";
+  html += InputsSection(comparison);
   html += "<h2>Error along the pipe</h2>" + ProfileSection(comparison);
   html +=
       "<h2>Frequency response: measured vs model</h2><p><small>Empirical transfer "

@@ -138,6 +138,11 @@ TEST(ReportTest, HtmlIsSelfContainedAndRendersInHeadlessChromium) {
   EXPECT_EQ(html.find("<link"), std::string::npos);
   EXPECT_NE(html.find("<h2>Summary</h2>"), std::string::npos);
   EXPECT_NE(html.find("Error along the pipe"), std::string::npos);
+  // The inputs as measured and as replayed: four plots, and how they were reconstructed.
+  EXPECT_NE(html.find("<h2>Inputs: as measured and as replayed</h2>"), std::string::npos);
+  EXPECT_NE(html.find("reconstructed under their noise"), std::string::npos);
+  EXPECT_NE(html.find("choke_position [deg]"), std::string::npos);
+  EXPECT_NE(html.find("FT2 [L/min]"), std::string::npos);
   EXPECT_NE(html.find("piston_position &rarr; PT1"), std::string::npos);
   EXPECT_NE(html.find("piston_position &rarr; C2"), std::string::npos);
   // One trace section per channel: 10 PT + C2 + FT3.
