@@ -20,6 +20,7 @@
 #include "model/params/rig_config.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/rig_log.h"
+#include "tests/support/statistics.h"
 #include "tests/support/test_domain.h"
 
 namespace mpdrig {
@@ -314,15 +315,8 @@ TEST_F(CliTest, ReplayLastSampleUsesOnlyLoggedInputs) {
 // --sensor-noise none is the noise alone, with the lab's standard deviation per channel kind
 // (flows relative to their reading). The sample standard deviation of n normal draws spreads by
 // 1 / sqrt(2 (n - 1)) of itself; the tolerance is 4 of those.
-double SampleStdDev(const std::vector<double>& x) {
-  double mean = 0.0;
-  for (double v : x) mean += v;
-  mean /= static_cast<double>(x.size());
-  double sum = 0.0;
-  for (double v : x) sum += (v - mean) * (v - mean);
-  return std::sqrt(sum / static_cast<double>(x.size() - 1));
-}
-double StdDevTolerance(std::size_t n) { return 4.0 / std::sqrt(2.0 * static_cast<double>(n - 1)); }
+using teststats::SampleStdDev;
+using teststats::StdDevTolerance;
 
 TEST_F(CliTest, SimulateAddsTheLabSensorNoiseByDefault) {
   const riglog::RigLog clean =

@@ -10,6 +10,7 @@
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
 #include "tests/support/shell.h"
+#include "tests/support/statistics.h"
 
 namespace mpdrig {
 namespace {
@@ -37,19 +38,8 @@ std::string Metadata(const riglog::RigLog& log, const std::string& key) {
   return "";
 }
 
-// Sample standard deviation about zero mean is not assumed: about the sample mean.
-double StdDev(const std::vector<double>& x) {
-  double mean = 0.0;
-  for (double v : x) mean += v;
-  mean /= static_cast<double>(x.size());
-  double sum = 0.0;
-  for (double v : x) sum += (v - mean) * (v - mean);
-  return std::sqrt(sum / static_cast<double>(x.size() - 1));
-}
-
-// The relative spread of a sample standard deviation of n normal draws is 1 / sqrt(2 (n - 1));
-// 4 of those fail by chance once in 16000 runs (and the seed is fixed).
-double Tolerance(std::size_t n) { return 4.0 / std::sqrt(2.0 * static_cast<double>(n - 1)); }
+using teststats::SampleStdDev;
+using teststats::StdDevTolerance;
 
 // 30 s at 50 Hz: 1501 samples a channel.
 const char kRun[] = " synth --seed 5 --duration 30 --rate-hz 50";
@@ -100,10 +90,10 @@ TEST(SynthCommandTest, TruthOutMinusTheLogHasTheLabStatistics) {
   }
   ASSERT_EQ(pressure.size(), 14u * 1501u);  // P1 P2 PT1..PT10 C1 C2
   ASSERT_EQ(flow.size(), 4u * 1501u);       // FT1..FT4
-  EXPECT_NEAR(StdDev(pressure), 2400.0, Tolerance(pressure.size()) * 2400.0);
-  EXPECT_NEAR(StdDev(flow), 1.0, Tolerance(flow.size()));
-  EXPECT_NEAR(StdDev(piston), 0.5e-3, Tolerance(piston.size()) * 0.5e-3);
-  EXPECT_NEAR(StdDev(choke), 0.1 / 90.0, Tolerance(choke.size()) * 0.1 / 90.0);
+  EXPECT_NEAR(SampleStdDev(pressure), 2400.0, StdDevTolerance(pressure.size()) * 2400.0);
+  EXPECT_NEAR(SampleStdDev(flow), 1.0, StdDevTolerance(flow.size()));
+  EXPECT_NEAR(SampleStdDev(piston), 0.5e-3, StdDevTolerance(piston.size()) * 0.5e-3);
+  EXPECT_NEAR(SampleStdDev(choke), 0.1 / 90.0, StdDevTolerance(choke.size()) * 0.1 / 90.0);
 }
 
 TEST(SynthCommandTest, SameSeedSameLogAndNoneIsTheTruth) {

@@ -9,6 +9,7 @@
 
 #include "model/common/units.h"
 #include "model/sim/rig_simulator.h"
+#include "tests/support/statistics.h"
 
 namespace mpdrig {
 namespace {
@@ -23,14 +24,7 @@ constexpr double kSigmaTol = 4.0 / 200.0;  // 4 / sqrt(2 * 20000)
 constexpr double kFirstPt1Draw = -1.2104715101518471;
 constexpr double kSecondPt1Draw = 0.42423507264248295;
 
-double StdDev(const std::vector<double>& x) {
-  double mean = 0.0;
-  for (double v : x) mean += v;
-  mean /= static_cast<double>(x.size());
-  double sum = 0.0;
-  for (double v : x) sum += (v - mean) * (v - mean);
-  return std::sqrt(sum / static_cast<double>(x.size() - 1));
-}
+using teststats::SampleStdDev;
 
 double Mean(const std::vector<double>& x) {
   double sum = 0.0;
@@ -161,14 +155,14 @@ TEST(SensorNoiseApplier, StandardDeviationsAreTheSpecs) {
   const double pressure = 5e5;
   for (Channel channel : {Channel::kP1, Channel::kPT5, Channel::kC2}) {
     const std::vector<double> e = Errors(&applier, channel, pressure);
-    EXPECT_NEAR(StdDev(e), 2400.0, kSigmaTol * 2400.0) << riglog::ChannelName(channel);
+    EXPECT_NEAR(SampleStdDev(e), 2400.0, kSigmaTol * 2400.0) << riglog::ChannelName(channel);
     // The mean of the errors: sigma / sqrt(n) spread; 4 of those.
     EXPECT_NEAR(Mean(e), 0.0, 4.0 * 2400.0 / std::sqrt(kDraws));
   }
   const std::vector<double> piston = Errors(&applier, Channel::kPistonPosition, 0.05);
-  EXPECT_NEAR(StdDev(piston), 0.5e-3, kSigmaTol * 0.5e-3);
+  EXPECT_NEAR(SampleStdDev(piston), 0.5e-3, kSigmaTol * 0.5e-3);
   const std::vector<double> choke = Errors(&applier, Channel::kChokePosition, 31.0 / 90.0);
-  EXPECT_NEAR(StdDev(choke), 0.1 / 90.0, kSigmaTol * 0.1 / 90.0);
+  EXPECT_NEAR(SampleStdDev(choke), 0.1 / 90.0, kSigmaTol * 0.1 / 90.0);
 }
 
 TEST(SensorNoiseApplier, FlowNoiseScalesWithTheReading) {
@@ -178,7 +172,7 @@ TEST(SensorNoiseApplier, FlowNoiseScalesWithTheReading) {
     const double q = units::LpmToM3ps(lpm);
     const double expected = 0.02 * std::abs(q) + absolute;
     const std::vector<double> e = Errors(&applier, Channel::kFT1, q);
-    EXPECT_NEAR(StdDev(e), expected, kSigmaTol * expected) << lpm << " L/min";
+    EXPECT_NEAR(SampleStdDev(e), expected, kSigmaTol * expected) << lpm << " L/min";
   }
   // 30 L/min: 0.65 L/min, 13 times the floor at zero flow.
   EXPECT_NEAR(SensorNoise::Lab().SigmaFor(Channel::kFT3, units::LpmToM3ps(30.0)),
