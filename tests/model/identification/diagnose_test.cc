@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -26,6 +27,7 @@
 #include "model/effects/effect.h"
 #include "model/identification/diagnose.h"
 #include "model/identification/synthetic_log.h"
+#include "model/sim/sensor_noise.h"
 
 namespace mpdrig {
 namespace {
@@ -162,6 +164,66 @@ std::vector<std::string> AllEffects() {
 
 INSTANTIATE_TEST_SUITE_P(Catalogue, DiagnoseHiddenEffect, ::testing::ValuesIn(AllEffects()),
                          [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace mpdrig
+
+namespace mpdrig {
+namespace {
+
+// At the lab's noise (thesis Table 4.1.1 on every channel, inputs too; 120 s at 100 Hz as the
+// issue measured it): no false alarm on effect-free logs, a clear hidden effect named with its
+// error falling, and every candidate that is not significant says what the log could show of it.
+Diagnosis DiagnoseAtLabNoise(std::optional<std::string> effect, std::uint64_t seed) {
+  SyntheticLogOptions options;
+  options.seed = seed;
+  options.hidden_effect = effect;
+  options.sensor_noise = SensorNoise::Lab();
+  auto synthetic = MakeSyntheticLog(options);
+  EXPECT_TRUE(synthetic.ok()) << synthetic.status().message();
+  if (!synthetic.ok()) return {};
+  auto log = MeasuredLogFromRigLog(synthetic->log, "lab noise");
+  EXPECT_TRUE(log.ok()) << log.status().message();
+  if (!log.ok()) return {};
+  DiagnoseOptions diagnose;
+  diagnose.simulation.cells = kDiagnoseCells;
+  auto diagnosis = Diagnose(*log, RigParams(), diagnose);
+  EXPECT_TRUE(diagnosis.ok()) << diagnosis.status().message();
+  return diagnosis.ok() ? *diagnosis : Diagnosis{};
+}
+
+TEST(DiagnoseAtLabNoise, NoFalseAlarmAndClearEffectsNamedDownToTheEffectFreeError) {
+  // Effect-free logs: nothing significant, and every candidate says what the log could show.
+  std::map<std::uint64_t, double> effect_free_error;
+  for (std::uint64_t seed : {1, 2}) {
+    SCOPED_TRACE("no hidden effect, seed " + std::to_string(seed));
+    const Diagnosis d = DiagnoseAtLabNoise(std::nullopt, seed);
+    EXPECT_FALSE(d.verdict.has_value()) << Ranking(d);
+    for (const CandidateResult& c : d.candidates) {
+      EXPECT_FALSE(c.significant) << c.effect;
+      EXPECT_FALSE(c.strength_key.empty()) << c.effect << ": no detectability estimate";
+    }
+    effect_free_error[seed] = d.baseline.error;
+  }
+  // Clear hidden effects on the same seeds (same excitation, parameters and noise): named, and
+  // the error falls by half or to within 10 % of the effect-free log's (the floor of a replay at
+  // this noise: the second-difference noise estimate is below it, as the inputs' residual noise
+  // is not white). sensor_lag seed 1 and unsteady_friction seed 2: baseline errors 4.4 % and
+  // 5.1 % against 3.7 % and 4.2 % without the effect (measured).
+  for (const auto& [effect, seed] :
+       {std::pair<std::string, std::uint64_t>{"sensor_lag", 1}, {"unsteady_friction", 2}}) {
+    SCOPED_TRACE(effect + " seed " + std::to_string(seed));
+    const Diagnosis d = DiagnoseAtLabNoise(effect, seed);
+    ASSERT_TRUE(d.verdict.has_value()) << Ranking(d);
+    const bool named = *d.verdict == effect || std::find(d.equivalent.begin(), d.equivalent.end(),
+                                                         effect) != d.equivalent.end();
+    EXPECT_TRUE(named) << Ranking(d);
+    const double after = d.candidates.front().error;
+    EXPECT_TRUE(after <= 0.5 * d.baseline.error || after <= 1.1 * effect_free_error[seed])
+        << "error " << d.baseline.error << " -> " << after << ", effect-free "
+        << effect_free_error[seed];
+  }
+}
 
 }  // namespace
 }  // namespace mpdrig
