@@ -26,6 +26,7 @@
 #include <Eigen/Dense>
 
 #include "model/effects/effect.h"
+#include "model/signal/input_reconstruction.h"
 
 namespace mpdrig {
 namespace {
@@ -100,10 +101,13 @@ Result<std::pair<const EffectInfo*, const EffectParamInfo*>> FindEffectParam(std
 struct WindowChannel {
   std::size_t index = 0;             // into log.channels
   std::vector<std::size_t> samples;  // measured samples in the window
-  double scale = 0.0;                // ||y - mean(y)|| sqrt(C) over those samples
+  double variation = 0.0;            // ||y - mean(y)|| over those samples
+  // The residuals' divisor: variation sqrt(C), or sigma sqrt(N C) (ChannelWeighting).
+  double scale = 0.0;
 };
 
-std::vector<WindowChannel> WindowChannels(const MeasuredLog& log, double begin_s, double end_s) {
+std::vector<WindowChannel> WindowChannels(const MeasuredLog& log, double begin_s, double end_s,
+                                          ChannelWeighting weighting) {
   const std::vector<double>& time = log.time_s();
   std::vector<WindowChannel> channels;
   for (std::size_t c = 0; c < log.channels.size(); ++c) {
@@ -121,7 +125,16 @@ std::vector<WindowChannel> WindowChannels(const MeasuredLog& log, double begin_s
     double sst = 0.0;
     for (std::size_t n : channel.samples) sst += (y[n] - mean) * (y[n] - mean);
     if (!(sst > 0.0)) continue;  // constant: NRMSE undefined, nothing to fit
-    channel.scale = std::sqrt(sst);
+    channel.variation = std::sqrt(sst);
+    channel.scale = channel.variation;
+    if (weighting == ChannelWeighting::kNoise) {
+      std::vector<double> values;
+      for (std::size_t n : channel.samples) values.push_back(y[n]);
+      const double count = static_cast<double>(channel.samples.size());
+      const double sigma =
+          std::max(WhiteNoiseSigma(values), 1e-3 * channel.variation / std::sqrt(count));
+      channel.scale = sigma * std::sqrt(count);
+    }
     channels.push_back(std::move(channel));
   }
   const double root_count = std::sqrt(static_cast<double>(channels.size()));
@@ -190,7 +203,7 @@ class ReplayResiduals {
         sum += residuals[offset + n] * residuals[offset + n];
       }
       offset += channel.samples.size();
-      total += std::sqrt(count * sum);
+      total += std::sqrt(sum) * channel.scale / channel.variation;  // the channel's NRMSE
     }
     return total / count;
   }
@@ -508,7 +521,7 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   }
 
   std::vector<WindowChannel> channels =
-      WindowChannels(log, options.window_begin_s, options.window_end_s);
+      WindowChannels(log, options.window_begin_s, options.window_end_s, options.weighting);
   if (channels.empty()) {
     return Status::Error("no measured channel varies inside the fit window: nothing to fit");
   }

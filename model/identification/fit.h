@@ -46,9 +46,21 @@ Result<double> GetParamValue(const RigParams& params, std::string_view key);
 // Sets `key` in `params` (SetParam semantics, numbers not text).
 Status SetParamValue(RigParams* params, std::string_view key, double value);
 
+// How the channels weigh in the cost.
+enum class ChannelWeighting {
+  // Each channel's residual over its own variation, ||y - mean(y)||: the cost is compare's mean
+  // squared NRMSE, every channel counts the same whatever its unit or noise.
+  kVariation,
+  // Each channel's residual over its white-noise level (sigma from the second differences of its
+  // measurement in the window, floored at 1e-3 of its variation per sample): the maximum-
+  // likelihood weighting for white measurement noise, where a quiet channel counts more.
+  kNoise,
+};
+
 struct FitOptions {
   SimulationOptions simulation;  // cells etc.; choke input is forced to kMeasured (ReplayModel)
   ReplayOptions replay;
+  ChannelWeighting weighting = ChannelWeighting::kVariation;
   // Only samples with time in [window_begin_s, window_end_s] enter the residuals (the replay
   // always starts at the log's start). diagnose fits on the first part and scores on the rest.
   double window_begin_s = -std::numeric_limits<double>::infinity();

@@ -32,6 +32,7 @@ struct FitArgs {
   int max_iterations = 30;
   double relative_step = 1.0e-3;
   InputReplayOptions replay;
+  std::string weights = "variation";
   bool quiet = false;
 };
 
@@ -223,6 +224,8 @@ int RunFit(const FitArgs& args) {
   FitOptions options;
   options.simulation = *simulation;
   options.replay = args.replay;
+  options.weighting =
+      args.weights == "noise" ? ChannelWeighting::kNoise : ChannelWeighting::kVariation;
   options.max_iterations = args.max_iterations;
   options.relative_step = args.relative_step;
   if (!args.window.empty()) {
@@ -317,6 +320,12 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       ->add_option("--relative-step", args->relative_step,
                    "finite-difference step relative to the parameter (or 1% of its range)")
       ->check(CLI::Range(1.0e-7, 0.1))
+      ->capture_default_str();
+  command
+      ->add_option("--weights", args->weights,
+                   "how the channels weigh: variation (each by its own variation, compare's "
+                   "NRMSE) or noise (each by its estimated white noise: maximum likelihood)")
+      ->check(CLI::IsMember({"variation", "noise"}))
       ->capture_default_str();
   AddInputReplayOptions(command, &args->replay);
   command->add_flag("--quiet", args->quiet, "no progress on stderr");

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <numbers>
 #include <random>
 
@@ -207,16 +208,25 @@ TEST(FitTest, WaveSpeedAndFrictionAtLabNoise) {
     ASSERT_TRUE(made.ok()) << made.status().message();
     auto log = MeasuredLogFromRigLog(made->log, "lab noise");
     ASSERT_TRUE(log.ok()) << log.status().message();
-    FitOptions options;
-    options.simulation.cells = synth.cells;
-    auto fit = FitParameters(*log, RigParams{},
-                             Defaults({"wave_speed_mps", "friction_f1_per_s", "friction_f2_per_m"}),
-                             options);
-    ASSERT_TRUE(fit.ok()) << fit.status().message();
-    const RigParams& truth = made->truth;
-    EXPECT_NEAR(fit->estimates[0], truth.wave_speed_mps, 0.01 * truth.wave_speed_mps);
-    EXPECT_NEAR(fit->estimates[1], truth.friction_f1_per_s, 0.2 * truth.friction_f1_per_s);
-    EXPECT_NEAR(fit->estimates[2], truth.friction_f2_per_m, 0.2 * truth.friction_f2_per_m);
+    for (ChannelWeighting weighting : {ChannelWeighting::kVariation, ChannelWeighting::kNoise}) {
+      const bool noise = weighting == ChannelWeighting::kNoise;
+      SCOPED_TRACE(noise ? "noise weights" : "variation weights");
+      FitOptions options;
+      options.simulation.cells = synth.cells;
+      options.weighting = weighting;
+      auto fit = FitParameters(
+          *log, RigParams{}, Defaults({"wave_speed_mps", "friction_f1_per_s", "friction_f2_per_m"}),
+          options);
+      ASSERT_TRUE(fit.ok()) << fit.status().message();
+      const RigParams& truth = made->truth;
+      std::printf("seed %d, %s weights: c %.1f (%.1f), f1 %.4f (%.4f), f2 %.3f (%.3f)\n",
+                  static_cast<int>(seed), noise ? "noise" : "variation", fit->estimates[0],
+                  truth.wave_speed_mps, fit->estimates[1], truth.friction_f1_per_s,
+                  fit->estimates[2], truth.friction_f2_per_m);
+      EXPECT_NEAR(fit->estimates[0], truth.wave_speed_mps, 0.01 * truth.wave_speed_mps);
+      EXPECT_NEAR(fit->estimates[1], truth.friction_f1_per_s, 0.2 * truth.friction_f1_per_s);
+      EXPECT_NEAR(fit->estimates[2], truth.friction_f2_per_m, 0.2 * truth.friction_f2_per_m);
+    }
   }
 }
 
