@@ -4,12 +4,21 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 
 #include "model/common/status.h"
 
 namespace mpdrig {
 namespace {
+
+// FFTW's planner (plan creation and destruction) is not thread-safe, only fftw_execute is. The
+// model has no threads, but a caller may run model functions on several (diagnose's candidates,
+// design.md): one lock around planning keeps them reentrant.
+std::mutex& PlannerMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
 
 bool IsSmooth(std::size_t n) {
   for (std::size_t p : {2, 3, 5, 7}) {
@@ -28,6 +37,7 @@ std::size_t FastFftSize(std::size_t min_size) {
 
 RealFft::RealFft(std::size_t size) : size_(size) {
   MPDRIG_CHECK(size > 0);
+  const std::lock_guard<std::mutex> lock(PlannerMutex());
   const std::size_t bins = size / 2 + 1;
   real_ = static_cast<double*>(fftw_malloc(sizeof(double) * size));
   complex_ = fftw_malloc(sizeof(fftw_complex) * bins);
@@ -43,6 +53,7 @@ RealFft::RealFft(std::size_t size) : size_(size) {
 }
 
 RealFft::~RealFft() {
+  const std::lock_guard<std::mutex> lock(PlannerMutex());
   fftw_destroy_plan(static_cast<fftw_plan>(forward_));
   fftw_destroy_plan(static_cast<fftw_plan>(inverse_));
   fftw_free(real_);
