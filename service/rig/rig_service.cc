@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -14,6 +15,9 @@
 namespace mpdrig::service {
 
 using Clock = std::chrono::steady_clock;
+
+// Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
+constexpr std::uint64_t kLockstepSliceSteps = 100;
 
 struct RigService::Impl {
   ServeOptions options;
@@ -296,35 +300,59 @@ struct RigService::Impl {
     return PublishAllStatus();
   }
 
+  // Lockstep: each rig has a queue of step requests; the rigs with work are served in turn, at
+  // most kLockstepSliceSteps steps each, so one huge request (steps up to 2^32 - 1) neither
+  // starves another rig nor delays a stop by more than one step. A request's commands are taken
+  // when it starts; it completes (last_completed_step_request, status) after its last step.
   Status RunLockstep(const std::atomic<bool>& stop) {
     MPDRIG_RETURN_IF_ERROR(PublishAllStatus());  // clients see the rigs are up
-    struct Request {
-      std::string rig_id;
-      std::uint64_t id;
-      std::uint32_t steps;
+    struct Pending {
+      std::uint64_t id = 0;
+      std::uint64_t remaining = 0;
+      bool started = false;
+    };
+    std::vector<std::deque<Pending>> queues(rigs.size());
+    auto busy = [&queues] {
+      return std::any_of(queues.begin(), queues.end(), [](const auto& q) { return !q.empty(); });
     };
     while (!stop.load()) {
-      auto ready = steps->Wait(DDS_MSECS(50));
-      if (!ready.ok()) return ready.status();
-      if (!*ready) continue;
-      std::vector<Request> requests;
+      if (!busy()) {
+        auto ready = steps->Wait(DDS_MSECS(50));
+        if (!ready.ok()) return ready.status();
+        if (!*ready) continue;
+      }
+      std::vector<std::pair<std::string, Pending>> requests;
       auto taken = steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t&) {
-        requests.push_back({r.rig_id, r.request_id, r.steps});
+        requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
       });
       if (!taken.ok()) return taken.status();
-      for (const Request& request : requests) {
-        MPDRIG_RETURN_IF_ERROR(TakeCommands());
-        RigHost* rig = Find(request.rig_id.c_str());
+      for (auto& [rig_id, request] : requests) {
+        RigHost* rig = Find(rig_id.c_str());
         if (rig == nullptr) {
-          RefuseUnknown(kStepRequestTopic, request.rig_id.c_str());
+          MPDRIG_RETURN_IF_ERROR(TakeCommands());
+          RefuseUnknown(kStepRequestTopic, rig_id.c_str());
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
-        for (std::uint32_t i = 0; i < request.steps; ++i)
-          MPDRIG_RETURN_IF_ERROR(TickAndPublish(*rig));
-        const std::size_t index = static_cast<std::size_t>(rig - rigs.data());
-        last_step_request[index] = request.id;
-        MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+        queues[static_cast<std::size_t>(rig - rigs.data())].push_back(request);
+      }
+      for (std::size_t index = 0; index < rigs.size() && !stop.load(); ++index) {
+        if (queues[index].empty()) continue;
+        Pending& request = queues[index].front();
+        if (!request.started) {
+          MPDRIG_RETURN_IF_ERROR(TakeCommands());
+          request.started = true;
+        }
+        const std::uint64_t slice = std::min(request.remaining, kLockstepSliceSteps);
+        for (std::uint64_t i = 0; i < slice && !stop.load(); ++i) {
+          MPDRIG_RETURN_IF_ERROR(TickAndPublish(rigs[index]));
+          --request.remaining;
+        }
+        if (request.remaining == 0) {
+          last_step_request[index] = request.id;
+          queues[index].pop_front();
+          MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+        }
       }
     }
     return Status::Ok();

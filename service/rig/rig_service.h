@@ -7,7 +7,10 @@
 //              taken first, then `steps` sensor periods run and each one's sensors are published,
 //              then the status carries last_completed_step_request. A client that needs its
 //              command applied in a given step waits for the command's acknowledgement
-//              (dds_wait_for_acks) before it sends the step request.
+//              (dds_wait_for_acks) before it sends the step request. Requests queue per rig;
+//              rigs with pending steps take turns of at most 100 steps, so a huge request
+//              (up to 2^32 - 1 steps) starves no other rig, and a stop ends it within one step.
+//              A command sent while its rig's request runs may apply in the middle of it.
 // A command that is NaN, infinite, out of range or for an unknown rig is refused, counted and
 // reported on status; the rig runs on. Nothing a client sends stops the service.
 // Several controllers may command one rig: each actuator's topic uses exclusive ownership, so

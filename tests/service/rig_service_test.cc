@@ -3,11 +3,21 @@
 // service in its own DDS domain.
 #include "service/rig/rig_service.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -18,6 +28,8 @@
 #include "mpdrig.h"
 #include "service/rig/wire.h"
 #include "tests/support/test_domain.h"
+
+extern char** environ;
 
 namespace mpdrig::service {
 namespace {
@@ -53,7 +65,10 @@ class ServiceTest : public ::testing::Test {
     auto service = RigService::Create(std::move(rigs), options);
     ASSERT_TRUE(service.ok()) << service.status().message();
     service_ = std::move(service).value();
-    thread_ = std::thread([this] { run_status_ = service_->Run(stop_); });
+    thread_ = std::thread([this] {
+      run_status_ = service_->Run(stop_);
+      finished_ = true;
+    });
 
     auto participant = dds::CreateParticipant(options.domain);
     ASSERT_TRUE(participant.ok());
@@ -149,6 +164,7 @@ class ServiceTest : public ::testing::Test {
   std::unique_ptr<RigService> service_;
   std::thread thread_;
   std::atomic<bool> stop_{false};
+  std::atomic<bool> finished_{false};  // Run has returned
   Status run_status_ = Status::Ok();
   std::uint64_t request_id_ = 0;
   std::string last_warnings_;
@@ -268,6 +284,33 @@ TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
   EXPECT_GT(c2_after - c2_before, 5e5)
       << "closing the choke from 31 to 28 deg must raise C2 by bars";
   EXPECT_NEAR(after["rig-1"].back()[Channel::kChokePosition], 28.0 / 90.0, 1e-6);
+}
+
+// One huge step request (issue 15, item 1): while rig-1 runs its 2^32 - 1 steps (49 days of
+// rig time at 100 Hz), rig-2's requests are served, and a stop ends the service at once.
+TEST_F(ServiceTest, HugeStepRequestStarvesNoOtherRigAndAStopEndsTheService) {
+  Start();
+  mpdrig_StepRequest huge{const_cast<char*>("rig-1"), 1000,
+                          std::numeric_limits<std::uint32_t>::max()};
+  ASSERT_TRUE(step_->Write(huge).ok());
+  Acked(step_->handle());
+  Step("rig-2", 10);
+  Step("rig-2", 10);
+  auto samples = TakeSensors();
+  EXPECT_EQ(samples["rig-2"].size(), 20u) << "rig-2 served while rig-1's request runs";
+  EXPECT_GT(samples["rig-1"].size(), 0u) << "rig-1's request runs too";
+
+  stop_ = true;
+  const auto asked = std::chrono::steady_clock::now();
+  while (!finished_ && std::chrono::steady_clock::now() - asked < std::chrono::seconds(5)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (!finished_) {
+    // The service thread cannot be joined: report and end the test process.
+    ADD_FAILURE() << "the service did not stop within 5 s of the stop request";
+    std::fflush(stdout);
+    std::_Exit(1);
+  }
 }
 
 TEST_F(ServiceTest, PistonSineMakesBottomHolePressureOscillateAtItsFrequency) {
