@@ -128,6 +128,28 @@ int RunSynth(const SynthArgs& args) {
   if (args.piston_noise_m) noise->piston_m = *args.piston_noise_m;
   if (args.choke_noise_deg) noise->choke_deg = *args.choke_noise_deg;
   options.sensor_noise = *noise;
+  // The flags' limits (synthetic_log.h), named as the user wrote them.
+  auto format = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::string(text);
+  };
+  if (!(options.duration_s >= 10.0 && options.duration_s <= kMaxSyntheticDurationS)) {
+    return Fail("synth",
+                Status::Error("--duration " + format(options.duration_s) + " s must be in [10, " +
+                              format(kMaxSyntheticDurationS) + "] s"));
+  }
+  if (!(options.rate_hz >= 10.0 && options.rate_hz <= kMaxSyntheticRateHz)) {
+    return Fail("synth",
+                Status::Error("--rate-hz " + format(options.rate_hz) + " Hz must be in [10, " +
+                              format(kMaxSyntheticRateHz) + "] Hz"));
+  }
+  if (options.duration_s * options.rate_hz > kMaxSyntheticSamples) {
+    return Fail("synth", Status::Error("--duration x --rate-hz = " +
+                                       format(options.duration_s * options.rate_hz) +
+                                       " samples, at most " + format(kMaxSyntheticSamples) +
+                                       " (held in memory): shorten the log or lower the rate"));
+  }
   auto made = MakeSyntheticLog(options);
   if (!made.ok()) return Fail("synth", made.status());
   made->log.metadata.push_back({"hidden", made->description});

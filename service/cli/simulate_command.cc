@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <string>
 
 #include "model/analysis/compare.h"
 #include "model/common/units.h"
@@ -34,6 +35,35 @@ struct SimulateArgs {
   std::string sensor_noise = "lab";
   std::uint64_t noise_seed = 1;
 };
+
+// Limits of a profile run: its samples are held in memory (about 230 B each, every channel)
+// and the solver steps the whole duration, so an absurd value would run out of memory or time
+// instead of failing (issue 15: --duration inf, 1e17, 1e9, --rate-hz inf).
+constexpr double kMaxDurationS = 86400.0;    // one day of rig time per run
+constexpr double kMaxRateHz = 100000.0;      // far above the lab's 100 Hz and the solver's grid
+constexpr double kMaxOutputSamples = 1.0e7;  // about 2.3 GB in memory: 1 kHz for 2.8 h
+
+Status CheckProfileRunLimits(double duration_s, double rate_hz) {
+  auto format = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::string(text);
+  };
+  if (!(duration_s > 0.0 && duration_s <= kMaxDurationS)) {
+    return Status::Error("--duration " + format(duration_s) + " s must be in (0, " +
+                         format(kMaxDurationS) + "] s (one day of rig time; split longer runs)");
+  }
+  if (!(rate_hz > 0.0 && rate_hz <= kMaxRateHz)) {
+    return Status::Error("--rate-hz " + format(rate_hz) + " Hz must be in (0, " +
+                         format(kMaxRateHz) + "] Hz");
+  }
+  if (duration_s * rate_hz > kMaxOutputSamples) {
+    return Status::Error("--duration x --rate-hz = " + format(duration_s * rate_hz) +
+                         " samples, at most " + format(kMaxOutputSamples) +
+                         " (they are held in memory): shorten the run or lower the rate");
+  }
+  return Status::Ok();
+}
 
 int RunSimulate(const SimulateArgs& args) {
   const std::string name = "simulate";
@@ -79,9 +109,8 @@ int RunSimulate(const SimulateArgs& args) {
     options->choke_input = ChokeInput::kMeasured;
     drive = "inputs of " + args.inputs_path;
   } else {
-    if (!(args.duration_s > 0.0) || !(args.rate_hz > 0.0)) {
-      return Fail(name, Status::Error("--duration and --rate-hz must be > 0"));
-    }
+    Status limits = CheckProfileRunLimits(args.duration_s, args.rate_hz);
+    if (!limits.ok()) return Fail(name, limits);
     auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
     if (!piston.ok()) return Fail(name, piston.status().Within("--piston"));
     auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);

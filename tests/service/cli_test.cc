@@ -467,6 +467,32 @@ TEST_F(CliTest, SimulateRejectsAnUnknownProfileKind) {
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 
+// Absurd durations and rates (issue 15, item 2): before, inf, 1e308 and 1e17 crashed (the
+// output count's std::lround overflowed) and 1e9 allocated until std::bad_alloc. Now each is
+// refused at once, naming the flag and its limit, and nothing is written.
+TEST_F(CliTest, SimulateRefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) {
+  struct Case {
+    std::string flags;
+    std::string named;
+  };
+  const std::vector<Case> cases = {
+      {"--duration inf", "--duration inf s must be in (0, 86400] s"},
+      {"--duration 1e308", "--duration 1e+308 s must be in (0, 86400] s"},
+      {"--duration 1e17", "--duration 1e+17 s must be in (0, 86400] s"},
+      {"--duration 1e9", "--duration 1e+09 s must be in (0, 86400] s"},
+      {"--duration nan", "--duration nan s"},
+      {"--duration -1", "--duration -1 s"},
+      {"--duration 1 --rate-hz inf", "--rate-hz inf Hz must be in (0, 100000] Hz"},
+      {"--duration 86400 --rate-hz 1000", "8.64e+07 samples, at most 1e+07"},
+  };
+  for (const Case& c : cases) {
+    const RunResult run = Run("simulate --piston 0 " + c.flags + " --out " + Quote(Path("Z.csv")));
+    EXPECT_EQ(run.exit_code, 1) << c.flags << ": refused with an error, not a crash\n" << run.err;
+    EXPECT_TRUE(Contains(run.err, c.named)) << c.flags << ": " << run.err;
+    EXPECT_FALSE(fs::exists(Path("Z.csv"))) << c.flags;
+  }
+}
+
 TEST_F(CliTest, SimulateRejectsBadModelOptions) {
   const RunResult model =
       Run("simulate --piston 0 --duration 1 --model foo --out " + Quote(Path("Z.csv")));
