@@ -32,6 +32,7 @@ struct DiagnoseArgs {
   double fit_fraction = 0.6;
   int max_iterations = 25;
   bool quiet = false;
+  riglog::ReadOptions read;
 };
 
 int RunDiagnose(DiagnoseArgs args) {
@@ -41,7 +42,7 @@ int RunDiagnose(DiagnoseArgs args) {
   if (!params.ok()) return Fail(name, params.status());
   auto simulation = args.model.LoadSimulationOptions();
   if (!simulation.ok()) return Fail(name, simulation.status());
-  auto log = LoadMeasuredLog(args.log_path);
+  auto log = LoadMeasuredLog(args.log_path, {}, args.read);
   if (!log.ok()) return Fail(name, log.status());
 
   DiagnoseOptions options;
@@ -201,6 +202,7 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                    "base parameters to fit (default wave_speed_mps,friction_f1_per_s,"
                    "choke_leak_m2)")
       ->delimiter(',');
+  AddLogReadOptions(command, &args->read);
   command->add_option("--candidates", args->candidates, "effects to try (default: all)")
       ->delimiter(',');
   command

@@ -13,6 +13,7 @@
 
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
+#include "model/riglog/rig_log_reader.h"
 #include "model/sim/log_inputs.h"
 #include "model/sim/rig_simulator.h"
 
@@ -41,6 +42,10 @@ struct ModelOptions {
 // Registers --raw-inputs and --piston-smoothing-s: how a command that replays a log feeds its
 // inputs to the model (reconstructed under their noise by default; log_inputs.h).
 void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options);
+
+// Registers --max-gap-s: the longest gap in time a command accepts in a log it reads
+// (riglog::ReadOptions, rig_log_reader.h).
+void AddLogReadOptions(CLI::App* command, riglog::ReadOptions* options);
 
 // Writes a command's text output (JSON, HTML, a config) to `path`, or to stdout for "-".
 Status WriteText(const std::string& path, const std::string& text);

@@ -29,6 +29,7 @@ struct SimulateArgs {
   double duration_s = 20.0;
   double rate_hz = 100.0;
   InputReplayOptions replay;
+  riglog::ReadOptions read;
   bool allow_negative_pressure = false;
   std::vector<double> pressure_at_m;
   std::string out_path;
@@ -82,7 +83,7 @@ int RunSimulate(const SimulateArgs& args) {
   double atmosphere = params->atmospheric_pressure_pa;
   std::string drive;
   if (!args.inputs_path.empty()) {
-    auto log = riglog::ReadRigLog(args.inputs_path);
+    auto log = riglog::ReadRigLog(args.inputs_path, args.read);
     if (!log.ok()) return Fail(name, log.status());
     // A log that starts mid-heave starts after a warm-up, where its pressures say so (as compare).
     InputReplayOptions replay = args.replay;
@@ -222,6 +223,7 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
   command->add_option("--rate-hz", args->rate_hz, "output sample rate [Hz] (profiles)")
       ->capture_default_str();
   AddInputReplayOptions(command, &args->replay);
+  AddLogReadOptions(command, &args->read);
   command
       ->add_option("--pressure-at", args->pressure_at_m,
                    "extra pressure outputs along the pipe, metres from the inlet, e.g. "

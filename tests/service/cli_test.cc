@@ -493,6 +493,67 @@ TEST_F(CliTest, SimulateRefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) 
   }
 }
 
+// A steady rig log at 100 Hz for 2 s (lines 3-203), then `last_line` (line 204).
+std::string SteadyLogWith(const std::string& last_line) {
+  std::string text =
+      "# rig-log: 1\ntime_s,piston_position_m,choke_position_deg,FT2_lpm,C1_barg,C2_barg,"
+      "PT1_barg,FT1_lpm\n";
+  for (int i = 0; i <= 200; ++i) {
+    char row[96];
+    std::snprintf(row, sizeof row, "%.2f,0,31,5,0,3.9,4.2,5\n", i * 0.01);
+    text += row;
+  }
+  return text + last_line + "\n";
+}
+
+// Issue 15, item 3: one huge time value made compare, simulate --inputs and diagnose run for
+// minutes, and a long gap passed silently. Each log tool now refuses a gap longer than
+// --max-gap-s (default 10 s) with the file, line and column, and takes a wider limit.
+TEST_F(CliTest, LogToolsRefuseAGapInTimeAtItsLineAndTakeAWiderLimit) {
+  const std::string gap = Path("gap.csv");
+  WriteFile(gap, SteadyLogWith("22,0,31,5,0,3.9,4.2,5"));
+  const std::string huge = Path("huge.csv");
+  WriteFile(huge, SteadyLogWith("1e308,0,31,5,0,3.9,4.2,5"));
+  for (const std::string& command :
+       {"simulate --inputs " + Quote(gap) + " --out " + Quote(Path("Z.csv")),
+        "compare " + Quote(gap) + " --json " + Quote(Path("Z.json")),
+        "diagnose " + Quote(gap) + " --json " + Quote(Path("Z.json")),
+        "observe " + Quote(gap) + " --disturbance-hz 0.2 --out " + Quote(Path("Z.csv"))}) {
+    const RunResult run = Run(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.err;
+    EXPECT_TRUE(Contains(run.err, gap + ":204:1: time_s: 22 is 20 s after the previous sample's 2 "
+                                        "(line 203), a gap longer than 10 s"))
+        << command << "\n"
+        << run.err;
+    EXPECT_TRUE(Contains(run.err, "--max-gap-s")) << run.err;
+  }
+  for (const std::string& command :
+       {"simulate --inputs " + Quote(huge) + " --out " + Quote(Path("Z.csv")),
+        "compare " + Quote(huge) + " --json " + Quote(Path("Z.json")),
+        "diagnose " + Quote(huge) + " --json " + Quote(Path("Z.json"))}) {
+    const RunResult run = Run(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.err;
+    EXPECT_TRUE(Contains(run.err, huge + ":204:1: time_s: 1e+308 is 1e+308 s after"))
+        << command << "\n"
+        << run.err;
+  }
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+  EXPECT_FALSE(fs::exists(Path("Z.json")));
+
+  const RunResult wider = Run("simulate --inputs " + Quote(gap) +
+                              " --max-gap-s 30 --sensor-noise none --out " + Quote(Path("Z.csv")));
+  EXPECT_EQ(wider.exit_code, 0) << wider.err;
+  riglog::ReadOptions read;
+  read.max_gap_s = 30.0;
+  auto written = riglog::ReadRigLog(Path("Z.csv"), read);
+  ASSERT_TRUE(written.ok()) << written.status().message();
+  EXPECT_EQ(written->num_rows(), 202u);
+  const RunResult bad =
+      Run("simulate --inputs " + Quote(gap) + " --max-gap-s 0 --out " + Quote(Path("Y.csv")));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_TRUE(Contains(bad.err, "--max-gap-s")) << bad.err;
+}
+
 TEST_F(CliTest, SimulateRejectsBadModelOptions) {
   const RunResult model =
       Run("simulate --piston 0 --duration 1 --model foo --out " + Quote(Path("Z.csv")));

@@ -290,6 +290,54 @@ TEST(RigLogReaderErrors, TimeNotStrictlyIncreasing) {
               "_decreasing");
 }
 
+// Issue 15, item 3: one wild time value made every tool replay the model over it for minutes.
+// A gap longer than ReadOptions::max_gap_s (default 10 s) is an error at the later sample.
+TEST(RigLogReaderErrors, GapInTimeLongerThanTheLimit) {
+  const std::string path = WriteTestFile("time_s,PT1_barg\n0,1\n0.01,1\n100000.01,1\n");
+  Result<RigLog> log = ReadRigLog(path);
+  ASSERT_FALSE(log.ok());
+  EXPECT_EQ(log.status().message(),
+            path +
+                ":4:1: time_s: 100000.01 is 100000 s after the previous sample's 0.01 (line 3), "
+                "a gap longer than 10 s (an interrupted recording or a wrong time; raise the "
+                "limit with --max-gap-s if it is real)");
+  ReadOptions wider;
+  wider.max_gap_s = 2.0e5;
+  Result<RigLog> accepted = ReadRigLog(path, wider);
+  ASSERT_TRUE(accepted.ok()) << accepted.status().message();
+  EXPECT_EQ(accepted->num_rows(), 3u);
+
+  const std::string huge = WriteTestFile("time_s,PT1_barg\n0,1\n0.01,1\n1e308,1\n", "_1e308");
+  Result<RigLog> refused = ReadRigLog(huge);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().message().rfind(huge + ":4:1: time_s: 1e+308 is 1e+308 s after", 0),
+            0u)
+      << refused.status().message();
+  // A gap of exactly the limit is fine.
+  ReadOk("time_s,PT1_barg\n0,1\n10,1\n");
+}
+
+// Issue 15, item 8: time steps of 1e-12 s gave null metrics and exit 0.
+TEST(RigLogReaderErrors, TimeStepShorterThanTheLimit) {
+  ExpectError("time_s,PT1_barg\n0,1\n1e-12,1\n",
+              ":3:1: time_s: 1e-12 is only 1e-12 s after the previous sample's 0 (line 2); time "
+              "steps must be at least 1e-06 s");
+}
+
+TEST(RigLogReaderErrors, BadTimeLimitsAreRefused) {
+  const std::string path = WriteTestFile("time_s\n0\n");
+  for (auto [gap, step] : {std::pair{std::nan(""), 1e-6}, std::pair{10.0, 0.0},
+                           std::pair{1e-7, 1e-6}, std::pair{10.0, std::nan("")}}) {
+    ReadOptions options;
+    options.max_gap_s = gap;
+    options.min_step_s = step;
+    Result<RigLog> log = ReadRigLog(path, options);
+    ASSERT_FALSE(log.ok()) << gap << " " << step;
+    EXPECT_NE(log.status().message().find("time limits of a rig log"), std::string::npos)
+        << log.status().message();
+  }
+}
+
 TEST(RigLogReaderErrors, UnsupportedVersion) {
   ExpectError("# rig-log: 2\ntime_s\n0\n",
               ":1:12: unsupported rig-log version '2'; this reader reads version 1");
