@@ -29,6 +29,9 @@ struct RigService::Impl {
   std::uint64_t profile_every = 0;                    // 0: no profile topic
   ProfileBuffers profile_buffers;
   std::uint64_t deadline_misses = 0;
+  std::uint64_t lost_periods = 0;       // sensor periods skipped by those misses
+  double longest_stall_s = 0.0;         // the longest miss, from its deadline [s of wall time]
+  double last_stall_sim_time_s = -1.0;  // rig time at the last miss; -1: none
   Clock::time_point started;
 
   // Declared parent-first, so children are deleted before their participant and domain.
@@ -221,6 +224,9 @@ struct RigService::Impl {
     const double wall_s = std::chrono::duration<double>(Clock::now() - started).count();
     wire.real_time_factor = wall_s > 0.0 ? rig.time_s() / wall_s : 0.0;
     wire.deadline_misses = deadline_misses;
+    wire.lost_periods = lost_periods;
+    wire.longest_stall_s = longest_stall_s;
+    wire.last_stall_sim_time_s = last_stall_sim_time_s;
     wire.rejected_commands = rig.counters().rejected_commands;
     wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
     wire.last_completed_step_request = last_step_request[index];
@@ -289,7 +295,21 @@ struct RigService::Impl {
       if (options.clock == ClockMode::kRealtime) {
         const Clock::time_point now = Clock::now();
         if (now > next + period_wall) {  // more than a whole period late: a missed deadline
+          // The periods between the deadline and now are skipped: the rig runs on that far behind
+          // the wall clock. Count them, and tell each rig's status when it happened.
+          const double late_s = std::chrono::duration<double>(now - next).count();
+          const auto lost = static_cast<std::uint64_t>(std::floor(late_s / period));
           ++deadline_misses;
+          lost_periods += lost;
+          longest_stall_s = std::max(longest_stall_s, late_s);
+          last_stall_sim_time_s = rigs.front().time_s();
+          char text[200];
+          std::snprintf(text, sizeof text,
+                        "fell behind real time at rig time %.3f s: a %.3f s stall, %llu periods "
+                        "lost (%llu in all, longest stall %.3f s)",
+                        last_stall_sim_time_s, late_s, static_cast<unsigned long long>(lost),
+                        static_cast<unsigned long long>(lost_periods), longest_stall_s);
+          for (RigHost& rig : rigs) rig.NoteEvent(text);
           next = now + period_wall;
         } else {
           std::this_thread::sleep_until(next);
@@ -381,6 +401,8 @@ RigService::~RigService() = default;
 
 const std::vector<RigHost>& RigService::rigs() const { return impl_->rigs; }
 std::uint64_t RigService::deadline_misses() const { return impl_->deadline_misses; }
+std::uint64_t RigService::lost_periods() const { return impl_->lost_periods; }
+double RigService::longest_stall_s() const { return impl_->longest_stall_s; }
 
 Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs,
                                                        const ServeOptions& options) {

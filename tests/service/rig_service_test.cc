@@ -527,5 +527,99 @@ TEST_F(ServiceTest, PressureProfileAlongThePipeAtTenHertzMatchesTheTransmitters)
   EXPECT_EQ(profile_counters, (std::vector<std::uint64_t>{0, 10, 20, 30, 40, 50, 60, 70, 80, 90}));
 }
 
+// Issue 15, item 5: a stall of the real-time clock used to count as one deadline miss, whatever
+// its length. A real `mpdrig serve` process is stopped (SIGSTOP) for 1.5 s at 100 Hz: its status
+// must report about 150 lost periods, a longest stall of about 1.5 s, the rig time when it fell
+// behind and a warning that says so; SIGTERM then stops it cleanly.
+TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTimeClock) {
+  const dds_domainid_t domain = TestDomain();
+  const std::string log_path =
+      ::testing::TempDir() + "/serve_stall." + std::to_string(::getpid()) + ".txt";
+  std::vector<std::string> args = {
+      MPDRIG_EXE,     "serve", "--clock", "realtime", "--rate-hz",
+      "100",          "--rig", "rig-1",   "--domain", std::to_string(domain),
+      "--no-observer"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  pid_t pid = -1;
+  ASSERT_EQ(posix_spawn(&pid, MPDRIG_EXE, &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  struct Reaper {  // kill -9 if the test leaves early
+    pid_t pid;
+    ~Reaper() {
+      if (pid > 0) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+      }
+    }
+  } reaper{pid};
+
+  auto dds_domain = dds::Domain::Create(domain, dds::LoopbackConfig());  // as the service's
+  ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
+  auto participant = dds::CreateParticipant(domain);
+  ASSERT_TRUE(participant.ok());
+  auto topic = dds::CreateTopic(participant->handle(), &mpdrig_RigStatus_desc, kStatusTopic);
+  ASSERT_TRUE(topic.ok());
+  auto status = dds::Reader<mpdrig_RigStatus>::Create(participant->handle(), topic->handle(),
+                                                      dds::StatusQos());
+  ASSERT_TRUE(status.ok());
+  struct Seen {
+    double sim_time_s = 0.0;
+    std::uint64_t lost_periods = 0;
+    double longest_stall_s = 0.0;
+    double last_stall_sim_time_s = -1.0;
+    std::string warnings;
+  } seen;
+  // Waits for a status that satisfies `done` (up to 20 s).
+  auto wait_for = [&](const std::function<bool(const Seen&)>& done) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (std::chrono::steady_clock::now() < until) {
+      auto ready = status->Wait(DDS_MSECS(100));
+      if (!ready.ok() || !*ready) continue;
+      bool matched = false;
+      (void)status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+        seen = {s.sim_time_s, s.lost_periods, s.longest_stall_s, s.last_stall_sim_time_s, ""};
+        for (std::uint32_t i = 0; i < s.warnings._length; ++i) {
+          seen.warnings += std::string(s.warnings._buffer[i]) + "\n";
+        }
+        matched = matched || done(seen);
+      });
+      if (matched) return true;
+    }
+    return false;
+  };
+  ASSERT_TRUE(wait_for([](const Seen& s) { return s.sim_time_s >= 1.0; }))
+      << "the service never ran 1 s of rig time";
+  EXPECT_EQ(seen.lost_periods, 0u) << "no stall yet";
+  const double stopped_at_s = seen.sim_time_s;
+
+  ASSERT_EQ(::kill(pid, SIGSTOP), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ASSERT_EQ(::kill(pid, SIGCONT), 0);
+  ASSERT_TRUE(wait_for([](const Seen& s) { return s.lost_periods > 0; }))
+      << "no status reported the stall; last: " << seen.warnings;
+  EXPECT_GE(seen.lost_periods, 120u) << "1.5 s at 100 Hz";
+  EXPECT_LE(seen.lost_periods, 400u);
+  EXPECT_GE(seen.longest_stall_s, 1.2);
+  EXPECT_LE(seen.longest_stall_s, 4.0);
+  EXPECT_GE(seen.last_stall_sim_time_s, stopped_at_s);
+  EXPECT_NE(seen.warnings.find("fell behind real time at rig time"), std::string::npos)
+      << seen.warnings;
+
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  int wait_status = 0;
+  ASSERT_EQ(::waitpid(pid, &wait_status, 0), pid);
+  reaper.pid = -1;
+  EXPECT_TRUE(WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0);
+  std::ifstream log(log_path);
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("periods lost, longest stall"), std::string::npos) << text;
+}
+
 }  // namespace
 }  // namespace mpdrig::service
