@@ -304,6 +304,11 @@ struct RigLogReader::State {
         last_time_line = line_number;
       }
       (*values_si)[i] = ToSi(column.unit, *value, atmospheric_pressure_pa);
+      if (i != time_index) {
+        Status in_range =
+            CheckPhysicalRange(column, *value, (*values_si)[i], atmospheric_pressure_pa);
+        if (!in_range.ok()) return ErrorAt(line_number, ColumnOf(line, start), in_range.message());
+      }
       start = comma + 1;
     }
     ++samples_read;

@@ -23,6 +23,8 @@
 //     `nan` is NaN. Field count must equal the header's.
 //   - `time_s` must be a number (not empty, not nan) and strictly increasing, by at least
 //     ReadOptions::min_step_s and at most ReadOptions::max_gap_s from one sample to the next.
+//   - Every other value must lie in its quantity's physical range (PhysicalRangeOf, channels.h):
+//     `PT1_barg=1e308` or `choke_position_deg=-50` is an error, not infinity or a replayed -50 deg.
 //
 // Every error is `path:line:column: message`, 1-based, the column being the character (UTF-8
 // code point) position where the offending field or header column starts, e.g.

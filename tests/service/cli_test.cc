@@ -554,6 +554,28 @@ TEST_F(CliTest, LogToolsRefuseAGapInTimeAtItsLineAndTakeAWiderLimit) {
   EXPECT_TRUE(Contains(bad.err, "--max-gap-s")) << bad.err;
 }
 
+// Issue 15, item 8: time steps of 1e-12 s gave null metrics with exit 0, and a choke opening of
+// -50 deg was replayed. Both are errors at their file, line and column.
+TEST_F(CliTest, LogToolsRefuseOutOfRangeValuesAndTinyTimeStepsAtTheirPosition) {
+  const std::string tiny = Path("tiny.csv");
+  WriteFile(tiny, SteadyLogWith("2.000000000001,0,31,5,0,3.9,4.2,5"));
+  const RunResult compare = Run("compare " + Quote(tiny) + " --json " + Quote(Path("Z.json")));
+  EXPECT_EQ(compare.exit_code, 1) << compare.err;
+  EXPECT_TRUE(Contains(compare.err, tiny + ":204:1: time_s: 2.000000000001 is only "))
+      << compare.err;
+  EXPECT_FALSE(fs::exists(Path("Z.json")));
+
+  const std::string choke = Path("choke.csv");
+  WriteFile(choke, SteadyLogWith("2.01,0,-50,5,0,3.9,4.2,5"));
+  const RunResult simulate =
+      Run("simulate --inputs " + Quote(choke) + " --out " + Quote(Path("Z.csv")));
+  EXPECT_EQ(simulate.exit_code, 1) << simulate.err;
+  EXPECT_TRUE(Contains(simulate.err, choke + ":204:8: choke_position_deg: -50 is outside the "
+                                             "physical range of a choke opening"))
+      << simulate.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
 TEST_F(CliTest, SimulateRejectsBadModelOptions) {
   const RunResult model =
       Run("simulate --piston 0 --duration 1 --model foo --out " + Quote(Path("Z.csv")));

@@ -338,6 +338,45 @@ TEST(RigLogReaderErrors, BadTimeLimitsAreRefused) {
   }
 }
 
+// Issue 15, item 8: values outside their quantity's physical range used to pass: 1e308 barg
+// became infinity ("not measured"), choke openings of -50 deg and 31 (as a fraction) were replayed.
+TEST(RigLogReaderErrors, ValuesOutsideTheirPhysicalRange) {
+  struct Case {
+    std::string content;
+    std::string message;  // after the path
+  };
+  const std::vector<Case> cases = {
+      {"time_s,PT1_barg\n0,1\n0.01,1e308\n",
+       ":3:6: PT1_barg: 1e+308 is outside the physical range of a pressure, "},
+      {"time_s,C1_barg\n0,1e308\n", ":2:3: C1_barg: 1e+308 is outside the physical range of a "},
+      {"time_s,PT1_bara\n0,-2000\n",
+       ":2:3: PT1_bara: -2000 is outside the physical range of a pressure, -1000 .. 1000 bara"},
+      {"time_s,piston_position_m,choke_position_deg\n0,0,-50\n",
+       ":2:5: choke_position_deg: -50 is outside the physical range of a choke opening, -4.5 .. "
+       "94.5 deg"},
+      {"time_s,choke_position_frac\n0,31\n",
+       ":2:3: choke_position_frac: 31 is outside the physical range of a choke opening, -0.05 .. "
+       "1.05 frac"},
+      {"time_s,FT2_lpm\n0,1e7\n",
+       ":2:3: FT2_lpm: 10000000 is outside the physical range of a flow"},
+      {"time_s,piston_position_m\n0,1e3\n",
+       ":2:3: piston_position_m: 1000 is outside the physical range of a position, -10 .. 10 m"},
+      {"time_s,BHP_est_barg\n0,1e308\n", ":2:3: BHP_est_barg: 1e+308 is outside"},
+  };
+  int index = 0;
+  for (const Case& c : cases) {
+    const std::string path = WriteTestFile(c.content, "_" + std::to_string(index++));
+    Result<RigLog> log = ReadRigLog(path);
+    ASSERT_FALSE(log.ok()) << "accepted:\n" << c.content;
+    EXPECT_EQ(log.status().message().rfind(path + c.message, 0), 0u) << log.status().message();
+  }
+  // The edges of the ranges, and not measured, pass.
+  const RigLog edges = ReadOk(
+      "time_s,piston_position_m,choke_position_deg,FT2_lpm,PT1_bara,PT2_barg\n"
+      "0,-10,-4.4,-5999,-1000,998\n0.01,10,94.4,5999,1000,\n");
+  EXPECT_EQ(edges.num_rows(), 2u);
+}
+
 TEST(RigLogReaderErrors, UnsupportedVersion) {
   ExpectError("# rig-log: 2\ntime_s\n0\n",
               ":1:12: unsupported rig-log version '2'; this reader reads version 1");
