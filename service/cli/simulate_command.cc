@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "model/analysis/compare.h"
@@ -37,12 +38,13 @@ struct SimulateArgs {
   std::uint64_t noise_seed = 1;
 };
 
-// Limits of a profile run: its samples are held in memory (about 230 B each, every channel)
-// and the solver steps the whole duration, so an absurd value would run out of memory or time
-// instead of failing (issue 15: --duration inf, 1e17, 1e9, --rate-hz inf).
+// Limits of a profile run: its output times are held in memory (8 B each; the samples stream to
+// the log, about 250 B each on disk) and the solver steps the whole duration, so an absurd value
+// would run out of memory, disk or time instead of failing (issue 15: --duration inf, 1e17,
+// 1e9, --rate-hz inf).
 constexpr double kMaxDurationS = 86400.0;    // one day of rig time per run
 constexpr double kMaxRateHz = 100000.0;      // far above the lab's 100 Hz and the solver's grid
-constexpr double kMaxOutputSamples = 1.0e7;  // about 2.3 GB in memory: 1 kHz for 2.8 h
+constexpr double kMaxOutputSamples = 1.0e7;  // 1 kHz for 2.8 h: 80 MB of times, 2.5 GB of log
 
 Status CheckProfileRunLimits(double duration_s, double rate_hz) {
   auto format = [](double value) {
@@ -61,7 +63,7 @@ Status CheckProfileRunLimits(double duration_s, double rate_hz) {
   if (duration_s * rate_hz > kMaxOutputSamples) {
     return Status::Error("--duration x --rate-hz = " + format(duration_s * rate_hz) +
                          " samples, at most " + format(kMaxOutputSamples) +
-                         " (they are held in memory): shorten the run or lower the rate");
+                         ": shorten the run or lower the rate");
   }
   return Status::Ok();
 }
@@ -137,19 +139,6 @@ int RunSimulate(const SimulateArgs& args) {
 
   const double span_s = output_times.back() - output_times.front();
   const bool show_progress = span_s > 600.0;
-  const auto started = std::chrono::steady_clock::now();
-  auto run = Simulate(*params, *options, signals, output_times, [&](double fraction) {
-    if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
-  });
-  if (!run.ok()) {
-    if (run.status().code() != Status::Code::kModelRange) return Fail(name, run.status());
-    return Fail(name, Status::Error(run.status().message() +
-                                    "\n  (raise the outlet pressure, reduce the piston amplitude, "
-                                    "or pass --allow-negative-pressure to continue anyway)"));
-  }
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-
   riglog::Metadata metadata = {
       {"source", "mpdrig simulate"},
       {"model", args.model.Describe(*params)},
@@ -160,25 +149,53 @@ int RunSimulate(const SimulateArgs& args) {
     metadata.emplace_back("set", assignment);
   // What the lab's sensors would read (sensor_noise.h); the extra --pressure-at outputs are the
   // model's, not sensors, and stay noise-free. `none` writes the model's output untouched.
+  std::optional<SensorNoiseApplier> sensors;
   if (!noise->IsNone()) {
-    SensorNoiseApplier sensors(*noise, args.noise_seed);
-    for (RigSample& sample : run->samples) sensors.MeasureSample(&sample);
+    sensors.emplace(*noise, args.noise_seed);
     metadata.emplace_back("sensor_noise",
                           noise->ToSpec() + ", seed " + std::to_string(args.noise_seed));
   }
+  // The samples go to the log as they come (a long run is not held in memory); a failed run
+  // leaves no log behind (rig_log_output.h).
+  auto out =
+      SampleLogStream::Open(args.out_path, std::move(metadata), atmosphere, args.pressure_at_m);
+  if (!out.ok()) return Fail(name, out.status());
+  Status written = Status::Ok();
+  const auto started = std::chrono::steady_clock::now();
+  auto run = SimulateEach(
+      *params, *options, signals, output_times,
+      [&](const RigSample& sample) {
+        if (!written.ok()) return;
+        RigSample measured = sample;
+        if (sensors) sensors->MeasureSample(&measured);
+        written = out->Write(measured);
+      },
+      [&](double fraction) {
+        if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
+      });
+  if (!run.ok()) {
+    if (run.status().code() != Status::Code::kModelRange) return Fail(name, run.status());
+    return Fail(name, Status::Error(run.status().message() +
+                                    "\n  (raise the outlet pressure, reduce the piston amplitude, "
+                                    "or pass --allow-negative-pressure to continue anyway)"));
+  }
+  if (!written.ok()) return Fail(name, written);
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  riglog::Metadata warnings;
   if (run->first_range_event) {
-    metadata.emplace_back("warning", run->first_range_event->Describe());
+    warnings.emplace_back("warning", run->first_range_event->Describe());
     std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
                  run->first_range_event->Describe().c_str());
   }
-  Status written =
-      WriteSamples(args.out_path, metadata, atmosphere, run->samples, args.pressure_at_m);
+  written = out->Finish(warnings);
   if (!written.ok()) return Fail(name, written);
   if (args.out_path != "-") {
     std::printf(
         "simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
         "channels written to %s\n",
-        span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, run->samples.size(),
+        span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, out->samples_written(),
         SimulatedColumns(args.pressure_at_m)->size() + 1, args.out_path.c_str());
   }
   return 0;

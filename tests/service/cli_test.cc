@@ -1,5 +1,6 @@
 // The mpdrig command line, run as a user runs it: the real binary, real files, exit codes and
 // messages. Every run here simulates a few seconds at most (milliseconds of CPU).
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -491,6 +492,31 @@ TEST_F(CliTest, SimulateRefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) 
     EXPECT_TRUE(Contains(run.err, c.named)) << c.flags << ": " << run.err;
     EXPECT_FALSE(fs::exists(Path("Z.csv"))) << c.flags;
   }
+}
+
+// Issue 15, item 2: simulate held its whole output in memory (135 MB for 600 s at 1 kHz, about
+// 230 B a sample). It streams it now: 200 001 samples (45 MB held before) must not raise the
+// process's peak memory by more than 15 MB over a run of 1 001 samples.
+TEST_F(CliTest, SimulateStreamsItsOutputInBoundedMemory) {
+  auto peak_rss_kb = [] {
+    rusage usage{};
+    ::getrusage(RUSAGE_CHILDREN, &usage);  // the largest child so far
+    return usage.ru_maxrss;
+  };
+  const std::string run =
+      "simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 --sensor-noise "
+      "none ";
+  ASSERT_EQ(Run(run + "--duration 0.5 --rate-hz 2000 --out " + Quote(Path("short.csv"))).exit_code,
+            0);
+  const long short_kb = peak_rss_kb();
+  const RunResult long_run =
+      Run(run + "--duration 100 --rate-hz 2000 --out " + Quote(Path("long.csv")));
+  ASSERT_EQ(long_run.exit_code, 0) << long_run.err;
+  const long long_kb = peak_rss_kb();
+  EXPECT_LT(long_kb - short_kb, 15 * 1024)
+      << "peak RSS " << short_kb << " kB for 1 001 samples, " << long_kb << " kB for 200 001";
+  EXPECT_EQ(ReadLog(Path("long.csv")).num_rows(), 200001u);
+  EXPECT_TRUE(Contains(long_run.out, "200001 samples")) << long_run.out;
 }
 
 // A steady rig log at 100 Hz for 2 s (lines 3-203), then `last_line` (line 204).
