@@ -32,6 +32,20 @@ struct RigService::Impl {
   std::uint64_t lost_periods = 0;       // sensor periods skipped by those misses
   double longest_stall_s = 0.0;         // the longest miss, from its deadline [s of wall time]
   double last_stall_sim_time_s = -1.0;  // rig time at the last miss; -1: none
+  double last_stall_s = 0.0;            // that miss, from its deadline [s of wall time]
+
+  // A warning of its own (the rig's last event, e.g. a safe state taken, stays beside it).
+  std::string StallWarning() const {
+    if (last_stall_sim_time_s < 0.0) return "";
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  "fell behind real time at rig time %.3f s: a %.3f s stall (%llu periods lost "
+                  "in %llu stalls, the longest %.3f s)",
+                  last_stall_sim_time_s, last_stall_s,
+                  static_cast<unsigned long long>(lost_periods),
+                  static_cast<unsigned long long>(deadline_misses), longest_stall_s);
+    return text;
+  }
   Clock::time_point started;
 
   // Declared parent-first, so children are deleted before their participant and domain.
@@ -230,12 +244,15 @@ struct RigService::Impl {
     wire.rejected_commands = rig.counters().rejected_commands;
     wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
     wire.last_completed_step_request = last_step_request[index];
-    // Warnings: leaving the model's range, and the last event (e.g. a safe state taken).
+    // Warnings: leaving the model's range, falling behind real time, and the last event (e.g. a
+    // safe state taken).
     std::string range_warning = rig.range_event() ? rig.range_event()->Describe() : "";
+    std::string stall_warning = StallWarning();
     std::string event = rig.counters().last_event;
-    char* warnings[2];
+    char* warnings[3];
     std::uint32_t count = 0;
     if (!range_warning.empty()) warnings[count++] = range_warning.data();
+    if (!stall_warning.empty()) warnings[count++] = stall_warning.data();
     if (!event.empty()) warnings[count++] = event.data();
     wire.warnings._length = wire.warnings._maximum = count;
     wire.warnings._buffer = count > 0 ? warnings : nullptr;
@@ -296,20 +313,13 @@ struct RigService::Impl {
         const Clock::time_point now = Clock::now();
         if (now > next + period_wall) {  // more than a whole period late: a missed deadline
           // The periods between the deadline and now are skipped: the rig runs on that far behind
-          // the wall clock. Count them, and tell each rig's status when it happened.
+          // the wall clock. Count them; the status says when it happened (StallWarning).
           const double late_s = std::chrono::duration<double>(now - next).count();
-          const auto lost = static_cast<std::uint64_t>(std::floor(late_s / period));
           ++deadline_misses;
-          lost_periods += lost;
+          lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
           longest_stall_s = std::max(longest_stall_s, late_s);
+          last_stall_s = late_s;
           last_stall_sim_time_s = rigs.front().time_s();
-          char text[200];
-          std::snprintf(text, sizeof text,
-                        "fell behind real time at rig time %.3f s: a %.3f s stall, %llu periods "
-                        "lost (%llu in all, longest stall %.3f s)",
-                        last_stall_sim_time_s, late_s, static_cast<unsigned long long>(lost),
-                        static_cast<unsigned long long>(lost_periods), longest_stall_s);
-          for (RigHost& rig : rigs) rig.NoteEvent(text);
           next = now + period_wall;
         } else {
           std::this_thread::sleep_until(next);
