@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <thread>
 
 #include "service/rig/wire.h"
@@ -15,6 +16,18 @@
 namespace mpdrig::service {
 
 using Clock = std::chrono::steady_clock;
+
+// The most bytes of an unknown rig id that a status repeats.
+constexpr std::size_t kMaxReportedIdBytes = 64;
+
+// 'id', or its first kMaxReportedIdBytes (not cutting a UTF-8 character) and its length.
+std::string ReportedId(const char* rig_id) {
+  const std::string_view id(rig_id);
+  if (id.size() <= kMaxReportedIdBytes) return "'" + std::string(id) + "'";
+  std::size_t end = kMaxReportedIdBytes;
+  while (end > 0 && (static_cast<unsigned char>(id[end]) & 0xC0) == 0x80) --end;
+  return "'" + std::string(id.substr(0, end)) + "...' (" + std::to_string(id.size()) + " bytes)";
+}
 
 // Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
 constexpr std::uint64_t kLockstepSliceSteps = 100;
@@ -105,12 +118,13 @@ struct RigService::Impl {
     return nullptr;
   }
 
-  // A command for a rig this service does not run: every rig's status reports it.
+  // A command for a rig this service does not run: every rig's status reports it, with at most
+  // kMaxReportedIdBytes of the id (a stranger's 10 MB id would otherwise go out in every status).
   void RefuseUnknown(const char* topic, const char* rig_id) {
     std::string serving;
     for (const RigHost& rig : rigs) serving += (serving.empty() ? "" : ", ") + rig.rig_id();
-    const std::string reason = std::string(topic) + " for unknown rig '" + rig_id +
-                               "' refused (this service runs: " + serving + ")";
+    const std::string reason = std::string(topic) + " for unknown rig " + ReportedId(rig_id) +
+                               " refused (this service runs: " + serving + ")";
     for (RigHost& rig : rigs) (void)rig.Refuse(reason);
   }
 

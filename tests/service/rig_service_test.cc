@@ -363,6 +363,22 @@ TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
       << "last valid command in force";
 }
 
+// Issue 15, item 4 (part): a stranger's 10 MB rig id was copied into every rig's last_rejection,
+// so each status carried 10 MB. The status now repeats at most 64 bytes of it, and its length.
+TEST_F(ServiceTest, AHugeUnknownRigIdIsNotCopiedIntoTheStatus) {
+  Start();
+  std::string huge(1 << 20, 'x');
+  mpdrig_ChokeCommand command{huge.data(), 40.0};
+  ASSERT_TRUE(choke_->Write(command).ok());
+  Acked(choke_->handle());
+  auto [rejected, reason] = Step("rig-1", 1);
+  EXPECT_EQ(rejected, 1u);
+  EXPECT_LT(reason.size(), 300u);
+  EXPECT_NE(reason.find("unknown rig '" + std::string(64, 'x') + "...' (1048576 bytes) refused"),
+            std::string::npos)
+      << reason.substr(0, 300);
+}
+
 TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeState) {
   Start(/*safe_choke_deg=*/90.0);
   const dds_entity_t p = participant_.handle();
