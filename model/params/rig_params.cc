@@ -106,6 +106,15 @@ Status RigParams::Validate() const {
       return Status::Error(out.str());
     }
   }
+  // The piston displaces (A_d - A_d2) per metre (5.4.1): an upper rod no thicker than the lower
+  // one would make the heave push fluid the wrong way, or not at all.
+  if (!(upper_rod_diameter_m > lower_rod_diameter_m)) {
+    std::ostringstream out;
+    out << "upper_rod_diameter_m = " << upper_rod_diameter_m
+        << " m must exceed lower_rod_diameter_m = " << lower_rod_diameter_m
+        << " m: the piston displaces the difference of the rods' areas (thesis 5.4.1)";
+    return Status::Error(out.str());
+  }
   if (std::abs(pipe_elevation_gain_m) > pipe_length_m) {
     return Status::Error(
         "pipe_elevation_gain_m exceeds pipe_length_m: the pipe cannot rise more "
