@@ -100,8 +100,9 @@ void ReconstructInputs(MeasuredLog* log) {
   log->reconstructed_inputs = ReconstructInputColumns(log->inputs, log->reconstruction);
 }
 
-Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress) {
-  auto source = FileRowSource::Open(path, progress);
+Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress,
+                                    const riglog::ReadOptions& read) {
+  auto source = FileRowSource::Open(path, progress, read);
   if (!source.ok()) return source.status();
   MeasuredLog log;
   log.path = path;
@@ -364,7 +365,7 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   MPDRIG_RETURN_IF_ERROR(CheckOptions(options));
   MPDRIG_RETURN_IF_ERROR(sim_options.Validate());
   // Pass 1: read the file (checking every line) for what the metrics need up front.
-  auto first_source = FileRowSource::Open(path, progress);
+  auto first_source = FileRowSource::Open(path, progress, options.read);
   if (!first_source.ok()) return first_source.status();
   LogScanner scanner((*first_source)->channels(), options);
   ReconstructionPlanner planner;
@@ -380,7 +381,7 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   first_source->reset();
 
   // Pass 2: read it again, replay the model in lock step, accumulate the metrics.
-  auto file = FileRowSource::Open(path);
+  auto file = FileRowSource::Open(path, {}, options.read);
   if (!file.ok()) return file.status();
   std::unique_ptr<LogRowSource> source = std::move(file).value();
   std::optional<InputReconstruction> plan;

@@ -63,6 +63,7 @@
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/channels.h"
+#include "model/riglog/rig_log_reader.h"
 #include "model/sim/log_inputs.h"
 #include "model/sim/rig_simulator.h"
 
@@ -102,7 +103,8 @@ struct MeasuredLog {
 // Streams `path` (RigLogReader): errors are `path:line:column: message`. Refuses a log without
 // piston_position or choke_position (or with an unmeasured input sample), fewer than 4 samples,
 // or no compared channel.
-Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress = {});
+Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress = {},
+                                    const riglog::ReadOptions& read = {});
 // The same from a log already in memory (tests, tools that build logs).
 Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& log, const std::string& path);
 // The samples of `log` with t <= t_end; the reconstructed inputs are the whole log's, cut (a
@@ -169,6 +171,8 @@ struct CompareOptions {
   // Welch segment length (samples, >= 8): longer logs are averaged over segments this long.
   // Memory per compared channel is about 24 bytes times this (compare_accumulator.h): 3 MB.
   int welch_segment_samples = 1 << 17;
+  // CompareLog: the reader's limits on the log's time axis (largest gap, smallest step).
+  riglog::ReadOptions read;
 };
 
 struct BandMetrics {

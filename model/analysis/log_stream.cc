@@ -23,7 +23,8 @@ constexpr std::size_t kSmoothingBlock = 4096;
 // ---- Sources ----------------------------------------------------------------------------------
 
 Result<std::unique_ptr<FileRowSource>> FileRowSource::Open(const std::string& path,
-                                                           const CompareProgress& progress) {
+                                                           const CompareProgress& progress,
+                                                           const riglog::ReadOptions& read) {
   // A regular file is opened here so that its read position gives the progress in percent;
   // anything else (and every error message) is the reader's.
   std::error_code error;
@@ -34,10 +35,10 @@ Result<std::unique_ptr<FileRowSource>> FileRowSource::Open(const std::string& pa
     auto file = std::make_unique<std::ifstream>(path, std::ios::binary);
     if (file->is_open()) {
       stream = file.get();
-      opened.emplace(riglog::RigLogReader::FromStream(std::move(file), path));
+      opened.emplace(riglog::RigLogReader::FromStream(std::move(file), path, read));
     }
   }
-  if (!opened) opened.emplace(riglog::RigLogReader::Open(path));
+  if (!opened) opened.emplace(riglog::RigLogReader::Open(path, read));
   if (!opened->ok()) return opened->status();
   std::unique_ptr<FileRowSource> source(new FileRowSource(std::move(*opened).value()));
   source->stream_ = stream;

@@ -65,8 +65,10 @@ class LogRowSource {
 // or ("read", -samples) every 100 000 samples from standard input ("-").
 class FileRowSource final : public LogRowSource {
  public:
+  // `read`: the reader's limits on the time axis (rig_log_reader.h).
   static Result<std::unique_ptr<FileRowSource>> Open(const std::string& path,
-                                                     const CompareProgress& progress = {});
+                                                     const CompareProgress& progress = {},
+                                                     const riglog::ReadOptions& read = {});
   const std::vector<SourceChannel>& channels() const override { return channels_; }
   Result<bool> Next(LogRow* row) override;
   const riglog::Metadata& metadata() const { return reader_.metadata(); }

@@ -101,8 +101,21 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
 }  // namespace
 
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
-  if (!(options.duration_s >= 10.0) || !(options.rate_hz >= 10.0)) {
-    return Status::Error("synthetic log: duration >= 10 s and rate >= 10 Hz");
+  // Upper bounds: the log, its noise-free twin and the replay grid are held in memory, so an
+  // absurd duration or rate would run out of memory or time instead of failing (issue 15).
+  if (!(options.duration_s >= 10.0 && options.duration_s <= kMaxSyntheticDurationS) ||
+      !(options.rate_hz >= 10.0 && options.rate_hz <= kMaxSyntheticRateHz)) {
+    std::ostringstream out;
+    out << "synthetic log: duration " << options.duration_s << " s must be in [10, "
+        << kMaxSyntheticDurationS << "] s and rate " << options.rate_hz << " Hz in [10, "
+        << kMaxSyntheticRateHz << "] Hz";
+    return Status::Error(out.str());
+  }
+  if (options.duration_s * options.rate_hz > kMaxSyntheticSamples) {
+    std::ostringstream out;
+    out << "synthetic log: duration x rate = " << options.duration_s * options.rate_hz
+        << " samples, at most " << kMaxSyntheticSamples << " (held in memory)";
+    return Status::Error(out.str());
   }
   if (options.sensor_noise) {
     MPDRIG_RETURN_IF_ERROR(options.sensor_noise->Validate().Within("synthetic log"));

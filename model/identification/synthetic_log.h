@@ -23,6 +23,11 @@
 
 namespace mpdrig {
 
+// Limits of a synthetic log (held in memory twice, with the replay beside it).
+constexpr double kMaxSyntheticDurationS = 86400.0;  // one day
+constexpr double kMaxSyntheticRateHz = 10000.0;
+constexpr double kMaxSyntheticSamples = 1.0e7;
+
 struct SyntheticLogOptions {
   std::uint64_t seed = 1;
   double duration_s = 120.0;

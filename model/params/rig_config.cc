@@ -91,6 +91,15 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
       params.choke_characteristic.push_back(
           {units::ChokeDegToFrac(point.opening_deg()), point.g_m2()});
     }
+    // Each point's error at the place it was written.
+    for (int i = 0; i < message.choke_point_size(); ++i) {
+      const pb::TextFormat::ParseLocation where =
+          locations.GetLocation(descriptor->FindFieldByName("choke_point"), i);
+      const std::string position = source_name + ":" + std::to_string(where.line + 1) + ":" +
+                                   std::to_string(where.column + 1);
+      MPDRIG_RETURN_IF_ERROR(
+          params.ValidateChokePoint(static_cast<std::size_t>(i)).Within(position));
+    }
   }
   for (int i = 0; i < message.effect_size(); ++i) {
     const config::Effect& effect = message.effect(i);

@@ -106,6 +106,15 @@ Status RigParams::Validate() const {
       return Status::Error(out.str());
     }
   }
+  // The piston displaces (A_d - A_d2) per metre (5.4.1): an upper rod no thicker than the lower
+  // one would make the heave push fluid the wrong way, or not at all.
+  if (!(upper_rod_diameter_m > lower_rod_diameter_m)) {
+    std::ostringstream out;
+    out << "upper_rod_diameter_m = " << upper_rod_diameter_m
+        << " m must exceed lower_rod_diameter_m = " << lower_rod_diameter_m
+        << " m: the piston displaces the difference of the rods' areas (thesis 5.4.1)";
+    return Status::Error(out.str());
+  }
   if (std::abs(pipe_elevation_gain_m) > pipe_length_m) {
     return Status::Error(
         "pipe_elevation_gain_m exceeds pipe_length_m: the pipe cannot rise more "
@@ -115,16 +124,22 @@ Status RigParams::Validate() const {
     return Status::Error("choke characteristic needs at least 2 points");
   }
   for (std::size_t i = 0; i < choke_characteristic.size(); ++i) {
-    const ChokePoint& point = choke_characteristic[i];
-    if (!std::isfinite(point.opening_frac) || !std::isfinite(point.g_m2) || point.g_m2 < 0.0 ||
-        point.opening_frac < 0.0 || point.opening_frac > 1.0) {
-      return Status::Error("choke characteristic point " + std::to_string(i) +
-                           ": opening must be in [0, 90] deg and G >= 0 m^2");
-    }
-    if (i > 0 && point.opening_frac <= choke_characteristic[i - 1].opening_frac) {
-      return Status::Error("choke characteristic point " + std::to_string(i) +
-                           ": openings must be strictly increasing");
-    }
+    MPDRIG_RETURN_IF_ERROR(ValidateChokePoint(i));
+  }
+  return Status::Ok();
+}
+
+Status RigParams::ValidateChokePoint(std::size_t index) const {
+  MPDRIG_CHECK(index < choke_characteristic.size());
+  const ChokePoint& point = choke_characteristic[index];
+  if (!std::isfinite(point.opening_frac) || !std::isfinite(point.g_m2) || point.g_m2 < 0.0 ||
+      point.opening_frac < 0.0 || point.opening_frac > 1.0) {
+    return Status::Error("choke characteristic point " + std::to_string(index) +
+                         ": opening must be in [0, 90] deg and G >= 0 m^2");
+  }
+  if (index > 0 && point.opening_frac <= choke_characteristic[index - 1].opening_frac) {
+    return Status::Error("choke characteristic point " + std::to_string(index) +
+                         ": openings must be strictly increasing");
   }
   return Status::Ok();
 }

@@ -77,6 +77,9 @@ struct RigParams {
 
   // Checks every value against the bounds of ParamTable() and the characteristic's shape.
   Status Validate() const;
+  // The characteristic's point `index`: in range, and after the point before it (Validate's check
+  // of one point, for a config loader that knows where the point was written).
+  Status ValidateChokePoint(std::size_t index) const;
 
   static std::vector<ChokePoint> DefaultChokeCharacteristic();
 

@@ -381,6 +381,36 @@ void AppendNumber(double value, std::string* out) {
   }
 }
 
+std::optional<PhysicalRange> PhysicalRangeOf(Quantity quantity) {
+  switch (quantity) {
+    case Quantity::kTime:
+      return std::nullopt;
+    case Quantity::kPosition:
+      return PhysicalRange{-10.0, 10.0};
+    case Quantity::kChokeOpening:
+      return PhysicalRange{-0.05, 1.05};
+    case Quantity::kFlow:
+      return PhysicalRange{-0.1, 0.1};
+    case Quantity::kPressure:
+      return PhysicalRange{-1.0e8, 1.0e8};
+  }
+  MPDRIG_CHECK(false);
+  return std::nullopt;
+}
+
+Status CheckPhysicalRange(const ColumnSpec& column, double value, double value_si,
+                          double atmospheric_pressure_pa) {
+  if (std::isnan(value) && std::isnan(value_si)) return Status::Ok();
+  const std::optional<PhysicalRange> range = PhysicalRangeOf(column.quantity());
+  if (!range || (value_si >= range->min_si && value_si <= range->max_si)) return Status::Ok();
+  const double low = FromSi(column.unit, range->min_si, atmospheric_pressure_pa);
+  const double high = FromSi(column.unit, range->max_si, atmospheric_pressure_pa);
+  return Status::Error(column.name + ": " + FormatNumber(value) +
+                       " is outside the physical range of a " +
+                       std::string(QuantityName(column.quantity())) + ", " + FormatNumber(low) +
+                       " .. " + FormatNumber(high) + " " + std::string(UnitSuffix(column.unit)));
+}
+
 std::string FormatNumber(double value) {
   std::string text;
   AppendNumber(value, &text);

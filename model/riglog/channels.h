@@ -124,6 +124,27 @@ Result<ColumnSpec> MakeColumn(std::string_view channel, Unit unit);
 // Known channel in its lab-default unit: MakeColumn(ChannelName(c), LabUnitFor(QuantityOf(c))).
 ColumnSpec LabColumn(Channel channel);
 
+// The physical range of a sample of `quantity`, SI with absolute pressure (none for time). Wide
+// enough for any reading of the lab's rig, with sensor offsets and noise; narrow enough to catch a
+// value in the wrong unit, a sign slip or an overflow (1e308 barg is infinite in Pa):
+//   position       -10 .. 10 m                  (the heave generator strokes well under 1 m)
+//   choke opening  -0.05 .. 1.05 (-4.5 .. 94.5 deg: 0 closed .. 1 open, plus a feedback offset)
+//   flow           -0.1 .. 0.1 m^3/s            (+-6000 L/min; the lab's pumps give tens of L/min)
+//   pressure       -1000 .. 1000 bar absolute   (a measurement stays above 0 abs but for a
+//                                               transmitter's offset; a simulation let past the
+//                                               model's range, --allow-negative-pressure, is not)
+struct PhysicalRange {
+  double min_si = 0.0;
+  double max_si = 0.0;
+};
+std::optional<PhysicalRange> PhysicalRangeOf(Quantity quantity);
+// Checks a sample of `column`: `value` as written, `value_si` converted. NaN (not measured)
+// passes. The error (no file position; the reader adds it) names the column, the value and the
+// range in the column's unit, e.g. "PT1_barg: 1e+308 is outside the physical range of a
+// pressure, -1.51325 .. 998.98675 barg".
+Status CheckPhysicalRange(const ColumnSpec& column, double value, double value_si,
+                          double atmospheric_pressure_pa);
+
 // ---- Field syntax shared by the reader and the writer -------------------------------------
 
 // `# key: value` lines before the header, in file order.

@@ -50,8 +50,8 @@ Status RigLog::AddColumn(ColumnSpec column, std::vector<double> values) {
   return Status::Ok();
 }
 
-Result<RigLog> ReadRigLog(const std::string& path) {
-  Result<RigLogReader> reader = RigLogReader::Open(path);
+Result<RigLog> ReadRigLog(const std::string& path, const ReadOptions& options) {
+  Result<RigLogReader> reader = RigLogReader::Open(path, options);
   if (!reader.ok()) return reader.status();
   RigLog log;
   log.metadata = reader->metadata();

@@ -13,6 +13,7 @@
 #include "model/common/status.h"
 #include "model/common/units.h"
 #include "model/riglog/channels.h"
+#include "model/riglog/rig_log_reader.h"
 
 namespace mpdrig::riglog {
 
@@ -40,8 +41,9 @@ struct RigLog {
   Status AddColumn(ColumnSpec column, std::vector<double> values_si);
 };
 
-// Reads a whole file ("-": standard input). Errors as RigLogReader: `path:line:column: message`.
-Result<RigLog> ReadRigLog(const std::string& path);
+// Reads a whole file ("-": standard input). Errors as RigLogReader: `path:line:column: message`;
+// `options`: the limits on the time axis (rig_log_reader.h).
+Result<RigLog> ReadRigLog(const std::string& path, const ReadOptions& options = {});
 
 // Writes `log` ("-": standard output) with RigLogWriter. Refuses a log whose vectors disagree in
 // length, or whose metadata `atmospheric_pressure_pa` disagrees with log.atmospheric_pressure_pa.

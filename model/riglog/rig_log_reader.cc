@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -31,6 +32,14 @@ std::int64_t ColumnOf(std::string_view line, std::size_t offset) {
 }
 
 bool IsBlank(char c) { return c == ' ' || c == '\t'; }
+
+// A time difference for a message: 6 significant digits (the sum of two written times carries
+// rounding noise in its last digits).
+std::string FormatGap(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", seconds);
+  return text;
+}
 
 struct MetadataLine {
   std::string_view key;
@@ -70,6 +79,7 @@ struct RigLogReader::State {
   std::vector<ColumnSpec> columns;
   std::size_t time_index = 0;
 
+  ReadOptions options;
   double last_time_s = 0.0;
   std::int64_t last_time_line = 0;  // 0: no sample yet
   std::int64_t pending_empty_line = 0;
@@ -272,10 +282,33 @@ struct RigLogReader::State {
                              " (line " + std::to_string(last_time_line) +
                              "); time must be strictly increasing");
         }
+        if (last_time_line != 0 && !(*value - last_time_s <= options.max_gap_s)) {
+          return ErrorAt(line_number, ColumnOf(line, start),
+                         column.name + ": " + FormatNumber(*value) + " is " +
+                             FormatGap(*value - last_time_s) + " s after the previous sample's " +
+                             FormatNumber(last_time_s) + " (line " +
+                             std::to_string(last_time_line) + "), a gap longer than " +
+                             FormatGap(options.max_gap_s) +
+                             " s (an interrupted recording or a wrong time; raise the limit "
+                             "with --max-gap-s if it is real)");
+        }
+        if (last_time_line != 0 && !(*value - last_time_s >= options.min_step_s)) {
+          return ErrorAt(line_number, ColumnOf(line, start),
+                         column.name + ": " + FormatNumber(*value) + " is only " +
+                             FormatGap(*value - last_time_s) + " s after the previous sample's " +
+                             FormatNumber(last_time_s) + " (line " +
+                             std::to_string(last_time_line) + "); time steps must be at least " +
+                             FormatGap(options.min_step_s) + " s");
+        }
         last_time_s = *value;
         last_time_line = line_number;
       }
       (*values_si)[i] = ToSi(column.unit, *value, atmospheric_pressure_pa);
+      if (i != time_index) {
+        Status in_range =
+            CheckPhysicalRange(column, *value, (*values_si)[i], atmospheric_pressure_pa);
+        if (!in_range.ok()) return ErrorAt(line_number, ColumnOf(line, start), in_range.message());
+      }
       start = comma + 1;
     }
     ++samples_read;
@@ -288,11 +321,21 @@ RigLogReader::RigLogReader(RigLogReader&&) noexcept = default;
 RigLogReader& RigLogReader::operator=(RigLogReader&&) noexcept = default;
 RigLogReader::~RigLogReader() = default;
 
-Result<RigLogReader> RigLogReader::Open(const std::string& path) {
+Status ReadOptions::Validate() const {
+  if (!(min_step_s > 0.0) || !(max_gap_s > min_step_s)) {
+    return Status::Error("time limits of a rig log: need max gap " + FormatGap(max_gap_s) +
+                         " s > min step " + FormatGap(min_step_s) + " s > 0");
+  }
+  return Status::Ok();
+}
+
+Result<RigLogReader> RigLogReader::Open(const std::string& path, const ReadOptions& options) {
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
   if (path == "-") {
     auto state = std::make_unique<State>();
     state->in = &std::cin;
     state->path = "<stdin>";
+    state->options = options;
     MPDRIG_RETURN_IF_ERROR(state->ReadHead());
     return RigLogReader(std::move(state));
   }
@@ -307,12 +350,15 @@ Result<RigLogReader> RigLogReader::Open(const std::string& path) {
     return Status::Error(path + ": cannot open for reading" +
                          (saved != 0 ? std::string(": ") + std::strerror(saved) : std::string()));
   }
-  return FromStream(std::move(file), path);
+  return FromStream(std::move(file), path, options);
 }
 
-Result<RigLogReader> RigLogReader::FromStream(std::unique_ptr<std::istream> in, std::string name) {
+Result<RigLogReader> RigLogReader::FromStream(std::unique_ptr<std::istream> in, std::string name,
+                                              const ReadOptions& options) {
   MPDRIG_CHECK(in != nullptr);
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
   auto state = std::make_unique<State>();
+  state->options = options;
   state->in = in.get();
   state->owned = std::move(in);
   state->path = std::move(name);

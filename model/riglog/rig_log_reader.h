@@ -21,7 +21,10 @@
 //     another sample is an error that points at the empty line.
 //   - Sample fields: see ParseSampleField. No surrounding spaces, no quotes, no `inf`. Empty or
 //     `nan` is NaN. Field count must equal the header's.
-//   - `time_s` must be a number (not empty, not nan) and strictly increasing.
+//   - `time_s` must be a number (not empty, not nan) and strictly increasing, by at least
+//     ReadOptions::min_step_s and at most ReadOptions::max_gap_s from one sample to the next.
+//   - Every other value must lie in its quantity's physical range (PhysicalRangeOf, channels.h):
+//     `PT1_barg=1e308` or `choke_position_deg=-50` is an error, not infinity or a replayed -50 deg.
 //
 // Every error is `path:line:column: message`, 1-based, the column being the character (UTF-8
 // code point) position where the offending field or header column starts, e.g.
@@ -43,12 +46,30 @@
 
 namespace mpdrig::riglog {
 
+// Limits on a log's time axis beyond the format (issue 15). Every tool replays the model over a
+// log's whole time span, so one wild time value (1e308, or a clock jump of a day) would make it
+// run for hours; a gap is also where a recording was interrupted, and the replay would hold the
+// inputs across it as if the rig had. Time steps far below any sensor period are a unit slip
+// (ms written as s) or a broken clock, and give empty metrics.
+struct ReadOptions {
+  // The longest step from one sample's time to the next [s]; a longer one is an error at the
+  // later sample. Default 10 s: 1000 sample periods of the lab's 100 Hz, longer than the rig's
+  // slowest dynamics (the ~7 s filling time constant), shorter than a replay a user waits for
+  // without noticing. Infinity: no limit.
+  double max_gap_s = 10.0;
+  // The shortest step [s]: 1 us, ten times finer than `mpdrig simulate`'s highest rate.
+  double min_step_s = 1.0e-6;
+
+  Status Validate() const;  // max_gap_s > min_step_s > 0, neither NaN
+};
+
 class RigLogReader {
  public:
   // Opens `path` ("-" reads standard input) and reads the metadata and the header.
-  static Result<RigLogReader> Open(const std::string& path);
+  static Result<RigLogReader> Open(const std::string& path, const ReadOptions& options = {});
   // Reads from `in`; `name` is used as the path in error messages.
-  static Result<RigLogReader> FromStream(std::unique_ptr<std::istream> in, std::string name);
+  static Result<RigLogReader> FromStream(std::unique_ptr<std::istream> in, std::string name,
+                                         const ReadOptions& options = {});
 
   RigLogReader(RigLogReader&&) noexcept;
   RigLogReader& operator=(RigLogReader&&) noexcept;

@@ -21,6 +21,7 @@ struct CompareArgs {
   std::string json_path;
   std::string report_path;
   InputReplayOptions replay;
+  riglog::ReadOptions read;
   int residual_lags = 25;
   bool quiet = false;
 };
@@ -40,6 +41,7 @@ int RunCompare(const CompareArgs& args) {
   options.reconstruct_inputs = args.replay.reconstruct_inputs;
   options.choose_warmup = args.replay.choose_warmup;
   options.residual_lags = args.residual_lags;
+  options.read = args.read;
   int last_percent = -1;
   std::string last_stage;
   const CompareProgress progress = [&](std::string_view stage, double fraction) {
@@ -118,6 +120,7 @@ void AddCompareCommand(CLI::App* app, int* exit_code) {
   command->add_option("--json", args->json_path, "metrics as JSON ('-' for stdout)");
   command->add_option("--report", args->report_path, "self-contained HTML report");
   AddInputReplayOptions(command, &args->replay);
+  AddLogReadOptions(command, &args->read);
   command
       ->add_option("--residual-lags", args->residual_lags,
                    "lags (samples) of the residual correlations, as MATLAB resid's M")

@@ -33,6 +33,7 @@ struct DiagnoseArgs {
   int max_iterations = 25;
   InputReplayOptions replay;
   bool quiet = false;
+  riglog::ReadOptions read;
 };
 
 int RunDiagnose(DiagnoseArgs args) {
@@ -42,7 +43,7 @@ int RunDiagnose(DiagnoseArgs args) {
   if (!params.ok()) return Fail(name, params.status());
   auto simulation = args.model.LoadSimulationOptions();
   if (!simulation.ok()) return Fail(name, simulation.status());
-  auto log = LoadMeasuredLog(args.log_path);
+  auto log = LoadMeasuredLog(args.log_path, {}, args.read);
   if (!log.ok()) return Fail(name, log.status());
 
   DiagnoseOptions options;
@@ -133,6 +134,28 @@ int RunSynth(const SynthArgs& args) {
   if (args.piston_noise_m) noise->piston_m = *args.piston_noise_m;
   if (args.choke_noise_deg) noise->choke_deg = *args.choke_noise_deg;
   options.sensor_noise = *noise;
+  // The flags' limits (synthetic_log.h), named as the user wrote them.
+  auto format = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::string(text);
+  };
+  if (!(options.duration_s >= 10.0 && options.duration_s <= kMaxSyntheticDurationS)) {
+    return Fail("synth",
+                Status::Error("--duration " + format(options.duration_s) + " s must be in [10, " +
+                              format(kMaxSyntheticDurationS) + "] s"));
+  }
+  if (!(options.rate_hz >= 10.0 && options.rate_hz <= kMaxSyntheticRateHz)) {
+    return Fail("synth",
+                Status::Error("--rate-hz " + format(options.rate_hz) + " Hz must be in [10, " +
+                              format(kMaxSyntheticRateHz) + "] Hz"));
+  }
+  if (options.duration_s * options.rate_hz > kMaxSyntheticSamples) {
+    return Fail("synth", Status::Error("--duration x --rate-hz = " +
+                                       format(options.duration_s * options.rate_hz) +
+                                       " samples, at most " + format(kMaxSyntheticSamples) +
+                                       " (held in memory): shorten the log or lower the rate"));
+  }
   auto made = MakeSyntheticLog(options);
   if (!made.ok()) return Fail("synth", made.status());
   made->log.metadata.push_back({"hidden", made->description});
@@ -184,6 +207,7 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                    "base parameters to fit (default wave_speed_mps,friction_f1_per_s,"
                    "choke_leak_m2)")
       ->delimiter(',');
+  AddLogReadOptions(command, &args->read);
   command->add_option("--candidates", args->candidates, "effects to try (default: all)")
       ->delimiter(',');
   command

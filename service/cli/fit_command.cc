@@ -24,6 +24,7 @@ constexpr int kFitDefaultCells = 50;  // a fit replays the log dozens of times
 struct FitArgs {
   ModelOptions model;
   std::string log_path;
+  riglog::ReadOptions read;
   std::vector<std::string> params;
   std::vector<std::string> bounds;
   std::string window;
@@ -238,7 +239,7 @@ int RunFit(const FitArgs& args) {
     };
   }
 
-  auto log = LoadMeasuredLog(args.log_path);
+  auto log = LoadMeasuredLog(args.log_path, {}, args.read);
   if (!log.ok()) return Fail(name, log.status());
   if (!args.quiet) {
     std::fprintf(stderr, "mpdrig fit: %zu samples, %zu compared channels; %s\n",
@@ -328,6 +329,7 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       ->check(CLI::IsMember({"variation", "noise"}))
       ->capture_default_str();
   AddInputReplayOptions(command, &args->replay);
+  AddLogReadOptions(command, &args->read);
   command->add_flag("--quiet", args->quiet, "no progress on stderr");
   command->callback([args, exit_code]() { *exit_code = RunFit(*args); });
 }

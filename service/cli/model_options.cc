@@ -1,6 +1,7 @@
 #include "service/cli/model_options.h"
 
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -94,6 +95,25 @@ Status WriteText(const std::string& path, const std::string& text) {
 int Fail(const std::string& command, const Status& status) {
   std::fprintf(stderr, "mpdrig %s: %s\n", command.c_str(), status.message().c_str());
   return 1;
+}
+
+void AddLogReadOptions(CLI::App* command, riglog::ReadOptions* options) {
+  command
+      ->add_option("--max-gap-s", options->max_gap_s,
+                   "longest step in time between two samples of the log [s]; a longer gap (an "
+                   "interrupted recording, a wrong time) is an error at its line ('inf': no "
+                   "limit; the model is replayed across the whole gap)")
+      ->check([min_step_s = options->min_step_s](const std::string& text) {
+        // Validators see the text before it is stored.
+        char* end = nullptr;
+        const double value = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !(value > min_step_s)) {
+          return "'" + text + "' must be a number of seconds above the shortest time step, " +
+                 riglog::FormatNumber(min_step_s) + " s ('inf': no limit)";
+        }
+        return std::string();
+      })
+      ->capture_default_str();
 }
 
 void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {

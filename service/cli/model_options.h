@@ -14,6 +14,7 @@
 #include "model/analysis/compare.h"
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
+#include "model/riglog/rig_log_reader.h"
 #include "model/sim/log_inputs.h"
 #include "model/sim/rig_simulator.h"
 
@@ -47,6 +48,10 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options);
 // --steady-start) and tells stderr how the inputs are fed (unless `quiet`).
 Status PrepareReplay(const MeasuredLog& log, const RigParams& params,
                      const SimulationOptions& simulation, InputReplayOptions* options, bool quiet);
+
+// Registers --max-gap-s: the longest gap in time a command accepts in a log it reads
+// (riglog::ReadOptions, rig_log_reader.h).
+void AddLogReadOptions(CLI::App* command, riglog::ReadOptions* options);
 
 // Writes a command's text output (JSON, HTML, a config) to `path`, or to stdout for "-".
 Status WriteText(const std::string& path, const std::string& text);

@@ -28,6 +28,7 @@ struct ObserverArgs {
   double friction_f1_per_s = std::nan("");
   std::string log_path;
   std::string out_path;
+  riglog::ReadOptions read;
 };
 
 void AddObserverOptions(CLI::App* command, ObserverArgs* args) {
@@ -118,7 +119,7 @@ int RunObserve(const ObserverArgs& args) {
   if (!params.ok()) return Fail(name, params.status());
   auto options = MakeOptions(args);
   if (!options.ok()) return Fail(name, options.status());
-  auto log = riglog::ReadRigLog(args.log_path);
+  auto log = riglog::ReadRigLog(args.log_path, args.read);
   if (!log.ok()) return Fail(name, log.status());
 
   // Topside channels: C2 = p(l), and the outlet flow FT1, or FT3 - FT2 (5.3.1).
@@ -233,6 +234,7 @@ void AddObserveCommand(CLI::App* app, int* exit_code) {
   AddObserverOptions(command, args.get());
   command->add_option("log", args->log_path, "input rig log ('-' for stdin)")->required();
   command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
+  AddLogReadOptions(command, &args->read);
   command->callback([args, exit_code]() { *exit_code = RunObserve(*args); });
 }
 

@@ -134,9 +134,12 @@ int RunServe(const ServeArgs& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   const double cpu_s = static_cast<double>(std::clock() - cpu_started) / CLOCKS_PER_SEC;
   std::fprintf(stderr,
-               "mpdrig serve: %.3f s wall, %.3f s CPU (%.0f%% of one core), %llu deadline misses\n",
+               "mpdrig serve: %.3f s wall, %.3f s CPU (%.0f%% of one core), %llu deadline misses, "
+               "%llu periods lost, longest stall %.3f s\n",
                wall_s, cpu_s, wall_s > 0 ? 100.0 * cpu_s / wall_s : 0.0,
-               static_cast<unsigned long long>((*service)->deadline_misses()));
+               static_cast<unsigned long long>((*service)->deadline_misses()),
+               static_cast<unsigned long long>((*service)->lost_periods()),
+               (*service)->longest_stall_s());
   for (const service::RigHost& rig : (*service)->rigs()) {
     std::fprintf(
         stderr, "mpdrig serve: %s ran %.3f s of rig time, %llu samples, %llu commands refused\n",

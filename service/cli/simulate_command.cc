@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <cstdio>
 #include <memory>
+#include <optional>
+#include <string>
 
 #include "model/analysis/compare.h"
 #include "model/common/units.h"
@@ -28,12 +30,43 @@ struct SimulateArgs {
   double duration_s = 20.0;
   double rate_hz = 100.0;
   InputReplayOptions replay;
+  riglog::ReadOptions read;
   bool allow_negative_pressure = false;
   std::vector<double> pressure_at_m;
   std::string out_path;
   std::string sensor_noise = "lab";
   std::uint64_t noise_seed = 1;
 };
+
+// Limits of a profile run: its output times are held in memory (8 B each; the samples stream to
+// the log, about 250 B each on disk) and the solver steps the whole duration, so an absurd value
+// would run out of memory, disk or time instead of failing (issue 15: --duration inf, 1e17,
+// 1e9, --rate-hz inf).
+constexpr double kMaxDurationS = 86400.0;    // one day of rig time per run
+constexpr double kMaxRateHz = 100000.0;      // far above the lab's 100 Hz and the solver's grid
+constexpr double kMaxOutputSamples = 1.0e7;  // 1 kHz for 2.8 h: 80 MB of times, 2.5 GB of log
+
+Status CheckProfileRunLimits(double duration_s, double rate_hz) {
+  auto format = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::string(text);
+  };
+  if (!(duration_s > 0.0 && duration_s <= kMaxDurationS)) {
+    return Status::Error("--duration " + format(duration_s) + " s must be in (0, " +
+                         format(kMaxDurationS) + "] s (one day of rig time; split longer runs)");
+  }
+  if (!(rate_hz > 0.0 && rate_hz <= kMaxRateHz)) {
+    return Status::Error("--rate-hz " + format(rate_hz) + " Hz must be in (0, " +
+                         format(kMaxRateHz) + "] Hz");
+  }
+  if (duration_s * rate_hz > kMaxOutputSamples) {
+    return Status::Error("--duration x --rate-hz = " + format(duration_s * rate_hz) +
+                         " samples, at most " + format(kMaxOutputSamples) +
+                         ": shorten the run or lower the rate");
+  }
+  return Status::Ok();
+}
 
 int RunSimulate(const SimulateArgs& args) {
   const std::string name = "simulate";
@@ -52,7 +85,7 @@ int RunSimulate(const SimulateArgs& args) {
   double atmosphere = params->atmospheric_pressure_pa;
   std::string drive;
   if (!args.inputs_path.empty()) {
-    auto log = riglog::ReadRigLog(args.inputs_path);
+    auto log = riglog::ReadRigLog(args.inputs_path, args.read);
     if (!log.ok()) return Fail(name, log.status());
     // A log that starts mid-heave starts after a warm-up, where its pressures say so (as compare).
     InputReplayOptions replay = args.replay;
@@ -68,9 +101,8 @@ int RunSimulate(const SimulateArgs& args) {
     options->choke_input = ChokeInput::kMeasured;
     drive = "inputs of " + args.inputs_path;
   } else {
-    if (!(args.duration_s > 0.0) || !(args.rate_hz > 0.0)) {
-      return Fail(name, Status::Error("--duration and --rate-hz must be > 0"));
-    }
+    Status limits = CheckProfileRunLimits(args.duration_s, args.rate_hz);
+    if (!limits.ok()) return Fail(name, limits);
     auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
     if (!piston.ok()) return Fail(name, piston.status().Within("--piston"));
     auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);
@@ -96,19 +128,6 @@ int RunSimulate(const SimulateArgs& args) {
 
   const double span_s = output_times.back() - output_times.front();
   const bool show_progress = span_s > 600.0;
-  const auto started = std::chrono::steady_clock::now();
-  auto run = Simulate(*params, *options, signals, output_times, [&](double fraction) {
-    if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
-  });
-  if (!run.ok()) {
-    if (run.status().code() != Status::Code::kModelRange) return Fail(name, run.status());
-    return Fail(name, Status::Error(run.status().message() +
-                                    "\n  (raise the outlet pressure, reduce the piston amplitude, "
-                                    "or pass --allow-negative-pressure to continue anyway)"));
-  }
-  const double elapsed_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-
   riglog::Metadata metadata = {
       {"source", "mpdrig simulate"},
       {"model", args.model.Describe(*params)},
@@ -119,25 +138,53 @@ int RunSimulate(const SimulateArgs& args) {
     metadata.emplace_back("set", assignment);
   // What the lab's sensors would read (sensor_noise.h); the extra --pressure-at outputs are the
   // model's, not sensors, and stay noise-free. `none` writes the model's output untouched.
+  std::optional<SensorNoiseApplier> sensors;
   if (!noise->IsNone()) {
-    SensorNoiseApplier sensors(*noise, args.noise_seed);
-    for (RigSample& sample : run->samples) sensors.MeasureSample(&sample);
+    sensors.emplace(*noise, args.noise_seed);
     metadata.emplace_back("sensor_noise",
                           noise->ToSpec() + ", seed " + std::to_string(args.noise_seed));
   }
+  // The samples go to the log as they come (a long run is not held in memory); a failed run
+  // leaves no log behind (rig_log_output.h).
+  auto out =
+      SampleLogStream::Open(args.out_path, std::move(metadata), atmosphere, args.pressure_at_m);
+  if (!out.ok()) return Fail(name, out.status());
+  Status written = Status::Ok();
+  const auto started = std::chrono::steady_clock::now();
+  auto run = SimulateEach(
+      *params, *options, signals, output_times,
+      [&](const RigSample& sample) {
+        if (!written.ok()) return;
+        RigSample measured = sample;
+        if (sensors) sensors->MeasureSample(&measured);
+        written = out->Write(measured);
+      },
+      [&](double fraction) {
+        if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
+      });
+  if (!run.ok()) {
+    if (run.status().code() != Status::Code::kModelRange) return Fail(name, run.status());
+    return Fail(name, Status::Error(run.status().message() +
+                                    "\n  (raise the outlet pressure, reduce the piston amplitude, "
+                                    "or pass --allow-negative-pressure to continue anyway)"));
+  }
+  if (!written.ok()) return Fail(name, written);
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  riglog::Metadata warnings;
   if (run->first_range_event) {
-    metadata.emplace_back("warning", run->first_range_event->Describe());
+    warnings.emplace_back("warning", run->first_range_event->Describe());
     std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
                  run->first_range_event->Describe().c_str());
   }
-  Status written =
-      WriteSamples(args.out_path, metadata, atmosphere, run->samples, args.pressure_at_m);
+  written = out->Finish(warnings);
   if (!written.ok()) return Fail(name, written);
   if (args.out_path != "-") {
     std::printf(
         "simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
         "channels written to %s\n",
-        span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, run->samples.size(),
+        span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, out->samples_written(),
         SimulatedColumns(args.pressure_at_m)->size() + 1, args.out_path.c_str());
   }
   return 0;
@@ -182,6 +229,7 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
   command->add_option("--rate-hz", args->rate_hz, "output sample rate [Hz] (profiles)")
       ->capture_default_str();
   AddInputReplayOptions(command, &args->replay);
+  AddLogReadOptions(command, &args->read);
   command
       ->add_option("--pressure-at", args->pressure_at_m,
                    "extra pressure outputs along the pipe, metres from the inlet, e.g. "

@@ -4,9 +4,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <map>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <thread>
 
 #include "service/rig/wire.h"
@@ -14,6 +16,21 @@
 namespace mpdrig::service {
 
 using Clock = std::chrono::steady_clock;
+
+// The most bytes of an unknown rig id that a status repeats.
+constexpr std::size_t kMaxReportedIdBytes = 64;
+
+// 'id', or its first kMaxReportedIdBytes (not cutting a UTF-8 character) and its length.
+std::string ReportedId(const char* rig_id) {
+  const std::string_view id(rig_id);
+  if (id.size() <= kMaxReportedIdBytes) return "'" + std::string(id) + "'";
+  std::size_t end = kMaxReportedIdBytes;
+  while (end > 0 && (static_cast<unsigned char>(id[end]) & 0xC0) == 0x80) --end;
+  return "'" + std::string(id.substr(0, end)) + "...' (" + std::to_string(id.size()) + " bytes)";
+}
+
+// Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
+constexpr std::uint64_t kLockstepSliceSteps = 100;
 
 struct RigService::Impl {
   ServeOptions options;
@@ -25,6 +42,23 @@ struct RigService::Impl {
   std::uint64_t profile_every = 0;                    // 0: no profile topic
   ProfileBuffers profile_buffers;
   std::uint64_t deadline_misses = 0;
+  std::uint64_t lost_periods = 0;       // sensor periods skipped by those misses
+  double longest_stall_s = 0.0;         // the longest miss, from its deadline [s of wall time]
+  double last_stall_sim_time_s = -1.0;  // rig time at the last miss; -1: none
+  double last_stall_s = 0.0;            // that miss, from its deadline [s of wall time]
+
+  // A warning of its own (the rig's last event, e.g. a safe state taken, stays beside it).
+  std::string StallWarning() const {
+    if (last_stall_sim_time_s < 0.0) return "";
+    char text[240];
+    std::snprintf(text, sizeof text,
+                  "fell behind real time at rig time %.3f s: a %.3f s stall (%llu periods lost "
+                  "in %llu stalls, the longest %.3f s)",
+                  last_stall_sim_time_s, last_stall_s,
+                  static_cast<unsigned long long>(lost_periods),
+                  static_cast<unsigned long long>(deadline_misses), longest_stall_s);
+    return text;
+  }
   Clock::time_point started;
 
   // Declared parent-first, so children are deleted before their participant and domain.
@@ -84,12 +118,13 @@ struct RigService::Impl {
     return nullptr;
   }
 
-  // A command for a rig this service does not run: every rig's status reports it.
+  // A command for a rig this service does not run: every rig's status reports it, with at most
+  // kMaxReportedIdBytes of the id (a stranger's 10 MB id would otherwise go out in every status).
   void RefuseUnknown(const char* topic, const char* rig_id) {
     std::string serving;
     for (const RigHost& rig : rigs) serving += (serving.empty() ? "" : ", ") + rig.rig_id();
-    const std::string reason = std::string(topic) + " for unknown rig '" + rig_id +
-                               "' refused (this service runs: " + serving + ")";
+    const std::string reason = std::string(topic) + " for unknown rig " + ReportedId(rig_id) +
+                               " refused (this service runs: " + serving + ")";
     for (RigHost& rig : rigs) (void)rig.Refuse(reason);
   }
 
@@ -217,15 +252,21 @@ struct RigService::Impl {
     const double wall_s = std::chrono::duration<double>(Clock::now() - started).count();
     wire.real_time_factor = wall_s > 0.0 ? rig.time_s() / wall_s : 0.0;
     wire.deadline_misses = deadline_misses;
+    wire.lost_periods = lost_periods;
+    wire.longest_stall_s = longest_stall_s;
+    wire.last_stall_sim_time_s = last_stall_sim_time_s;
     wire.rejected_commands = rig.counters().rejected_commands;
     wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
     wire.last_completed_step_request = last_step_request[index];
-    // Warnings: leaving the model's range, and the last event (e.g. a safe state taken).
+    // Warnings: leaving the model's range, falling behind real time, and the last event (e.g. a
+    // safe state taken).
     std::string range_warning = rig.range_event() ? rig.range_event()->Describe() : "";
+    std::string stall_warning = StallWarning();
     std::string event = rig.counters().last_event;
-    char* warnings[2];
+    char* warnings[3];
     std::uint32_t count = 0;
     if (!range_warning.empty()) warnings[count++] = range_warning.data();
+    if (!stall_warning.empty()) warnings[count++] = stall_warning.data();
     if (!event.empty()) warnings[count++] = event.data();
     wire.warnings._length = wire.warnings._maximum = count;
     wire.warnings._buffer = count > 0 ? warnings : nullptr;
@@ -285,7 +326,14 @@ struct RigService::Impl {
       if (options.clock == ClockMode::kRealtime) {
         const Clock::time_point now = Clock::now();
         if (now > next + period_wall) {  // more than a whole period late: a missed deadline
+          // The periods between the deadline and now are skipped: the rig runs on that far behind
+          // the wall clock. Count them; the status says when it happened (StallWarning).
+          const double late_s = std::chrono::duration<double>(now - next).count();
           ++deadline_misses;
+          lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
+          longest_stall_s = std::max(longest_stall_s, late_s);
+          last_stall_s = late_s;
+          last_stall_sim_time_s = rigs.front().time_s();
           next = now + period_wall;
         } else {
           std::this_thread::sleep_until(next);
@@ -296,35 +344,59 @@ struct RigService::Impl {
     return PublishAllStatus();
   }
 
+  // Lockstep: each rig has a queue of step requests; the rigs with work are served in turn, at
+  // most kLockstepSliceSteps steps each, so one huge request (steps up to 2^32 - 1) neither
+  // starves another rig nor delays a stop by more than one step. A request's commands are taken
+  // when it starts; it completes (last_completed_step_request, status) after its last step.
   Status RunLockstep(const std::atomic<bool>& stop) {
     MPDRIG_RETURN_IF_ERROR(PublishAllStatus());  // clients see the rigs are up
-    struct Request {
-      std::string rig_id;
-      std::uint64_t id;
-      std::uint32_t steps;
+    struct Pending {
+      std::uint64_t id = 0;
+      std::uint64_t remaining = 0;
+      bool started = false;
+    };
+    std::vector<std::deque<Pending>> queues(rigs.size());
+    auto busy = [&queues] {
+      return std::any_of(queues.begin(), queues.end(), [](const auto& q) { return !q.empty(); });
     };
     while (!stop.load()) {
-      auto ready = steps->Wait(DDS_MSECS(50));
-      if (!ready.ok()) return ready.status();
-      if (!*ready) continue;
-      std::vector<Request> requests;
+      if (!busy()) {
+        auto ready = steps->Wait(DDS_MSECS(50));
+        if (!ready.ok()) return ready.status();
+        if (!*ready) continue;
+      }
+      std::vector<std::pair<std::string, Pending>> requests;
       auto taken = steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t&) {
-        requests.push_back({r.rig_id, r.request_id, r.steps});
+        requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
       });
       if (!taken.ok()) return taken.status();
-      for (const Request& request : requests) {
-        MPDRIG_RETURN_IF_ERROR(TakeCommands());
-        RigHost* rig = Find(request.rig_id.c_str());
+      for (auto& [rig_id, request] : requests) {
+        RigHost* rig = Find(rig_id.c_str());
         if (rig == nullptr) {
-          RefuseUnknown(kStepRequestTopic, request.rig_id.c_str());
+          MPDRIG_RETURN_IF_ERROR(TakeCommands());
+          RefuseUnknown(kStepRequestTopic, rig_id.c_str());
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
-        for (std::uint32_t i = 0; i < request.steps; ++i)
-          MPDRIG_RETURN_IF_ERROR(TickAndPublish(*rig));
-        const std::size_t index = static_cast<std::size_t>(rig - rigs.data());
-        last_step_request[index] = request.id;
-        MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+        queues[static_cast<std::size_t>(rig - rigs.data())].push_back(request);
+      }
+      for (std::size_t index = 0; index < rigs.size() && !stop.load(); ++index) {
+        if (queues[index].empty()) continue;
+        Pending& request = queues[index].front();
+        if (!request.started) {
+          MPDRIG_RETURN_IF_ERROR(TakeCommands());
+          request.started = true;
+        }
+        const std::uint64_t slice = std::min(request.remaining, kLockstepSliceSteps);
+        for (std::uint64_t i = 0; i < slice && !stop.load(); ++i) {
+          MPDRIG_RETURN_IF_ERROR(TickAndPublish(rigs[index]));
+          --request.remaining;
+        }
+        if (request.remaining == 0) {
+          last_step_request[index] = request.id;
+          queues[index].pop_front();
+          MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+        }
       }
     }
     return Status::Ok();
@@ -353,6 +425,8 @@ RigService::~RigService() = default;
 
 const std::vector<RigHost>& RigService::rigs() const { return impl_->rigs; }
 std::uint64_t RigService::deadline_misses() const { return impl_->deadline_misses; }
+std::uint64_t RigService::lost_periods() const { return impl_->lost_periods; }
+double RigService::longest_stall_s() const { return impl_->longest_stall_s; }
 
 Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs,
                                                        const ServeOptions& options) {

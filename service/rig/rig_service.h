@@ -1,13 +1,19 @@
 // The virtual rig as a DDS service: several rigs (one per rig id) in one process, commands in,
 // sensors and status out, paced by a clock:
 //   realtime - one sensor period of rig time per period of wall time; late ticks are counted as
-//              deadline misses (a tick that starts more than one period late);
+//              deadline misses (a tick that starts more than one period late); the periods a
+//              late tick skips are not caught up (the rig runs on behind the wall clock): the
+//              status counts them (lost_periods), gives the longest stall and the rig time of
+//              the last one, and its warnings say when the rig fell behind;
 //   fast     - as fast as the machine goes;
 //   lockstep - the rig advances only when a client asks (StepRequest): all pending commands are
 //              taken first, then `steps` sensor periods run and each one's sensors are published,
 //              then the status carries last_completed_step_request. A client that needs its
 //              command applied in a given step waits for the command's acknowledgement
-//              (dds_wait_for_acks) before it sends the step request.
+//              (dds_wait_for_acks) before it sends the step request. Requests queue per rig;
+//              rigs with pending steps take turns of at most 100 steps, so a huge request
+//              (up to 2^32 - 1 steps) starves no other rig, and a stop ends it within one step.
+//              A command sent while its rig's request runs may apply in the middle of it.
 // A command that is NaN, infinite, out of range or for an unknown rig is refused, counted and
 // reported on status; the rig runs on. Nothing a client sends stops the service.
 // Several controllers may command one rig: each actuator's topic uses exclusive ownership, so
@@ -71,6 +77,10 @@ class RigService {
   const std::vector<RigHost>& rigs() const;
   // Ticks (of all rigs together) that started more than one sensor period late (realtime).
   std::uint64_t deadline_misses() const;
+  // The sensor periods those late ticks skipped (the rigs run on that far behind the wall
+  // clock), and the longest of the stalls [s of wall time] (realtime).
+  std::uint64_t lost_periods() const;
+  double longest_stall_s() const;
 
  private:
   struct Impl;

@@ -1,5 +1,6 @@
 // The mpdrig command line, run as a user runs it: the real binary, real files, exit codes and
 // messages. Every run here simulates a few seconds at most (milliseconds of CPU).
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -458,6 +459,140 @@ TEST_F(CliTest, SimulateRejectsAnUnknownProfileKind) {
       Run("simulate --piston 0 --choke-deg sine:amp_m=1,freq_hz=1 --out " + Quote(Path("Z.csv")));
   EXPECT_NE(choke.exit_code, 0);
   EXPECT_TRUE(Contains(choke.err, "--choke-deg") && Contains(choke.err, "amp_deg")) << choke.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
+// Absurd durations and rates (issue 15, item 2): before, inf, 1e308 and 1e17 crashed (the
+// output count's std::lround overflowed) and 1e9 allocated until std::bad_alloc. Now each is
+// refused at once, naming the flag and its limit, and nothing is written.
+TEST_F(CliTest, SimulateRefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) {
+  struct Case {
+    std::string flags;
+    std::string named;
+  };
+  const std::vector<Case> cases = {
+      {"--duration inf", "--duration inf s must be in (0, 86400] s"},
+      {"--duration 1e308", "--duration 1e+308 s must be in (0, 86400] s"},
+      {"--duration 1e17", "--duration 1e+17 s must be in (0, 86400] s"},
+      {"--duration 1e9", "--duration 1e+09 s must be in (0, 86400] s"},
+      {"--duration nan", "--duration nan s"},
+      {"--duration -1", "--duration -1 s"},
+      {"--duration 1 --rate-hz inf", "--rate-hz inf Hz must be in (0, 100000] Hz"},
+      {"--duration 86400 --rate-hz 1000", "8.64e+07 samples, at most 1e+07"},
+  };
+  for (const Case& c : cases) {
+    const RunResult run = Run("simulate --piston 0 " + c.flags + " --out " + Quote(Path("Z.csv")));
+    EXPECT_EQ(run.exit_code, 1) << c.flags << ": refused with an error, not a crash\n" << run.err;
+    EXPECT_TRUE(Contains(run.err, c.named)) << c.flags << ": " << run.err;
+    EXPECT_FALSE(fs::exists(Path("Z.csv"))) << c.flags;
+  }
+}
+
+// Issue 15, item 2: simulate held its whole output in memory (135 MB for 600 s at 1 kHz, about
+// 230 B a sample). It streams it now: 200 001 samples (45 MB held before) must not raise the
+// process's peak memory by more than 15 MB over a run of 1 001 samples.
+TEST_F(CliTest, SimulateStreamsItsOutputInBoundedMemory) {
+  auto peak_rss_kb = [] {
+    rusage usage{};
+    ::getrusage(RUSAGE_CHILDREN, &usage);  // the largest child so far
+    return usage.ru_maxrss;
+  };
+  const std::string run =
+      "simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 --sensor-noise "
+      "none ";
+  ASSERT_EQ(Run(run + "--duration 0.5 --rate-hz 2000 --out " + Quote(Path("short.csv"))).exit_code,
+            0);
+  const long short_kb = peak_rss_kb();
+  const RunResult long_run =
+      Run(run + "--duration 100 --rate-hz 2000 --out " + Quote(Path("long.csv")));
+  ASSERT_EQ(long_run.exit_code, 0) << long_run.err;
+  const long long_kb = peak_rss_kb();
+  EXPECT_LT(long_kb - short_kb, 15 * 1024)
+      << "peak RSS " << short_kb << " kB for 1 001 samples, " << long_kb << " kB for 200 001";
+  EXPECT_EQ(ReadLog(Path("long.csv")).num_rows(), 200001u);
+  EXPECT_TRUE(Contains(long_run.out, "200001 samples")) << long_run.out;
+}
+
+// A steady rig log at 100 Hz for 2 s (lines 3-203), then `last_line` (line 204).
+std::string SteadyLogWith(const std::string& last_line) {
+  std::string text =
+      "# rig-log: 1\ntime_s,piston_position_m,choke_position_deg,FT2_lpm,C1_barg,C2_barg,"
+      "PT1_barg,FT1_lpm\n";
+  for (int i = 0; i <= 200; ++i) {
+    char row[96];
+    std::snprintf(row, sizeof row, "%.2f,0,31,5,0,3.9,4.2,5\n", i * 0.01);
+    text += row;
+  }
+  return text + last_line + "\n";
+}
+
+// Issue 15, item 3: one huge time value made compare, simulate --inputs and diagnose run for
+// minutes, and a long gap passed silently. Each log tool now refuses a gap longer than
+// --max-gap-s (default 10 s) with the file, line and column, and takes a wider limit.
+TEST_F(CliTest, LogToolsRefuseAGapInTimeAtItsLineAndTakeAWiderLimit) {
+  const std::string gap = Path("gap.csv");
+  WriteFile(gap, SteadyLogWith("22,0,31,5,0,3.9,4.2,5"));
+  const std::string huge = Path("huge.csv");
+  WriteFile(huge, SteadyLogWith("1e308,0,31,5,0,3.9,4.2,5"));
+  for (const std::string& command :
+       {"simulate --inputs " + Quote(gap) + " --out " + Quote(Path("Z.csv")),
+        "compare " + Quote(gap) + " --json " + Quote(Path("Z.json")),
+        "diagnose " + Quote(gap) + " --json " + Quote(Path("Z.json")),
+        "observe " + Quote(gap) + " --disturbance-hz 0.2 --out " + Quote(Path("Z.csv"))}) {
+    const RunResult run = Run(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.err;
+    EXPECT_TRUE(Contains(run.err, gap + ":204:1: time_s: 22 is 20 s after the previous sample's 2 "
+                                        "(line 203), a gap longer than 10 s"))
+        << command << "\n"
+        << run.err;
+    EXPECT_TRUE(Contains(run.err, "--max-gap-s")) << run.err;
+  }
+  for (const std::string& command :
+       {"simulate --inputs " + Quote(huge) + " --out " + Quote(Path("Z.csv")),
+        "compare " + Quote(huge) + " --json " + Quote(Path("Z.json")),
+        "diagnose " + Quote(huge) + " --json " + Quote(Path("Z.json"))}) {
+    const RunResult run = Run(command);
+    EXPECT_EQ(run.exit_code, 1) << command << "\n" << run.err;
+    EXPECT_TRUE(Contains(run.err, huge + ":204:1: time_s: 1e+308 is 1e+308 s after"))
+        << command << "\n"
+        << run.err;
+  }
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+  EXPECT_FALSE(fs::exists(Path("Z.json")));
+
+  const RunResult wider = Run("simulate --inputs " + Quote(gap) +
+                              " --max-gap-s 30 --sensor-noise none --out " + Quote(Path("Z.csv")));
+  EXPECT_EQ(wider.exit_code, 0) << wider.err;
+  riglog::ReadOptions read;
+  read.max_gap_s = 30.0;
+  auto written = riglog::ReadRigLog(Path("Z.csv"), read);
+  ASSERT_TRUE(written.ok()) << written.status().message();
+  EXPECT_EQ(written->num_rows(), 202u);
+  const RunResult bad =
+      Run("simulate --inputs " + Quote(gap) + " --max-gap-s 0 --out " + Quote(Path("Y.csv")));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_TRUE(Contains(bad.err, "--max-gap-s")) << bad.err;
+}
+
+// Issue 15, item 8: time steps of 1e-12 s gave null metrics with exit 0, and a choke opening of
+// -50 deg was replayed. Both are errors at their file, line and column.
+TEST_F(CliTest, LogToolsRefuseOutOfRangeValuesAndTinyTimeStepsAtTheirPosition) {
+  const std::string tiny = Path("tiny.csv");
+  WriteFile(tiny, SteadyLogWith("2.000000000001,0,31,5,0,3.9,4.2,5"));
+  const RunResult compare = Run("compare " + Quote(tiny) + " --json " + Quote(Path("Z.json")));
+  EXPECT_EQ(compare.exit_code, 1) << compare.err;
+  EXPECT_TRUE(Contains(compare.err, tiny + ":204:1: time_s: 2.000000000001 is only "))
+      << compare.err;
+  EXPECT_FALSE(fs::exists(Path("Z.json")));
+
+  const std::string choke = Path("choke.csv");
+  WriteFile(choke, SteadyLogWith("2.01,0,-50,5,0,3.9,4.2,5"));
+  const RunResult simulate =
+      Run("simulate --inputs " + Quote(choke) + " --out " + Quote(Path("Z.csv")));
+  EXPECT_EQ(simulate.exit_code, 1) << simulate.err;
+  EXPECT_TRUE(Contains(simulate.err, choke + ":204:8: choke_position_deg: -50 is outside the "
+                                             "physical range of a choke opening"))
+      << simulate.err;
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 

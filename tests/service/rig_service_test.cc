@@ -3,11 +3,21 @@
 // service in its own DDS domain.
 #include "service/rig/rig_service.h"
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -18,6 +28,8 @@
 #include "mpdrig.h"
 #include "service/rig/wire.h"
 #include "tests/support/test_domain.h"
+
+extern char** environ;
 
 namespace mpdrig::service {
 namespace {
@@ -53,7 +65,10 @@ class ServiceTest : public ::testing::Test {
     auto service = RigService::Create(std::move(rigs), options);
     ASSERT_TRUE(service.ok()) << service.status().message();
     service_ = std::move(service).value();
-    thread_ = std::thread([this] { run_status_ = service_->Run(stop_); });
+    thread_ = std::thread([this] {
+      run_status_ = service_->Run(stop_);
+      finished_ = true;
+    });
 
     auto participant = dds::CreateParticipant(options.domain);
     ASSERT_TRUE(participant.ok());
@@ -149,6 +164,7 @@ class ServiceTest : public ::testing::Test {
   std::unique_ptr<RigService> service_;
   std::thread thread_;
   std::atomic<bool> stop_{false};
+  std::atomic<bool> finished_{false};  // Run has returned
   Status run_status_ = Status::Ok();
   std::uint64_t request_id_ = 0;
   std::string last_warnings_;
@@ -270,6 +286,33 @@ TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
   EXPECT_NEAR(after["rig-1"].back()[Channel::kChokePosition], 28.0 / 90.0, 1e-6);
 }
 
+// One huge step request (issue 15, item 1): while rig-1 runs its 2^32 - 1 steps (49 days of
+// rig time at 100 Hz), rig-2's requests are served, and a stop ends the service at once.
+TEST_F(ServiceTest, HugeStepRequestStarvesNoOtherRigAndAStopEndsTheService) {
+  Start();
+  mpdrig_StepRequest huge{const_cast<char*>("rig-1"), 1000,
+                          std::numeric_limits<std::uint32_t>::max()};
+  ASSERT_TRUE(step_->Write(huge).ok());
+  Acked(step_->handle());
+  Step("rig-2", 10);
+  Step("rig-2", 10);
+  auto samples = TakeSensors();
+  EXPECT_EQ(samples["rig-2"].size(), 20u) << "rig-2 served while rig-1's request runs";
+  EXPECT_GT(samples["rig-1"].size(), 0u) << "rig-1's request runs too";
+
+  stop_ = true;
+  const auto asked = std::chrono::steady_clock::now();
+  while (!finished_ && std::chrono::steady_clock::now() - asked < std::chrono::seconds(5)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (!finished_) {
+    // The service thread cannot be joined: report and end the test process.
+    ADD_FAILURE() << "the service did not stop within 5 s of the stop request";
+    std::fflush(stdout);
+    std::_Exit(1);
+  }
+}
+
 TEST_F(ServiceTest, PistonSineMakesBottomHolePressureOscillateAtItsFrequency) {
   Start();
   mpdrig_PistonCommand sine{};
@@ -318,6 +361,22 @@ TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
   ASSERT_EQ(samples.size(), 20u) << "the rig kept running";
   EXPECT_NEAR(samples.back()[Channel::kChokePosition], 31.0 / 90.0, 1e-9)
       << "last valid command in force";
+}
+
+// Issue 15, item 4 (part): a stranger's 10 MB rig id was copied into every rig's last_rejection,
+// so each status carried 10 MB. The status now repeats at most 64 bytes of it, and its length.
+TEST_F(ServiceTest, AHugeUnknownRigIdIsNotCopiedIntoTheStatus) {
+  Start();
+  std::string huge(1 << 20, 'x');
+  mpdrig_ChokeCommand command{huge.data(), 40.0};
+  ASSERT_TRUE(choke_->Write(command).ok());
+  Acked(choke_->handle());
+  auto [rejected, reason] = Step("rig-1", 1);
+  EXPECT_EQ(rejected, 1u);
+  EXPECT_LT(reason.size(), 300u);
+  EXPECT_NE(reason.find("unknown rig '" + std::string(64, 'x') + "...' (1048576 bytes) refused"),
+            std::string::npos)
+      << reason.substr(0, 300);
 }
 
 TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeState) {
@@ -482,6 +541,100 @@ TEST_F(ServiceTest, PressureProfileAlongThePipeAtTenHertzMatchesTheTransmitters)
     profile_counters.push_back(p.sample_counter);
   });
   EXPECT_EQ(profile_counters, (std::vector<std::uint64_t>{0, 10, 20, 30, 40, 50, 60, 70, 80, 90}));
+}
+
+// Issue 15, item 5: a stall of the real-time clock used to count as one deadline miss, whatever
+// its length. A real `mpdrig serve` process is stopped (SIGSTOP) for 1.5 s at 100 Hz: its status
+// must report about 150 lost periods, a longest stall of about 1.5 s, the rig time when it fell
+// behind and a warning that says so; SIGTERM then stops it cleanly.
+TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTimeClock) {
+  const dds_domainid_t domain = TestDomain();
+  const std::string log_path =
+      ::testing::TempDir() + "/serve_stall." + std::to_string(::getpid()) + ".txt";
+  std::vector<std::string> args = {
+      MPDRIG_EXE,     "serve", "--clock", "realtime", "--rate-hz",
+      "100",          "--rig", "rig-1",   "--domain", std::to_string(domain),
+      "--no-observer"};
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  pid_t pid = -1;
+  ASSERT_EQ(posix_spawn(&pid, MPDRIG_EXE, &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+  struct Reaper {  // kill -9 if the test leaves early
+    pid_t pid;
+    ~Reaper() {
+      if (pid > 0) {
+        ::kill(pid, SIGKILL);
+        ::waitpid(pid, nullptr, 0);
+      }
+    }
+  } reaper{pid};
+
+  auto dds_domain = dds::Domain::Create(domain, dds::LoopbackConfig());  // as the service's
+  ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
+  auto participant = dds::CreateParticipant(domain);
+  ASSERT_TRUE(participant.ok());
+  auto topic = dds::CreateTopic(participant->handle(), &mpdrig_RigStatus_desc, kStatusTopic);
+  ASSERT_TRUE(topic.ok());
+  auto status = dds::Reader<mpdrig_RigStatus>::Create(participant->handle(), topic->handle(),
+                                                      dds::StatusQos());
+  ASSERT_TRUE(status.ok());
+  struct Seen {
+    double sim_time_s = 0.0;
+    std::uint64_t lost_periods = 0;
+    double longest_stall_s = 0.0;
+    double last_stall_sim_time_s = -1.0;
+    std::string warnings;
+  } seen;
+  // Waits for a status that satisfies `done` (up to 20 s).
+  auto wait_for = [&](const std::function<bool(const Seen&)>& done) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (std::chrono::steady_clock::now() < until) {
+      auto ready = status->Wait(DDS_MSECS(100));
+      if (!ready.ok() || !*ready) continue;
+      bool matched = false;
+      (void)status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+        seen = {s.sim_time_s, s.lost_periods, s.longest_stall_s, s.last_stall_sim_time_s, ""};
+        for (std::uint32_t i = 0; i < s.warnings._length; ++i) {
+          seen.warnings += std::string(s.warnings._buffer[i]) + "\n";
+        }
+        matched = matched || done(seen);
+      });
+      if (matched) return true;
+    }
+    return false;
+  };
+  ASSERT_TRUE(wait_for([](const Seen& s) { return s.sim_time_s >= 1.0; }))
+      << "the service never ran 1 s of rig time";
+  EXPECT_EQ(seen.lost_periods, 0u) << "no stall yet";
+  const double stopped_at_s = seen.sim_time_s;
+
+  ASSERT_EQ(::kill(pid, SIGSTOP), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ASSERT_EQ(::kill(pid, SIGCONT), 0);
+  ASSERT_TRUE(wait_for([](const Seen& s) { return s.lost_periods > 0; }))
+      << "no status reported the stall; last: " << seen.warnings;
+  EXPECT_GE(seen.lost_periods, 120u) << "1.5 s at 100 Hz";
+  EXPECT_LE(seen.lost_periods, 400u);
+  EXPECT_GE(seen.longest_stall_s, 1.2);
+  EXPECT_LE(seen.longest_stall_s, 4.0);
+  EXPECT_GE(seen.last_stall_sim_time_s, stopped_at_s);
+  EXPECT_NE(seen.warnings.find("fell behind real time at rig time"), std::string::npos)
+      << seen.warnings;
+
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  int wait_status = 0;
+  ASSERT_EQ(::waitpid(pid, &wait_status, 0), pid);
+  reaper.pid = -1;
+  EXPECT_TRUE(WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0);
+  std::ifstream log(log_path);
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("periods lost, longest stall"), std::string::npos) << text;
 }
 
 }  // namespace

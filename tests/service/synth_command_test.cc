@@ -44,6 +44,28 @@ using teststats::StdDevTolerance;
 // 30 s at 50 Hz: 1501 samples a channel.
 const char kRun[] = " synth --seed 5 --duration 30 --rate-hz 50";
 
+// Absurd lengths and rates (issue 15, item 2): before, --duration 1e9 allocated until
+// std::bad_alloc aborted the process. Now they are refused at once, naming the flag and the limit.
+TEST(SynthCommandTest, RefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) {
+  const fs::path dir = TempDir();
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"--duration 1e9", "--duration 1e+09 s must be in [10, 86400] s"},
+      {"--duration inf", "--duration inf s must be in [10, 86400] s"},
+      {"--duration 30 --rate-hz inf", "--rate-hz inf Hz must be in [10, 10000] Hz"},
+      {"--duration 86400 --rate-hz 1000", "8.64e+07 samples, at most 1e+07"},
+  };
+  for (const auto& [flags, named] : cases) {
+    std::string output;
+    EXPECT_EQ(
+        RunShell(kExe + " synth --seed 1 " + flags + " --out " + (dir / "x.csv").string(), &output),
+        1)
+        << flags << ": refused with an error, not a crash\n"
+        << output;
+    EXPECT_NE(output.find(named), std::string::npos) << flags << ": " << output;
+    EXPECT_FALSE(fs::exists(dir / "x.csv")) << flags;
+  }
+}
+
 TEST(SynthCommandTest, TruthOutMinusTheLogHasTheLabStatistics) {
   const fs::path dir = TempDir();
   std::string output;

@@ -121,8 +121,15 @@ TEST(RigConfig, BadChokeTableIsAnError) {
   const std::string message = ErrorOf(
       "choke_point { opening_deg: 40 g_m2: 1e-5 }\n"
       "choke_point { opening_deg: 30 g_m2: 2e-5 }\n");
-  EXPECT_EQ(message.rfind(kSource + ": ", 0), 0u) << message;
+  // Issue 15, item 9 (part): the error names the point's line and column.
+  EXPECT_EQ(message.rfind(kSource + ":2:1: ", 0), 0u) << message;
   EXPECT_NE(message.find("increasing"), std::string::npos) << message;
+  const std::string range = ErrorOf(
+      "choke_point { opening_deg: 0 g_m2: 0 }\n"
+      "wave_speed_mps: 1000\n"
+      "  choke_point { opening_deg: 45 g_m2: -1 }\n");
+  EXPECT_EQ(range.rfind(kSource + ":3:3: ", 0), 0u) << range;
+  EXPECT_NE(range.find("G >= 0"), std::string::npos) << range;
   EXPECT_FALSE(ParseRigConfig("choke_point { opening_deg: 91 g_m2: 1e-5 }\n"
                               "choke_point { opening_deg: 0 g_m2: 0 }\n",
                               kSource)

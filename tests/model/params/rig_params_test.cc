@@ -206,6 +206,26 @@ TEST(RigParams, ApplyOverride) {
   EXPECT_EQ(params.friction_f1_per_s, 0.24);
 }
 
+// Issue 15, item 9 (part): an upper rod no thicker than the lower one (or 0) was accepted and
+// reversed (or removed) the piston's effect.
+TEST(RigParams, ValidateCatchesRodsThatReverseThePiston) {
+  for (auto [upper, lower] :
+       {std::pair{0.020, 0.022}, std::pair{0.0, 0.022}, std::pair{0.022, 0.022}}) {
+    RigParams params;
+    params.upper_rod_diameter_m = upper;
+    params.lower_rod_diameter_m = lower;
+    const Status status = params.Validate();
+    ASSERT_FALSE(status.ok()) << upper << " " << lower;
+    EXPECT_NE(status.message().find("upper_rod_diameter_m = "), std::string::npos)
+        << status.message();
+    EXPECT_NE(status.message().find("must exceed lower_rod_diameter_m"), std::string::npos)
+        << status.message();
+  }
+  RigParams no_lower_rod;
+  no_lower_rod.lower_rod_diameter_m = 0.0;
+  EXPECT_TRUE(no_lower_rod.Validate().ok()) << no_lower_rod.Validate().message();
+}
+
 TEST(RigParams, ValidateCatchesABadChokeTable) {
   {
     RigParams params;

@@ -290,6 +290,93 @@ TEST(RigLogReaderErrors, TimeNotStrictlyIncreasing) {
               "_decreasing");
 }
 
+// Issue 15, item 3: one wild time value made every tool replay the model over it for minutes.
+// A gap longer than ReadOptions::max_gap_s (default 10 s) is an error at the later sample.
+TEST(RigLogReaderErrors, GapInTimeLongerThanTheLimit) {
+  const std::string path = WriteTestFile("time_s,PT1_barg\n0,1\n0.01,1\n100000.01,1\n");
+  Result<RigLog> log = ReadRigLog(path);
+  ASSERT_FALSE(log.ok());
+  EXPECT_EQ(log.status().message(),
+            path +
+                ":4:1: time_s: 100000.01 is 100000 s after the previous sample's 0.01 (line 3), "
+                "a gap longer than 10 s (an interrupted recording or a wrong time; raise the "
+                "limit with --max-gap-s if it is real)");
+  ReadOptions wider;
+  wider.max_gap_s = 2.0e5;
+  Result<RigLog> accepted = ReadRigLog(path, wider);
+  ASSERT_TRUE(accepted.ok()) << accepted.status().message();
+  EXPECT_EQ(accepted->num_rows(), 3u);
+
+  const std::string huge = WriteTestFile("time_s,PT1_barg\n0,1\n0.01,1\n1e308,1\n", "_1e308");
+  Result<RigLog> refused = ReadRigLog(huge);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_EQ(refused.status().message().rfind(huge + ":4:1: time_s: 1e+308 is 1e+308 s after", 0),
+            0u)
+      << refused.status().message();
+  // A gap of exactly the limit is fine.
+  ReadOk("time_s,PT1_barg\n0,1\n10,1\n");
+}
+
+// Issue 15, item 8: time steps of 1e-12 s gave null metrics and exit 0.
+TEST(RigLogReaderErrors, TimeStepShorterThanTheLimit) {
+  ExpectError("time_s,PT1_barg\n0,1\n1e-12,1\n",
+              ":3:1: time_s: 1e-12 is only 1e-12 s after the previous sample's 0 (line 2); time "
+              "steps must be at least 1e-06 s");
+}
+
+TEST(RigLogReaderErrors, BadTimeLimitsAreRefused) {
+  const std::string path = WriteTestFile("time_s\n0\n");
+  for (auto [gap, step] : {std::pair{std::nan(""), 1e-6}, std::pair{10.0, 0.0},
+                           std::pair{1e-7, 1e-6}, std::pair{10.0, std::nan("")}}) {
+    ReadOptions options;
+    options.max_gap_s = gap;
+    options.min_step_s = step;
+    Result<RigLog> log = ReadRigLog(path, options);
+    ASSERT_FALSE(log.ok()) << gap << " " << step;
+    EXPECT_NE(log.status().message().find("time limits of a rig log"), std::string::npos)
+        << log.status().message();
+  }
+}
+
+// Issue 15, item 8: values outside their quantity's physical range used to pass: 1e308 barg
+// became infinity ("not measured"), choke openings of -50 deg and 31 (as a fraction) were replayed.
+TEST(RigLogReaderErrors, ValuesOutsideTheirPhysicalRange) {
+  struct Case {
+    std::string content;
+    std::string message;  // after the path
+  };
+  const std::vector<Case> cases = {
+      {"time_s,PT1_barg\n0,1\n0.01,1e308\n",
+       ":3:6: PT1_barg: 1e+308 is outside the physical range of a pressure, "},
+      {"time_s,C1_barg\n0,1e308\n", ":2:3: C1_barg: 1e+308 is outside the physical range of a "},
+      {"time_s,PT1_bara\n0,-2000\n",
+       ":2:3: PT1_bara: -2000 is outside the physical range of a pressure, -1000 .. 1000 bara"},
+      {"time_s,piston_position_m,choke_position_deg\n0,0,-50\n",
+       ":2:5: choke_position_deg: -50 is outside the physical range of a choke opening, -4.5 .. "
+       "94.5 deg"},
+      {"time_s,choke_position_frac\n0,31\n",
+       ":2:3: choke_position_frac: 31 is outside the physical range of a choke opening, -0.05 .. "
+       "1.05 frac"},
+      {"time_s,FT2_lpm\n0,1e7\n",
+       ":2:3: FT2_lpm: 10000000 is outside the physical range of a flow"},
+      {"time_s,piston_position_m\n0,1e3\n",
+       ":2:3: piston_position_m: 1000 is outside the physical range of a position, -10 .. 10 m"},
+      {"time_s,BHP_est_barg\n0,1e308\n", ":2:3: BHP_est_barg: 1e+308 is outside"},
+  };
+  int index = 0;
+  for (const Case& c : cases) {
+    const std::string path = WriteTestFile(c.content, "_" + std::to_string(index++));
+    Result<RigLog> log = ReadRigLog(path);
+    ASSERT_FALSE(log.ok()) << "accepted:\n" << c.content;
+    EXPECT_EQ(log.status().message().rfind(path + c.message, 0), 0u) << log.status().message();
+  }
+  // The edges of the ranges, and not measured, pass.
+  const RigLog edges = ReadOk(
+      "time_s,piston_position_m,choke_position_deg,FT2_lpm,PT1_bara,PT2_barg\n"
+      "0,-10,-4.4,-5999,-1000,998\n0.01,10,94.4,5999,1000,\n");
+  EXPECT_EQ(edges.num_rows(), 2u);
+}
+
 TEST(RigLogReaderErrors, UnsupportedVersion) {
   ExpectError("# rig-log: 2\ntime_s\n0\n",
               ":1:12: unsupported rig-log version '2'; this reader reads version 1");
