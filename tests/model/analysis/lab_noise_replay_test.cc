@@ -82,9 +82,10 @@ std::vector<Scenario> Scenarios() {
   };
 }
 
-// At 0.33 Hz and 28 deg, PT4 swings little and the replay's slow pressure error (FT2's noise
-// averaged over the longest window, through the choke's steady law, dp/p = 2 dq/q) costs 3-11
-// points there at lab noise: not asserted at lab noise (README, "what it assumes").
+// At 0.33 Hz and 28 deg PT4 swings little (0.11 bar), and the error of the choke's and FT2's mean
+// levels (sigma / sqrt(N) even over the whole log) moves every pressure by about 0.01 bar through
+// the choke's steady law: 1-11 points behind a perfect model there, by seed. Not asserted at lab
+// noise (README, "Inputs are measurements too").
 Scenario MidHeaveThirdHertz() {
   return {"mid_heave_0.33Hz",
           80.0,
