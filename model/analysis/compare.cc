@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "model/analysis/compare_accumulator.h"
@@ -270,7 +271,12 @@ Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const
     ReplayOptions start = replay;
     start.warmup = warm ? candidate : std::nullopt;
     auto traces = ReplayModel(cut, params, sim_options, start);
-    if (!traces.ok()) return traces.status();
+    if (!traces.ok()) {
+      // A start that leaves the model's range (or fails) is not chosen; if both do, the replay
+      // itself will say why.
+      error[warm] = std::numeric_limits<double>::infinity();
+      continue;
+    }
     for (std::size_t c = 0; c < cut.channels.size(); ++c) {
       if (!IsPressure(cut.channels[c].channel)) continue;
       for (std::size_t i = 0; i < cut.time_s().size(); ++i) {

@@ -141,7 +141,8 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
 // log_inputs.h) or from the steady state: the inputs cannot tell a heave that was already running
 // when the recording started from one that started with it, the pressures can. Where the log's
 // start is periodic, both starts are replayed over its first two periods with `params`, and the
-// warm-up is chosen if its squared error over the measured pressure channels is smaller.
+// warm-up is chosen if its squared error over the measured pressure channels is smaller (a start
+// whose replay fails, e.g. leaves the model's range, is never chosen).
 Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const RigParams& params,
                                                    const SimulationOptions& sim_options,
                                                    const ReplayOptions& replay);
