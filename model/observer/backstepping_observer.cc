@@ -81,16 +81,17 @@ double BacksteppingObserver::MeasuredDown(const TopsideMeasurement& m) const {
 Status BacksteppingObserver::SetDisturbanceFrequency(double frequency_hz) {
   ObserverOptions options = options_;
   options.disturbance_hz = frequency_hz;
-  auto gains = ObserverGains::Compute(params_, options, kernel_);
-  if (!gains.ok()) return gains.status();
-  gains_ = std::move(gains).value();
-  options_ = options;
-  return Status::Ok();
+  return Redesign(options);
 }
 
 Status BacksteppingObserver::SetMeasurementNoise(const MeasurementNoise& noise) {
   ObserverOptions options = options_;
   options.noise = noise;
+  return Redesign(options);
+}
+
+// The gains for new options; the observer keeps its old ones (and options) if they fail.
+Status BacksteppingObserver::Redesign(const ObserverOptions& options) {
   auto gains = ObserverGains::Compute(params_, options, kernel_);
   if (!gains.ok()) return gains.status();
   gains_ = std::move(gains).value();

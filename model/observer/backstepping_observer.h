@@ -89,6 +89,8 @@ class BacksteppingObserver {
   double FlowAtM3ps(double x_m) const;
 
  private:
+  // Recomputes the gains for `options` (SetDisturbanceFrequency, SetMeasurementNoise).
+  Status Redesign(const ObserverOptions& options);
   // The grid interval holding x and the weight of its upper node.
   void Locate(double x_m, int* index, double* weight) const;
   BacksteppingObserver(const RigParams& params, const ObserverOptions& options, ObserverGains gains,

@@ -10,7 +10,6 @@
 #include <functional>
 #include <numbers>
 #include <optional>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -20,6 +19,7 @@
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
+#include "model/sim/sensor_noise.h"
 
 namespace mpdrig {
 namespace {
@@ -28,11 +28,6 @@ using riglog::Channel;
 
 constexpr double kRateHz = 100.0;
 constexpr int kCells = 50;
-constexpr double kPressureNoisePa = 0.024e5;
-constexpr double kPistonNoiseM = 0.5e-3;
-constexpr double kChokeNoiseDeg = 0.1;
-constexpr double kFlowNoiseFraction = 0.02;
-constexpr double kFlowNoiseFloorLpm = 0.05;
 // "Within 3 points of a perfect model" (the acceptance).
 constexpr double kAllowedFitLossPoints = 3.0;
 
@@ -145,25 +140,13 @@ bool IsFlow(Channel channel) {
          channel == Channel::kFT4;
 }
 
-// The truth as the lab's sensors would log it (SI columns).
+// The truth as the lab's sensors would log it (SensorNoise::Lab(), thesis Table 4.1.1: the
+// project's one noise model, as `mpdrig synth` and `simulate` apply it).
 riglog::RigLog LabNoise(riglog::RigLog log, std::uint64_t seed) {
-  std::mt19937_64 random(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
+  SensorNoiseApplier noise(SensorNoise::Lab(), seed);
   for (std::size_t c = 0; c < log.columns.size(); ++c) {
     const auto channel = riglog::FindChannel(log.columns[c].channel);
-    if (!channel) continue;  // every column here is a lab channel
-    for (double& v : log.values_si[c]) {
-      if (*channel == Channel::kPistonPosition) {
-        v += kPistonNoiseM * normal(random);
-      } else if (*channel == Channel::kChokePosition) {
-        v += units::ChokeDegToFrac(kChokeNoiseDeg) * normal(random);
-      } else if (IsFlow(*channel)) {
-        v += (kFlowNoiseFraction * std::fabs(v) + units::LpmToM3ps(kFlowNoiseFloorLpm)) *
-             normal(random);
-      } else {
-        v += kPressureNoisePa * normal(random);
-      }
-    }
+    if (channel) noise.MeasureColumn(*channel, log.values_si[c]);
   }
   return log;
 }
