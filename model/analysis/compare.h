@@ -147,6 +147,28 @@ Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const
                                                    const SimulationOptions& sim_options,
                                                    const ReplayOptions& replay);
 
+// The choke's and FT2's level offsets that make the replay's mean pressures meet the measured
+// ones, within what the inputs' noise allows (InputLevelCorrection, log_inputs.h): one replay of
+// the log's first kReconstructionPlanSamples rows with `params` and `replay` (its warm-up
+// included), the sensitivities from the steady law at the inputs' mean, the maximum a posteriori
+// offsets with each input's sigma/sqrt(N) as the prior, clipped to kMaxLevelOffsetSigmas of it.
+// None when the inputs are not reconstructed, replay.estimate_levels is false, the log has no
+// pressure channel, or the replay fails (the replay itself will say why).
+Result<InputLevelCorrection> EstimateInputLevels(const MeasuredLog& log, const RigParams& params,
+                                                 const SimulationOptions& sim_options,
+                                                 const ReplayOptions& replay);
+// Puts the correction into the log's reconstruction (and its reconstructed inputs) and into the
+// warm-up's levels, so that every replay after it feeds the corrected levels.
+void ApplyInputLevels(const InputLevelCorrection& levels, MeasuredLog* log);
+void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay);
+
+// Everything a replay of a whole log in memory decides from the log before it runs: the start
+// (ChooseWarmup, where replay->choose_warmup) and the input levels (EstimateInputLevels +
+// ApplyInputLevels, where replay->estimate_levels). fit, diagnose and simulate --inputs call it;
+// CompareLog does the same on its streamed head.
+Status PrepareLogReplay(MeasuredLog* log, const RigParams& params,
+                        const SimulationOptions& sim_options, ReplayOptions* replay);
+
 struct CompareOptions {
   int residual_lags = 25;   // M, as MATLAB resid's default
   int max_harmonics = 3;    // f0, 2 f0, 3 f0
@@ -169,6 +191,9 @@ struct CompareOptions {
   bool reconstruct_inputs = true;
   // CompareLog: start the replay after a warm-up where ChooseWarmup says so.
   bool choose_warmup = true;
+  // CompareLog: correct the reconstructed choke and FT2 levels from the measured pressures
+  // (EstimateInputLevels).
+  bool estimate_levels = true;
   // Welch segment length (samples, >= 8): longer logs are averaged over segments this long.
   // Memory per compared channel is about 24 bytes times this (compare_accumulator.h): 3 MB.
   int welch_segment_samples = 1 << 17;

@@ -169,6 +169,29 @@ InputReconstruction PlanInputReconstruction(const LogInputColumns& columns) {
   return plan;
 }
 
+double InputLevelCorrection::Tau(double t) const {
+  if (!(half_span_s > 0.0)) return 0.0;
+  return std::clamp((t - center_s) / half_span_s, -1.0, 1.0);
+}
+
+std::string InputLevelCorrection::Describe() const {
+  std::ostringstream out;
+  out.precision(3);
+  const double k = kMaxLevelOffsetSigmas;
+  out << "input levels from the measured pressures: choke " << std::showpos
+      << units::ChokeFracToDeg(choke_offset_frac) << " deg" << " (trend "
+      << units::ChokeFracToDeg(choke_trend_frac) << "), FT2 " << units::M3psToLpm(pump_offset_m3ps)
+      << " L/min (trend " << units::M3psToLpm(pump_trend_m3ps) << ")" << std::noshowpos
+      << "; the noise allows +-" << units::ChokeFracToDeg(k * choke_sigma_frac) << " ("
+      << units::ChokeFracToDeg(k * choke_trend_sigma_frac) << ") deg, +-"
+      << units::M3psToLpm(k * pump_sigma_m3ps) << " (" << units::M3psToLpm(k * pump_trend_sigma_m3ps)
+      << ") L/min; pressure residual " << residual_before_pa * 1e-5 << " -> "
+      << residual_after_pa * 1e-5 << " bar, trend " << residual_trend_before_pa * 1e-5 << " -> "
+      << residual_trend_after_pa * 1e-5 << " bar";
+  if (at_bound) out << " (at the bound: the rest is the model's)";
+  return out.str();
+}
+
 LogInputColumns ReconstructInputBlock(const LogInputColumns& block, const LevelInputSums& sums,
                                       long first_index, const InputReconstruction& plan) {
   LogInputColumns out;
@@ -184,6 +207,14 @@ LogInputColumns ReconstructInputBlock(const LogInputColumns& block, const LevelI
   };
   out.choke_opening_frac = levels(block.choke_opening_frac, sums.choke, plan.choke_noise_frac);
   out.pump_flow_m3ps = levels(block.pump_flow_m3ps, sums.pump, plan.pump_noise_m3ps);
+  if (plan.levels.applied()) {
+    for (std::size_t i = 0; i < out.time_s.size(); ++i) {
+      const double t = out.time_s[i];
+      out.choke_opening_frac[i] =
+          std::clamp(out.choke_opening_frac[i] + plan.levels.ChokeAt(t), 0.0, 1.0);
+      out.pump_flow_m3ps[i] = std::max(0.0, out.pump_flow_m3ps[i] + plan.levels.PumpAt(t));
+    }
+  }
   out.outlet_pressure_pa = levels(block.outlet_pressure_pa, sums.outlet, plan.outlet_noise_pa);
   return out;
 }
@@ -361,14 +392,16 @@ std::vector<double> SmoothedPistonPosition(const LogInputColumns& columns, doubl
 }
 
 Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::string& path,
-                                        const InputReplayOptions& options) {
+                                        const InputReplayOptions& options,
+                                        const InputReconstruction* plan) {
   const std::size_t n = columns.time_s.size();
   if (n < 2) return Status::Error(path + ": needs at least 2 samples");
   MPDRIG_CHECK(columns.piston_position_m.size() == n && columns.choke_opening_frac.size() == n &&
                columns.pump_flow_m3ps.size() == n && columns.outlet_pressure_pa.size() == n);
   double smoothing_s = options.piston_smoothing_s;
   if (options.reconstruct_inputs) {
-    columns = ReconstructInputColumns(columns, PlanInputReconstruction(columns));
+    columns = ReconstructInputColumns(columns,
+                                      plan != nullptr ? *plan : PlanInputReconstruction(columns));
     smoothing_s = 0.0;  // the reconstruction has smoothed the piston
   }
   std::vector<double> smoothed = SmoothedPistonPosition(columns, smoothing_s);

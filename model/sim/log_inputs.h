@@ -58,6 +58,9 @@ struct InputReplayOptions {
   std::optional<PeriodicWarmup> warmup;
   // Commands that have the measured log let ChooseWarmup set `warmup`; false: always steady.
   bool choose_warmup = true;
+  // Commands that have the measured log correct the reconstructed choke and FT2 levels from the
+  // measured pressures (EstimateInputLevels); false: the levels as reconstructed.
+  bool estimate_levels = true;
 };
 
 // The input columns of a log, SI, one value per row of `time_s`.
@@ -87,6 +90,52 @@ inline constexpr long kMaxLevelHalfWidthSamples = 8192;
 // heave at 100 Hz wants 57).
 inline constexpr double kMaxPistonHalfWidthSamples = 256;
 
+// The choke's and FT2's levels, corrected from the measured pressures (EstimateInputLevels in
+// model/analysis/compare.h). Reconstructed, a flat input still errs by about sigma / sqrt(N) over
+// its windows, more near the log's ends where the windows are one-sided (0.003-0.01 L/min of FT2
+// at 100 Hz), and through the choke's steady law (dp/p = 2 dq/q; G steep at small openings) that
+// moves every pipe pressure by 0.01-0.05 bar: a channel that swings little (PT4 at 0.33 Hz and
+// 28 deg, PT5 near the half-wave resonance) then fits several points worse than the same model fed
+// the true inputs. The pressures know the level far better (0.024 bar per sample on a dozen
+// channels), so the correction, a mean and a linear trend over the log's head, is the maximum a
+// posteriori estimate under both (the reconstruction's own error as the prior), bounded by
+// kMaxLevelOffsetSigmas of that prior: an offset the inputs' noise cannot explain is the model's to
+// show, not the replay's to hide.
+inline constexpr double kMaxLevelOffsetSigmas = 3.0;
+
+struct InputLevelCorrection {
+  // Added to the reconstructed choke opening and FT2 at time t:
+  // offset + trend * tau, tau = (t - center_s) / half_span_s held within [-1, 1].
+  double choke_offset_frac = 0.0;
+  double pump_offset_m3ps = 0.0;
+  double choke_trend_frac = 0.0;
+  double pump_trend_m3ps = 0.0;
+  double center_s = 0.0;
+  double half_span_s = 0.0;
+  // The prior standard deviations: of each input's mean (sigma / sqrt N) and of its trend (the
+  // one-sided windows' error at the ends, 2 sigma / sqrt W).
+  double choke_sigma_frac = 0.0;
+  double pump_sigma_m3ps = 0.0;
+  double choke_trend_sigma_frac = 0.0;
+  double pump_trend_sigma_m3ps = 0.0;
+  // The mean pressure residual (measured - model) over the pressure channels, and its trend (at
+  // tau = 1), before and after (as predicted by the steady law's sensitivities).
+  double residual_before_pa = 0.0;
+  double residual_after_pa = 0.0;
+  double residual_trend_before_pa = 0.0;
+  double residual_trend_after_pa = 0.0;
+  bool at_bound = false;  // a term was clipped to kMaxLevelOffsetSigmas
+  bool applied() const {
+    return choke_offset_frac != 0.0 || pump_offset_m3ps != 0.0 || choke_trend_frac != 0.0 ||
+           pump_trend_m3ps != 0.0;
+  }
+  double Tau(double t) const;  // 0 without a span
+  double ChokeAt(double t) const { return choke_offset_frac + choke_trend_frac * Tau(t); }
+  double PumpAt(double t) const { return pump_offset_m3ps + pump_trend_m3ps * Tau(t); }
+  // One line for a person, in lab units.
+  std::string Describe() const;
+};
+
 struct InputReconstruction {
   double sample_interval_s = 0.0;  // median interval of the plan's samples
   double piston_noise_m = 0.0;     // white-noise standard deviations, as estimated
@@ -96,6 +145,8 @@ struct InputReconstruction {
   double piston_band_hz = 0.0;            // highest frequency the piston carries above its noise
   double piston_half_width_s = 0.0;       // 0: the piston passes unchanged
   long level_max_half_width_samples = 0;  // ICI's longest window for choke, pump, outlet
+  // Added to the reconstructed choke and FT2 levels (none until EstimateInputLevels sets it).
+  InputLevelCorrection levels;
   // How far from a sample the samples it depends on lie: within the piston's half width in time
   // and within the level windows' in samples.
   long level_reach_samples() const { return level_max_half_width_samples; }
@@ -106,8 +157,9 @@ struct InputReconstruction {
 // The plan from the first kReconstructionPlanSamples rows of `columns` (fewer if it has fewer).
 InputReconstruction PlanInputReconstruction(const LogInputColumns& columns);
 
-// The reconstructed columns (same times). Each value depends only on the samples within
-// plan.piston_half_width_s and plan.level_reach_samples() of it.
+// The reconstructed columns (same times), with plan.levels added (the choke kept within [0, 1],
+// FT2 at or above 0). Each value depends only on the samples within plan.piston_half_width_s and
+// plan.level_reach_samples() of it.
 LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
                                         const InputReconstruction& plan);
 
@@ -147,9 +199,11 @@ std::optional<PeriodicWarmup> PlanPeriodicWarmup(const LogInputColumns& head, bo
 Result<LogInputColumns> InputColumnsFromLog(const riglog::RigLog& log, const std::string& path);
 
 // Time functions of the inputs, reconstructed or smoothed as `options` say; the columns are moved
-// into shared storage (one copy of time). Needs at least 2 rows.
+// into shared storage (one copy of time). Needs at least 2 rows. Reconstructed by `plan` where
+// given (e.g. a MeasuredLog's, with its level correction), else by a plan made here.
 Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::string& path,
-                                        const InputReplayOptions& options);
+                                        const InputReplayOptions& options,
+                                        const InputReconstruction* plan = nullptr);
 
 // InputColumnsFromLog + SignalsFromColumns.
 Result<InputSignals> SignalsFromLog(const riglog::RigLog& log, const std::string& path,

@@ -40,6 +40,7 @@ int RunCompare(const CompareArgs& args) {
   options.piston_smoothing_s = args.replay.piston_smoothing_s;
   options.reconstruct_inputs = args.replay.reconstruct_inputs;
   options.choose_warmup = args.replay.choose_warmup;
+  options.estimate_levels = args.replay.estimate_levels;
   options.residual_lags = args.residual_lags;
   options.read = args.read;
   int last_percent = -1;

@@ -55,7 +55,7 @@ int RunDiagnose(DiagnoseArgs args) {
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
   const Status prepared =
-      PrepareReplay(*log, *params, options.simulation, &options.replay, args.quiet);
+      PrepareReplay(&*log, *params, options.simulation, &options.replay, args.quiet);
   if (!prepared.ok()) return Fail(name, prepared);
   if (!args.quiet) {
     options.progress = [](std::string_view stage, double fraction) {

@@ -246,7 +246,7 @@ int RunFit(const FitArgs& args) {
                  log->time_s().size(), log->channels.size(), args.model.Describe(*start).c_str());
   }
   const Status prepared =
-      PrepareReplay(*log, *start, options.simulation, &options.replay, args.quiet);
+      PrepareReplay(&*log, *start, options.simulation, &options.replay, args.quiet);
   if (!prepared.ok()) return Fail(name, prepared);
   auto fit = FitParameters(*log, *start, parameters, options);
   if (!fit.ok()) return Fail(name, fit.status().Within(args.log_path));

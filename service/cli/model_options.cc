@@ -122,6 +122,11 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
       "replay the log's inputs as measured; by default they are reconstructed under their noise "
       "(noise levels and the piston's band estimated from the log, steps kept)");
   command->add_flag_callback(
+      "--levels-as-measured", [options]() { options->estimate_levels = false; },
+      "keep the reconstructed choke and FT2 levels; by default they are corrected from the "
+      "measured pressures, within what the inputs' own noise allows (their mean over N samples "
+      "errs by sigma/sqrt(N), which the choke's steep law turns into pressure offsets)");
+  command->add_flag_callback(
       "--steady-start", [options]() { options->choose_warmup = false; },
       "start the replay from the steady state even where the log starts in the middle of a "
       "periodic heave (by default such a log is replayed after a 30 s warm-up on its first "
@@ -133,16 +138,15 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
       ->capture_default_str();
 }
 
-Status PrepareReplay(const MeasuredLog& log, const RigParams& params,
+Status PrepareReplay(MeasuredLog* log, const RigParams& params,
                      const SimulationOptions& simulation, InputReplayOptions* options, bool quiet) {
-  if (options->choose_warmup) {
-    auto warmup = ChooseWarmup(log, params, simulation, *options);
-    if (!warmup.ok()) return warmup.status();
-    options->warmup = *warmup;
-  }
+  MPDRIG_RETURN_IF_ERROR(PrepareLogReplay(log, params, simulation, options));
   if (quiet) return Status::Ok();
   if (options->reconstruct_inputs) {
-    std::fprintf(stderr, "%s\n", log.reconstruction.Describe().c_str());
+    std::fprintf(stderr, "%s\n", log->reconstruction.Describe().c_str());
+    if (options->estimate_levels) {
+      std::fprintf(stderr, "%s\n", log->reconstruction.levels.Describe().c_str());
+    }
   }
   if (options->warmup) {
     std::fprintf(stderr,

@@ -45,8 +45,10 @@ struct ModelOptions {
 void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options);
 
 // For a command that replays `log`: lets ChooseWarmup set options->warmup (unless
-// --steady-start) and tells stderr how the inputs are fed (unless `quiet`).
-Status PrepareReplay(const MeasuredLog& log, const RigParams& params,
+// --steady-start), corrects the log's reconstructed choke and FT2 levels from its pressures
+// (unless --levels-as-measured; EstimateInputLevels) and tells stderr how the inputs are fed
+// (unless `quiet`).
+Status PrepareReplay(MeasuredLog* log, const RigParams& params,
                      const SimulationOptions& simulation, InputReplayOptions* options, bool quiet);
 
 // Registers --max-gap-s: the longest gap in time a command accepts in a log it reads

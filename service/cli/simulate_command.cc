@@ -88,12 +88,18 @@ int RunSimulate(const SimulateArgs& args) {
     auto log = riglog::ReadRigLog(args.inputs_path, args.read);
     if (!log.ok()) return Fail(name, log.status());
     // A log that starts mid-heave starts after a warm-up, where its pressures say so (as compare).
+    // Its choke and FT2 levels are corrected from its pressures, as compare's.
     InputReplayOptions replay = args.replay;
+    std::optional<InputReconstruction> plan;
     if (auto measured = MeasuredLogFromRigLog(*log, args.inputs_path); measured.ok()) {
-      const Status prepared = PrepareReplay(*measured, *params, *options, &replay, false);
+      const Status prepared = PrepareReplay(&*measured, *params, *options, &replay, false);
       if (!prepared.ok()) return Fail(name, prepared);
+      plan = measured->reconstruction;
     }
-    auto from_log = SignalsFromLog(*log, args.inputs_path, replay);
+    auto columns = InputColumnsFromLog(*log, args.inputs_path);
+    if (!columns.ok()) return Fail(name, columns.status());
+    auto from_log = SignalsFromColumns(std::move(columns).value(), args.inputs_path, replay,
+                                       plan ? &*plan : nullptr);
     if (!from_log.ok()) return Fail(name, from_log.status());
     signals = *from_log;
     output_times = log->time_s;

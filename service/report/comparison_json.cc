@@ -109,6 +109,30 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
     json.Key("level_max_window_s")
         .Number(2.0 * static_cast<double>(plan->level_max_half_width_samples) *
                 plan->sample_interval_s);
+    // The choke's and FT2's levels as corrected from the measured pressures (EstimateInputLevels).
+    const InputLevelCorrection& levels = plan->levels;
+    json.Key("levels").BeginObject();
+    // offset + trend * tau, tau from -1 at start_s to 1 at end_s (held beyond).
+    json.Key("start_s").Number(levels.center_s - levels.half_span_s);
+    json.Key("end_s").Number(levels.center_s + levels.half_span_s);
+    json.Key("choke_offset_deg").Number(units::ChokeFracToDeg(levels.choke_offset_frac));
+    json.Key("choke_trend_deg").Number(units::ChokeFracToDeg(levels.choke_trend_frac));
+    json.Key("FT2_offset_lpm").Number(units::M3psToLpm(levels.pump_offset_m3ps));
+    json.Key("FT2_trend_lpm").Number(units::M3psToLpm(levels.pump_trend_m3ps));
+    json.Key("choke_offset_bound_deg")
+        .Number(units::ChokeFracToDeg(kMaxLevelOffsetSigmas * levels.choke_sigma_frac));
+    json.Key("choke_trend_bound_deg")
+        .Number(units::ChokeFracToDeg(kMaxLevelOffsetSigmas * levels.choke_trend_sigma_frac));
+    json.Key("FT2_offset_bound_lpm")
+        .Number(units::M3psToLpm(kMaxLevelOffsetSigmas * levels.pump_sigma_m3ps));
+    json.Key("FT2_trend_bound_lpm")
+        .Number(units::M3psToLpm(kMaxLevelOffsetSigmas * levels.pump_trend_sigma_m3ps));
+    json.Key("pressure_residual_before_bar").Number(levels.residual_before_pa * 1e-5);
+    json.Key("pressure_residual_after_bar").Number(levels.residual_after_pa * 1e-5);
+    json.Key("pressure_residual_trend_before_bar").Number(levels.residual_trend_before_pa * 1e-5);
+    json.Key("pressure_residual_trend_after_bar").Number(levels.residual_trend_after_pa * 1e-5);
+    json.Key("at_bound").Bool(levels.at_bound);
+    json.EndObject();
   }
   json.Key("warmup").Bool(comparison.warmup.has_value());
   if (comparison.warmup) {
