@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -490,9 +491,15 @@ void ExpectSameComparison(const Comparison& a, const Comparison& b) {
 
 TEST(CompareTest, StreamingAndInMemoryPathsAgreeExactly) {
   // A rig with c = 1000 m/s against the default model, PT3 with gaps (single samples and a 5 s
-  // stretch), PT4 with an offset: every metric has something to measure.
+  // stretch), PT4 with an offset: every metric has something to measure. FT2 is noisy (2 % of
+  // 20 L/min, uniform from a fixed hash), so its reconstruction and level estimate run too.
   const riglog::RigLog inputs =
-      InputLog([](double t) { return Sine(t, 0.05, 0.2) + Sine(t, 0.01, 0.5); });
+      InputLog([](double t) { return Sine(t, 0.05, 0.2) + Sine(t, 0.01, 0.5); },
+               [](std::size_t i) {
+                 const std::uint64_t h = (i + 1) * 0x9E3779B97F4A7C15ull;
+                 const double u = static_cast<double>((h ^ (h >> 29)) % 1000003) / 1000003.0;
+                 return 20.0 + 0.4 * std::sqrt(3.0) * (2.0 * u - 1.0);
+               });
   RigParams rig;
   rig.wave_speed_mps = 1000.0;
   const std::string path =
@@ -517,9 +524,10 @@ TEST(CompareTest, StreamingAndInMemoryPathsAgreeExactly) {
     ASSERT_TRUE(log.ok()) << log.status().message();
     ReplayOptions replay;
     replay.piston_smoothing_s = options.piston_smoothing_s;
-    auto warmup = ChooseWarmup(*log, RigParams{}, SimulationOptions{}, replay);
-    ASSERT_TRUE(warmup.ok()) << warmup.status().message();
-    replay.warmup = *warmup;
+    const Status prepared = PrepareLogReplay(&*log, RigParams{}, SimulationOptions{}, &replay);
+    ASSERT_TRUE(prepared.ok()) << prepared.message();
+    ASSERT_TRUE(streamed->input_reconstruction.has_value());
+    EXPECT_TRUE(streamed->input_reconstruction->levels.applied());
     auto model = ReplayModel(*log, RigParams{}, SimulationOptions{}, replay);
     ASSERT_TRUE(model.ok()) << model.status().message();
     auto in_memory = CompareTraces(*log, *model, options);
