@@ -499,17 +499,19 @@ void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay)
 }
 
 Status PrepareLogReplay(MeasuredLog* log, const RigParams& params,
-                        const SimulationOptions& sim_options, ReplayOptions* replay) {
+                        const SimulationOptions& sim_options, ReplayOptions* replay,
+                        InputLevels levels) {
   if (replay->choose_warmup) {
     auto warmup = ChooseWarmup(*log, params, sim_options, *replay);
     if (!warmup.ok()) return warmup.status();
     replay->warmup = *warmup;
   }
-  if (replay->reconstruct_inputs && replay->estimate_levels) {
-    auto levels = EstimateInputLevels(*log, params, sim_options, *replay);
-    if (!levels.ok()) return levels.status();
-    ApplyInputLevels(*levels, log);
-    ApplyInputLevels(*levels, replay);
+  if (levels == InputLevels::kWithTheseParams && replay->reconstruct_inputs &&
+      replay->estimate_levels) {
+    auto estimate = EstimateInputLevels(*log, params, sim_options, *replay);
+    if (!estimate.ok()) return estimate.status();
+    ApplyInputLevels(*estimate, log);
+    ApplyInputLevels(*estimate, replay);
   }
   return Status::Ok();
 }

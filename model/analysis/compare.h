@@ -163,11 +163,14 @@ void ApplyInputLevels(const InputLevelCorrection& levels, MeasuredLog* log);
 void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay);
 
 // Everything a replay of a whole log in memory decides from the log before it runs: the start
-// (ChooseWarmup, where replay->choose_warmup) and the input levels (EstimateInputLevels +
-// ApplyInputLevels, where replay->estimate_levels). fit, diagnose and simulate --inputs call it;
-// CompareLog does the same on its streamed head.
+// (ChooseWarmup, where replay->choose_warmup) and, with kWithTheseParams, the input levels
+// (EstimateInputLevels + ApplyInputLevels, where replay->estimate_levels). simulate --inputs
+// calls it so, as CompareLog does on its streamed head; fit and diagnose with kAfterTheFit, as
+// they estimate the levels at the parameters they fit (FitParametersAndInputLevels, Diagnose).
+enum class InputLevels { kWithTheseParams, kAfterTheFit };
 Status PrepareLogReplay(MeasuredLog* log, const RigParams& params,
-                        const SimulationOptions& sim_options, ReplayOptions* replay);
+                        const SimulationOptions& sim_options, ReplayOptions* replay,
+                        InputLevels levels = InputLevels::kWithTheseParams);
 
 struct CompareOptions {
   int residual_lags = 25;   // M, as MATLAB resid's default

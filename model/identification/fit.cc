@@ -688,4 +688,28 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   return result;
 }
 
+Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams& start,
+                                              const std::vector<FitParameter>& parameters,
+                                              FitOptions options) {
+  auto first = FitParameters(*log, start, parameters, options);
+  if (!first.ok()) return first;
+  const ReplayOptions& replay = options.replay;
+  if (!replay.reconstruct_inputs || !replay.estimate_levels ||
+      log->reconstruction.levels.applied()) {
+    return first;
+  }
+  auto levels = EstimateInputLevels(*log, first->params, options.simulation, replay);
+  if (!levels.ok()) return levels.status();
+  if (!levels->applied()) return first;
+  ApplyInputLevels(*levels, log);
+  ApplyInputLevels(*levels, &options.replay);
+  auto second = FitParameters(*log, first->params, parameters, options);
+  if (!second.ok()) return second.status().Within("refitting on the estimated input levels");
+  second->error_before = first->error_before;
+  second->iterations += first->iterations;
+  second->replays += first->replays + 3;
+  second->input_levels = *levels;
+  return second;
+}
+
 }  // namespace mpdrig

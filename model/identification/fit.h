@@ -94,6 +94,8 @@ struct FitResult {
   int replays = 0;  // model runs spent
   bool converged = false;
   std::string solver_report;  // Ceres's brief report
+  // FitParametersAndInputLevels: the levels estimated at the first fit's parameters.
+  InputLevelCorrection input_levels;
 };
 
 // Mean NRMSE over the compared channels with a defined NRMSE, on the window: the metric of
@@ -106,5 +108,15 @@ double WindowError(const MeasuredLog& log, const ModelTraces& model, double wind
 Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
                                 const std::vector<FitParameter>& parameters,
                                 const FitOptions& options = {});
+
+// What `mpdrig fit` runs: FitParameters on the log as reconstructed, then the choke's and FT2's
+// levels estimated at the fitted parameters (EstimateInputLevels; at the start values a wrong
+// parameter would pass for a level error) and applied to *log, then FitParameters again from the
+// first fit's estimates. Where options.replay does not reconstruct or estimate levels, or *log
+// already has levels, FitParameters alone. replays and iterations count both fits, error_before
+// is the first fit's.
+Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams& start,
+                                              const std::vector<FitParameter>& parameters,
+                                              FitOptions options = {});
 
 }  // namespace mpdrig

@@ -55,7 +55,8 @@ int RunDiagnose(DiagnoseArgs args) {
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
   const Status prepared =
-      PrepareReplay(&*log, *params, options.simulation, &options.replay, args.quiet);
+      PrepareReplay(&*log, *params, options.simulation, &options.replay, args.quiet,
+                    InputLevels::kAfterTheFit);
   if (!prepared.ok()) return Fail(name, prepared);
   if (!args.quiet) {
     options.progress = [](std::string_view stage, double fraction) {
@@ -85,6 +86,9 @@ int RunDiagnose(DiagnoseArgs args) {
   auto diagnosis = Diagnose(*log, *params, options);
   if (!diagnosis.ok()) return Fail(name, diagnosis.status());
   const Diagnosis& d = *diagnosis;
+  if (!args.quiet && d.input_levels.applied()) {
+    std::fprintf(stderr, "%s (at the fitted base model)\n", d.input_levels.Describe().c_str());
+  }
 
   if (!args.json_path.empty()) {
     const Status written = WriteText(args.json_path, report::DiagnosisJson(d, args.log_path));

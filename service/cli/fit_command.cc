@@ -246,10 +246,15 @@ int RunFit(const FitArgs& args) {
                  log->time_s().size(), log->channels.size(), args.model.Describe(*start).c_str());
   }
   const Status prepared =
-      PrepareReplay(&*log, *start, options.simulation, &options.replay, args.quiet);
+      PrepareReplay(&*log, *start, options.simulation, &options.replay, args.quiet,
+                    InputLevels::kAfterTheFit);
   if (!prepared.ok()) return Fail(name, prepared);
-  auto fit = FitParameters(*log, *start, parameters, options);
+  auto fit = FitParametersAndInputLevels(&*log, *start, parameters, options);
   if (!fit.ok()) return Fail(name, fit.status().Within(args.log_path));
+  if (!args.quiet && fit->input_levels.applied()) {
+    std::fprintf(stderr, "%s (at the first fit's parameters; refitted on them)\n",
+                 fit->input_levels.Describe().c_str());
+  }
 
   if (!args.out_config_path.empty()) {
     Status written = WriteText(args.out_config_path, FormatRigConfig(fit->params));

@@ -139,12 +139,13 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
 }
 
 Status PrepareReplay(MeasuredLog* log, const RigParams& params,
-                     const SimulationOptions& simulation, InputReplayOptions* options, bool quiet) {
-  MPDRIG_RETURN_IF_ERROR(PrepareLogReplay(log, params, simulation, options));
+                     const SimulationOptions& simulation, InputReplayOptions* options, bool quiet,
+                     InputLevels levels) {
+  MPDRIG_RETURN_IF_ERROR(PrepareLogReplay(log, params, simulation, options, levels));
   if (quiet) return Status::Ok();
   if (options->reconstruct_inputs) {
     std::fprintf(stderr, "%s\n", log->reconstruction.Describe().c_str());
-    if (options->estimate_levels) {
+    if (options->estimate_levels && levels == InputLevels::kWithTheseParams) {
       std::fprintf(stderr, "%s\n", log->reconstruction.levels.Describe().c_str());
     }
   }

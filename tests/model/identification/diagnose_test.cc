@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <map>
 #include <string>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -51,14 +52,19 @@ struct Case {
   Diagnosis diagnosis;
 };
 
+// The logs' sensor noise: MakeSyntheticLog's quiet one (0.003 bar, 0.03 L/min, 20 um, 0.01 deg),
+// or the lab's (thesis Table 4.1.1, 8-25 times more).
+enum class Noise { kQuiet, kLab };
+
 Case RunCase(std::optional<std::string> effect, std::uint64_t seed, bool baseline_only = false,
-             std::optional<bool> low_pressure = std::nullopt) {
+             std::optional<bool> low_pressure = std::nullopt, Noise noise = Noise::kQuiet) {
   SyntheticLogOptions options;
   options.seed = seed;
   options.low_pressure = low_pressure;
   options.duration_s = kDurationS;
   options.rate_hz = kRateHz;
   options.hidden_effect = effect;
+  if (noise == Noise::kLab) options.sensor_noise = SensorNoise::Lab();
   auto synthetic = MakeSyntheticLog(options);
   EXPECT_TRUE(synthetic.ok()) << synthetic.status().message();
   Case result;
@@ -70,6 +76,10 @@ Case RunCase(std::optional<std::string> effect, std::uint64_t seed, bool baselin
   diagnose.simulation.cells = kDiagnoseCells;
   diagnose.simulation.stop_on_range_violation = false;
   diagnose.baseline_only = baseline_only;
+  // As `mpdrig diagnose` prepares the replay: the start and the inputs' levels.
+  const Status prepared = PrepareLogReplay(&*log, RigParams(), diagnose.simulation,
+                                           &diagnose.replay, InputLevels::kAfterTheFit);
+  EXPECT_TRUE(prepared.ok()) << prepared.message();
   auto diagnosis = Diagnose(*log, RigParams(), diagnose);
   EXPECT_TRUE(diagnosis.ok()) << diagnosis.status().message();
   if (diagnosis.ok()) result.diagnosis = *diagnosis;
@@ -90,9 +100,11 @@ std::string Ranking(const Diagnosis& d) {
   return out;
 }
 
-TEST(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
+class DiagnoseWithoutHiddenEffect : public ::testing::TestWithParam<Noise> {};
+
+TEST_P(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
   for (int seed = 1; seed <= CasesPerEffect(); ++seed) {
-    const Case c = RunCase(std::nullopt, seed);
+    const Case c = RunCase(std::nullopt, seed, false, std::nullopt, GetParam());
     SCOPED_TRACE(c.synthetic.description);
     std::printf("seed %d: base %.4g%% floor %.4g%% |%s\n", seed, 100.0 * c.diagnosis.baseline.error,
                 100.0 * c.diagnosis.noise_floor, Ranking(c.diagnosis).c_str());
@@ -103,7 +115,11 @@ TEST(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
   }
 }
 
-class DiagnoseHiddenEffect : public ::testing::TestWithParam<std::string> {};
+INSTANTIATE_TEST_SUITE_P(Noise, DiagnoseWithoutHiddenEffect,
+                         ::testing::Values(Noise::kQuiet, Noise::kLab),
+                         [](const auto& info) { return info.param == Noise::kLab ? "lab" : "quiet"; });
+
+class DiagnoseHiddenEffect : public ::testing::TestWithParam<std::tuple<std::string, Noise>> {};
 
 // Ranked first: the verdict, or one of the candidates the diagnosis reports as explaining the
 // log as well (`equivalent`). On these logs the two inlet compliances are one such pair: the
@@ -118,16 +134,17 @@ bool RankedFirst(const std::string& hidden, const Diagnosis& d) {
 }
 
 TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
-  const std::string effect = GetParam();
+  const auto& [effect, noise] = GetParam();
   int detectable = 0, first_detectable = 0, first = 0, alone = 0, wrong = 0;
   const int cases = CasesPerEffect();
   for (int seed = 1; seed <= cases; ++seed) {
-    const Case c = RunCase(effect, seed);
+    const Case c = RunCase(effect, seed, false, std::nullopt, noise);
     const Diagnosis& d = c.diagnosis;
-    // The same log without the effect: same seed, same excitation (column_separation's logs
-    // are the low-pressure runs).
+    // The same log without the effect: same seed, same excitation and noise (column_separation's
+    // logs are the low-pressure runs).
     const double without =
-        RunCase(std::nullopt, seed, true, effect == "column_separation").diagnosis.baseline.error;
+        RunCase(std::nullopt, seed, true, effect == "column_separation", noise)
+            .diagnosis.baseline.error;
     const bool is_detectable = d.baseline.error > (1.0 + kDetectableMargin) * without;
     std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n", effect.c_str(),
                 seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * without,
@@ -162,8 +179,13 @@ std::vector<std::string> AllEffects() {
   return names;
 }
 
-INSTANTIATE_TEST_SUITE_P(Catalogue, DiagnoseHiddenEffect, ::testing::ValuesIn(AllEffects()),
-                         [](const auto& info) { return info.param; });
+INSTANTIATE_TEST_SUITE_P(Catalogue, DiagnoseHiddenEffect,
+                         ::testing::Combine(::testing::ValuesIn(AllEffects()),
+                                            ::testing::Values(Noise::kQuiet, Noise::kLab)),
+                         [](const auto& info) {
+                           return std::get<0>(info.param) +
+                                  (std::get<1>(info.param) == Noise::kLab ? "_lab" : "_quiet");
+                         });
 
 }  // namespace
 }  // namespace mpdrig
@@ -187,6 +209,9 @@ Diagnosis DiagnoseAtLabNoise(std::optional<std::string> effect, std::uint64_t se
   if (!log.ok()) return {};
   DiagnoseOptions diagnose;
   diagnose.simulation.cells = kDiagnoseCells;
+  const Status prepared = PrepareLogReplay(&*log, RigParams(), diagnose.simulation,
+                                           &diagnose.replay, InputLevels::kAfterTheFit);
+  EXPECT_TRUE(prepared.ok()) << prepared.message();
   auto diagnosis = Diagnose(*log, RigParams(), diagnose);
   EXPECT_TRUE(diagnosis.ok()) << diagnosis.status().message();
   return diagnosis.ok() ? *diagnosis : Diagnosis{};
