@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "model/common/units.h"
 #include "model/riglog/channels.h"
 #include "service/report/svg_plot.h"
 
@@ -65,6 +66,13 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   const CandidateResult& b = d.baseline;
   out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
       << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays
+      // The choke's and FT2's levels as estimated at the fitted base model, lab units.
+      << ",\"input_levels\":{\"choke_offset_deg\":"
+      << Num(units::ChokeFracToDeg(d.input_levels.choke_offset_frac))
+      << ",\"choke_trend_deg\":" << Num(units::ChokeFracToDeg(d.input_levels.choke_trend_frac))
+      << ",\"FT2_offset_lpm\":" << Num(units::M3psToLpm(d.input_levels.pump_offset_m3ps))
+      << ",\"FT2_trend_lpm\":" << Num(units::M3psToLpm(d.input_levels.pump_trend_m3ps))
+      << ",\"at_bound\":" << (d.input_levels.at_bound ? "true" : "false") << "}"
       << ",\"baseline\":{\"error\":" << Num(b.error) << ",\"fit_error\":" << Num(b.fit_error)
       << ",\"params\":" << ParamsJson(b.params)
       << ",\"channels\":" << ChannelsJson(b.channel_errors) << "},\"candidates\":[";
