@@ -28,6 +28,7 @@ struct ServeArgs {
   std::string clock = "realtime";
   int domain = 0;
   std::string dds_config;  // XML or a file; default: loopback only
+  std::string security;    // DDS Security identity directory (make-class's OUT/service)
   double duration_s = 0.0;
   double choke_deg = 31.0;
   double pump_lpm = 0.0;
@@ -110,6 +111,11 @@ int RunServe(const ServeArgs& args) {
       serve.dds_config = args.dds_config;  // inline XML
     }
   }
+  if (!args.security.empty()) {
+    auto security = dds::LoadSecurityDirectory(args.security);
+    if (!security.ok()) return Fail(name, security.status().Within("--security"));
+    serve.security = std::move(security).value();
+  }
   auto service = service::RigService::Create(std::move(rigs), serve);
   if (!service.ok()) return Fail(name, service.status());
 
@@ -123,9 +129,14 @@ int RunServe(const ServeArgs& args) {
       "  topics: mpdrig_sensors, mpdrig_estimate, mpdrig_pressure_profile, mpdrig_status (out); "
       "mpdrig_choke_command, "
       "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
-      "mpdrig_step_request (in)\n  sensor noise: %s\n  stop with Ctrl-C\n",
+      "mpdrig_step_request (in)\n  sensor noise: %s\n  security: %s\n  stop with Ctrl-C\n",
       ids.c_str(), args.domain, args.dds_config.empty() ? "loopback only" : "configured network",
-      args.clock.c_str(), args.rate_hz, (*service)->rigs().front().DescribeSensorNoise().c_str());
+      args.clock.c_str(), args.rate_hz, (*service)->rigs().front().DescribeSensorNoise().c_str(),
+      args.security.empty()
+          ? "none (any participant on the domain may command any rig)"
+          : ("DDS Security with " + serve.security->dir +
+             "; each rig's topics in partition rig.<rig id>")
+                .c_str());
   const auto started = std::chrono::steady_clock::now();
   const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
@@ -182,6 +193,12 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--dds-config", args->dds_config,
                       "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
+  command->add_option(
+      "--security", args->security,
+      "DDS Security: the service's identity directory of a class (deploy/security/make-class "
+      "OUT ...: OUT/service). Authenticated, access-controlled and encrypted; each rig's topics "
+      "in partition rig.<rig id>, so a student's permissions name the rigs they may command and "
+      "read. Refuses to start if the directory is not a valid identity, saying why");
   command
       ->add_option("--duration", args->duration_s,
                    "stop after this much rig time [s] (realtime/fast; 0: run until Ctrl-C)")

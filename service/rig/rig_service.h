@@ -30,11 +30,13 @@
 #include <atomic>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "model/common/status.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 #include "service/rig/rig_host.h"
 #include "service/rig/rig_observer.h"
 
@@ -60,6 +62,12 @@ struct ServeOptions {
   // Pressure along the pipe (RigHost::pressure_positions_m) on mpdrig_pressure_profile at this
   // rate of rig time (0: off); with the observer's estimate at the same positions.
   double profile_hz = 10.0;
+  // DDS Security (service/dds/security.h; the identity of make-class's OUT/service): then each
+  // rig's topics live in partition "rig.<rig id>", so permissions decide who commands and reads
+  // which rig, and a command that arrives in one rig's partition for another rig is refused
+  // (counted, reported on both rigs' status with its writer). Unset: no security, the default
+  // partition, as before.
+  std::optional<dds::SecurityFiles> security;
 
   Status Validate(double sensor_rate_hz) const;
 };
