@@ -9,9 +9,9 @@
 //   mpdrig_command_latency --domain 9 --rig rig-1 --security class/rig-1   # DDS Security
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -54,10 +54,10 @@ int main(int argc, char** argv) {
   auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors");
   auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, "mpdrig_pump_command");
   if (!sensors_topic.ok() || !pump_topic.ok()) return Fail("cannot create topics");
-  auto sensors =
-      dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), sensors_topic->handle(), dds::SensorQos());
-  auto pump =
-      dds::Writer<mpdrig_PumpCommand>::Create(scope->pub(), pump_topic->handle(), dds::CommandQos());
+  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), sensors_topic->handle(),
+                                                        dds::SensorQos());
+  auto pump = dds::Writer<mpdrig_PumpCommand>::Create(scope->pub(), pump_topic->handle(),
+                                                      dds::CommandQos());
   if (!sensors.ok() || !pump.ok()) return Fail("cannot create the reader or the writer");
 
   // Waits for the first sample whose FT2 is `flow_lpm`; seconds since `since`, or -1 on timeout.

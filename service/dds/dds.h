@@ -132,7 +132,8 @@ class Reader {
   static Result<Reader> Create(dds_entity_t participant, dds_entity_t topic, const Qos& qos) {
     Entity reader(dds_create_reader(participant, topic, qos.get(), nullptr));
     if (reader.handle() < 0) return Check(reader.handle(), "dds_create_reader");
-    // `participant` may be a subscriber (a partition of its own): the waitset needs the participant.
+    // `participant` may be a subscriber (a partition of its own): the waitset needs the
+    // participant.
     const dds_entity_t owner = dds_get_participant(reader.handle());
     if (owner < 0) return Check(owner, "dds_get_participant");
     Entity waitset(dds_create_waitset(owner));

@@ -135,15 +135,24 @@ Result<Entity> CreateParticipant(dds_domainid_t domain, const SecurityFiles* sec
 std::string RigPartition(const std::string& rig_id) { return "rig." + rig_id; }
 
 Status CheckSecureRigId(const std::string& rig_id) {
-  bool ok = !rig_id.empty() && rig_id.size() <= 64;
-  for (char c : rig_id) {
+  // NAME, or NAME.N for a private rig (the service names those; make-class refuses a '.').
+  const std::size_t dot = rig_id.find('.');
+  const std::string name = rig_id.substr(0, dot);
+  bool ok = !name.empty() && name.size() <= 64;
+  for (char c : name) {
     ok = ok && ((c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
                 c == '_' || c == '-');
+  }
+  if (dot != std::string::npos) {
+    const std::string number = rig_id.substr(dot + 1);
+    ok = ok && !number.empty() && number.size() <= 4 && number[0] != '0';
+    for (char c : number) ok = ok && c >= '0' && c <= '9';
   }
   if (ok) return Status::Ok();
   return Status::Error("rig id '" + rig_id +
                        "': with --security a rig id names a partition and a permission, so it "
-                       "is 1-64 of A-Z a-z 0-9 _ - (make-class names students the same way)");
+                       "is 1-64 of A-Z a-z 0-9 _ - (make-class names students the same way), or "
+                       "NAME.N for a private rig");
 }
 
 Result<Entity> CreatePublisher(dds_entity_t participant, const std::string& partition) {

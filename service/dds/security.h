@@ -46,7 +46,8 @@ Result<Entity> CreateParticipant(dds_domainid_t domain, const SecurityFiles* sec
 // The partition of a rig's topics when security is on.
 std::string RigPartition(const std::string& rig_id);
 // With security, a rig id becomes a partition name and a permissions pattern: only 1-64 of
-// [A-Za-z0-9_-], so that no wildcard (* ?) or separator hides in one.
+// [A-Za-z0-9_-], so that no wildcard (* ?) or separator hides in one; or NAME.N (N = 1..9999),
+// a private rig of student NAME (mpdrig serve --private-rigs).
 Status CheckSecureRigId(const std::string& rig_id);
 // A publisher or subscriber in one partition: its writers or readers (Writer/Reader::Create
 // with it in place of the participant) see only endpoints of that partition.
@@ -60,7 +61,9 @@ Result<Entity> CreateSubscriber(dds_entity_t participant, const std::string& par
 struct ClientScope {
   Entity participant;
   Entity publisher, subscriber;  // with security only
-  dds_entity_t pub() const { return publisher.handle() > 0 ? publisher.handle() : participant.handle(); }
+  dds_entity_t pub() const {
+    return publisher.handle() > 0 ? publisher.handle() : participant.handle();
+  }
   dds_entity_t sub() const {
     return subscriber.handle() > 0 ? subscriber.handle() : participant.handle();
   }

@@ -66,6 +66,7 @@ struct RigService::Impl {
   dds::Entity participant;
   dds::Entity sensors_topic, choke_topic, piston_topic, pump_topic, outlet_topic, step_topic,
       status_topic, estimate_topic, profile_topic;
+  dds::Entity request_topic;  // private rigs (security)
   // The service's writers and readers: one set for every rig in the default partition, or, with
   // security, one set per rig in the rig's partition (permissions name partitions, not keys).
   struct Endpoints {
@@ -80,6 +81,7 @@ struct RigService::Impl {
     std::optional<dds::Reader<mpdrig_PumpCommand>> pump;
     std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
     std::optional<dds::Reader<mpdrig_StepRequest>> steps;
+    std::optional<dds::Reader<mpdrig_RigRequest>> requests;  // private rigs (security)
   };
   std::vector<std::unique_ptr<Endpoints>> endpoints;
   dds::Entity step_waitset;  // every set's step requests (lockstep)
@@ -87,7 +89,106 @@ struct RigService::Impl {
   Status CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool keep_all, Endpoints* set);
 
   Endpoints& EndpointsOf(std::size_t rig_index) {
-    return endpoints.size() == 1 ? *endpoints.front() : *endpoints[rig_index];
+    return endpoints.front()->rig < 0 ? *endpoints.front() : *endpoints[rig_index];
+  }
+  // One set of endpoints: every rig's in the default partition (rig < 0), or with security rig
+  // `rig`'s in its partition. Its step (and rig) requests wake the lockstep loop.
+  Status AddEndpoints(int rig) {
+    const dds_entity_t p = participant.handle();
+    auto set = std::make_unique<Endpoints>();
+    set->rig = rig;
+    dds_entity_t pub = p;
+    dds_entity_t sub = p;
+    if (rig >= 0) {
+      const std::string partition = dds::RigPartition(rigs[static_cast<std::size_t>(rig)].rig_id());
+      auto publisher = dds::CreatePublisher(p, partition);
+      if (!publisher.ok()) return publisher.status();
+      set->publisher = std::move(publisher).value();
+      auto subscriber = dds::CreateSubscriber(p, partition);
+      if (!subscriber.ok()) return subscriber.status();
+      set->subscriber = std::move(subscriber).value();
+      pub = set->publisher.handle();
+      sub = set->subscriber.handle();
+    }
+    MPDRIG_RETURN_IF_ERROR(
+        CreateEndpoints(pub, sub, options.clock == ClockMode::kLockstep, set.get()));
+    std::vector<dds_entity_t> wake = {set->steps->handle()};
+    if (options.private_rigs > 0) {
+      dds::Qos qos;  // requests are not state: reliable, keep all, volatile
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+      auto requests = dds::Reader<mpdrig_RigRequest>::Create(sub, request_topic.handle(), qos);
+      if (!requests.ok()) return requests.status();
+      set->requests.emplace(std::move(requests).value());
+      wake.push_back(set->requests->handle());
+    }
+    for (dds_entity_t reader : wake) {
+      const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+      if (condition < 0) return dds::Check(condition, "dds_create_readcondition");
+      MPDRIG_RETURN_IF_ERROR(dds::Check(dds_waitset_attach(step_waitset.handle(), condition, 0),
+                                        "dds_waitset_attach"));
+    }
+    endpoints.push_back(std::move(set));
+    return Status::Ok();
+  }
+
+  // Private rigs students asked for (security): "<student>.1" .. "<student>.N" within the
+  // limits; each in its own partition, which only that student's permissions name.
+  Status TakeRigRequests() {
+    if (options.private_rigs == 0) return Status::Ok();
+    std::vector<std::pair<std::size_t, std::uint32_t>> asked;  // requesting rig, how many
+    for (std::size_t i = 0; i < endpoints.size(); ++i) {
+      Endpoints& set = *endpoints[i];
+      auto taken =
+          set.requests->TakeEach([&](const mpdrig_RigRequest& r, const dds_sample_info_t& info) {
+            if (!FromItsPartition(set, kRigRequestTopic, r.rig_id, set.requests->handle(),
+                                  info.publication_handle))
+              return;
+            asked.push_back({static_cast<std::size_t>(set.rig), r.private_rigs});
+          });
+      if (!taken.ok()) return taken.status();
+    }
+    for (auto [index, count] : asked) {
+      const std::string student = rigs[index].rig_id();
+      if (student.find('.') != std::string::npos) {
+        (void)rigs[index].Refuse(std::string(kRigRequestTopic) + " refused: " + student +
+                                 " is a private rig itself");
+        MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+        continue;
+      }
+      if (count > options.private_rigs) {
+        (void)rigs[index].Refuse(std::string(kRigRequestTopic) + " for " + std::to_string(count) +
+                                 " private rigs refused beyond " +
+                                 std::to_string(options.private_rigs) +
+                                 ": this service allows that many per student (--private-rigs)");
+        count = options.private_rigs;
+      }
+      for (std::uint32_t k = 1; k <= count; ++k) {
+        const std::string id = student + "." + std::to_string(k);
+        if (Find(id.c_str()) != nullptr) continue;
+        if (options.max_rigs > 0 && rigs.size() >= options.max_rigs) {
+          (void)rigs[index].Refuse("private rig " + id +
+                                   " refused: this service runs its limit of " +
+                                   std::to_string(options.max_rigs) + " rigs (--max-rigs)");
+          break;
+        }
+        auto rig = options.make_rig(id);
+        if (!rig.ok()) {
+          (void)rigs[index].Refuse("private rig " + id + ": " + rig.status().message());
+          break;
+        }
+        rigs.push_back(std::move(rig).value());
+        observers.emplace_back();
+        observer_failed.push_back(false);
+        last_step_request.push_back(0);
+        MPDRIG_RETURN_IF_ERROR(AddEndpoints(static_cast<int>(rigs.size() - 1)));
+        rigs.back().NoteEvent("private rig of " + student + ", made on its request");
+        rigs[index].NoteEvent("private rig " + id + " runs");
+        MPDRIG_RETURN_IF_ERROR(PublishStatus(rigs.size() - 1));
+      }
+      MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+    }
+    return Status::Ok();
   }
 
   // With security, a command arrives in its writer's partition, which its permissions allow:
@@ -374,6 +475,7 @@ struct RigService::Impl {
     while (!stop.load()) {
       if (options.duration_s > 0.0 && rigs.front().time_s() >= options.duration_s - 0.5 * period)
         break;
+      MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
       MPDRIG_RETURN_IF_ERROR(TakeCommands());
       for (RigHost& rig : rigs) MPDRIG_RETURN_IF_ERROR(TickAndPublish(rig));
       if (rigs.front().time_s() >= next_status_s) {
@@ -418,22 +520,26 @@ struct RigService::Impl {
     };
     while (!stop.load()) {
       if (!busy()) {
-        const dds_return_t ready = dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
+        const dds_return_t ready =
+            dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
         if (ready < 0) return dds::Check(ready, "dds_waitset_wait");
         if (ready == 0) continue;
       }
+      MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
+      queues.resize(rigs.size());
       std::vector<std::pair<std::string, Pending>> requests;
       bool refused = false;  // a request from another rig's partition (security)
       for (auto& set : endpoints) {
         auto& steps = set->steps;
-        auto taken = steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
-          if (!FromItsPartition(*set, kStepRequestTopic, r.rig_id, steps->handle(),
-                                info.publication_handle)) {
-            refused = true;
-            return;
-          }
-          requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
-        });
+        auto taken =
+            steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
+              if (!FromItsPartition(*set, kStepRequestTopic, r.rig_id, steps->handle(),
+                                    info.publication_handle)) {
+                refused = true;
+                return;
+              }
+              requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
+            });
         if (!taken.ok()) return taken.status();
       }
       if (refused) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
@@ -561,7 +667,11 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   const double rate_hz = 1.0 / impl->rigs.front().sensor_period_s();
   MPDRIG_RETURN_IF_ERROR(options.Validate(rate_hz));
   if (options.security) {
-    for (const RigHost& rig : impl->rigs) MPDRIG_RETURN_IF_ERROR(dds::CheckSecureRigId(rig.rig_id()));
+    for (const RigHost& rig : impl->rigs)
+      MPDRIG_RETURN_IF_ERROR(dds::CheckSecureRigId(rig.rig_id()));
+  }
+  if (options.private_rigs > 0 && (!options.security || !options.make_rig)) {
+    return Status::Error("private rigs need security (a student asks in their own partition)");
   }
   // Every k-th sample: the nearest whole divisor of the sensor rate (at least every sample).
   if (options.estimate_hz > 0.0) {
@@ -576,7 +686,8 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   auto domain = dds::Domain::Create(options.domain, options.dds_config);
   if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
   impl->domain.emplace(std::move(domain).value());
-  auto participant = dds::CreateParticipant(options.domain, options.security ? &*options.security : nullptr);
+  auto participant =
+      dds::CreateParticipant(options.domain, options.security ? &*options.security : nullptr);
   if (!participant.ok()) return participant.status();
   impl->participant = std::move(participant).value();
   const dds_entity_t p = impl->participant.handle();
@@ -602,33 +713,18 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
       topic(&mpdrig_PressureProfile_desc, kPressureProfileTopic, &impl->profile_topic));
 
   // One set of endpoints in the default partition, or with security one per rig in its own.
-  const bool keep_all = options.clock == ClockMode::kLockstep;
-  const std::size_t sets = options.security ? impl->rigs.size() : 1;
+  if (options.private_rigs > 0) {
+    MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigRequest_desc, kRigRequestTopic, &impl->request_topic));
+  }
   dds::Entity step_waitset(dds_create_waitset(p));
   if (step_waitset.handle() < 0) return dds::Check(step_waitset.handle(), "dds_create_waitset");
   impl->step_waitset = std::move(step_waitset);
-  for (std::size_t i = 0; i < sets; ++i) {
-    auto set = std::make_unique<Impl::Endpoints>();
-    dds_entity_t pub = p;
-    dds_entity_t sub = p;
-    if (options.security) {
-      set->rig = static_cast<int>(i);
-      const std::string partition = dds::RigPartition(impl->rigs[i].rig_id());
-      auto publisher = dds::CreatePublisher(p, partition);
-      if (!publisher.ok()) return publisher.status();
-      set->publisher = std::move(publisher).value();
-      auto subscriber = dds::CreateSubscriber(p, partition);
-      if (!subscriber.ok()) return subscriber.status();
-      set->subscriber = std::move(subscriber).value();
-      pub = set->publisher.handle();
-      sub = set->subscriber.handle();
+  if (options.security) {
+    for (std::size_t i = 0; i < impl->rigs.size(); ++i) {
+      MPDRIG_RETURN_IF_ERROR(impl->AddEndpoints(static_cast<int>(i)));
     }
-    MPDRIG_RETURN_IF_ERROR(impl->CreateEndpoints(pub, sub, keep_all, set.get()));
-    const dds_entity_t condition = dds_create_readcondition(set->steps->handle(), DDS_ANY_STATE);
-    if (condition < 0) return dds::Check(condition, "dds_create_readcondition");
-    MPDRIG_RETURN_IF_ERROR(dds::Check(
-        dds_waitset_attach(impl->step_waitset.handle(), condition, 0), "dds_waitset_attach"));
-    impl->endpoints.push_back(std::move(set));
+  } else {
+    MPDRIG_RETURN_IF_ERROR(impl->AddEndpoints(-1));
   }
 
   return std::unique_ptr<RigService>(new RigService(std::move(impl)));

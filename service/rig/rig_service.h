@@ -28,6 +28,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -68,6 +69,14 @@ struct ServeOptions {
   // (counted, reported on both rigs' status with its writer). Unset: no security, the default
   // partition, as before.
   std::optional<dds::SecurityFiles> security;
+  // Private rigs, with security only: a student's RigRequest (sent in their rig's partition)
+  // makes the service run "<student>.1" .. "<student>.N", N up to `private_rigs` per student
+  // (0: requests are not taken), each made by `make_rig`, while the service runs fewer than
+  // `max_rigs` rigs in all (0: no limit). A request beyond a limit is refused on the student's
+  // status.
+  std::uint32_t private_rigs = 0;
+  std::size_t max_rigs = 0;
+  std::function<Result<RigHost>(const std::string& rig_id)> make_rig;
 
   Status Validate(double sensor_rate_hz) const;
 };

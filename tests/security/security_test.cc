@@ -41,7 +41,7 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-constexpr double kInitialChokeDeg = 31.0;  // serve's default
+constexpr double kInitialChokeDeg = 31.0;    // serve's default
 constexpr double kChokeToleranceDeg = 0.01;  // noise-free sensors: the position is exact
 
 // A process; SIGINT, then SIGKILL after 5 s, when this goes.
@@ -113,9 +113,9 @@ class Peer {
     peer->local_domain_ = static_cast<dds_domainid_t>(testing::ClaimTestDomain());
     std::string config = dds::LoopbackConfig();
     const std::string discovery = "<Discovery>";
-    config.replace(config.find(discovery), discovery.size(),
-                   discovery + "<ExternalDomainId>" + std::to_string(wire_domain) +
-                       "</ExternalDomainId>");
+    config.replace(
+        config.find(discovery), discovery.size(),
+        discovery + "<ExternalDomainId>" + std::to_string(wire_domain) + "</ExternalDomainId>");
     auto domain = dds::Domain::Create(peer->local_domain_, config);
     EXPECT_TRUE(domain.ok()) << domain.status().message();
     if (!domain.ok()) return nullptr;
@@ -149,14 +149,14 @@ class Peer {
 
   template <typename T>
   Result<dds::Writer<T>> MakeWriter(const std::string& partition,
-                                         const dds_topic_descriptor_t* descriptor,
-                                         const char* topic, const dds::Qos& qos) {
+                                    const dds_topic_descriptor_t* descriptor, const char* topic,
+                                    const dds::Qos& qos) {
     return dds::Writer<T>::Create(Publisher(partition), Topic(descriptor, topic), qos);
   }
   template <typename T>
   Result<dds::Reader<T>> MakeReader(const std::string& partition,
-                                         const dds_topic_descriptor_t* descriptor,
-                                         const char* topic, const dds::Qos& qos) {
+                                    const dds_topic_descriptor_t* descriptor, const char* topic,
+                                    const dds::Qos& qos) {
     return dds::Reader<T>::Create(Subscriber(partition), Topic(descriptor, topic), qos);
   }
 
@@ -165,12 +165,14 @@ class Peer {
   dds_entity_t Scope(const std::string& partition, bool publisher) {
     if (partition.empty()) return participant_.handle();
     for (auto& scope : scopes_) {
-      if (scope.partition == partition && scope.publisher == publisher) return scope.entity->handle();
+      if (scope.partition == partition && scope.publisher == publisher)
+        return scope.entity->handle();
     }
     auto created = publisher ? dds::CreatePublisher(participant_.handle(), partition)
                              : dds::CreateSubscriber(participant_.handle(), partition);
     EXPECT_TRUE(created.ok()) << created.status().message();
-    scopes_.push_back({partition, publisher, std::make_unique<dds::Entity>(std::move(created).value())});
+    scopes_.push_back(
+        {partition, publisher, std::make_unique<dds::Entity>(std::move(created).value())});
     return scopes_.back().entity->handle();
   }
   struct ScopeEntry {
@@ -293,8 +295,8 @@ class SecureClass : public ::testing::Test {
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("mpdrig-security-test-" + std::to_string(::getpid()));
     fs::remove_all(dir_);
-    const std::string make = std::string(MAKE_CLASS) + " " + dir_.string() +
-                             " alice bob:alice >" + dir_.string() + ".make.log 2>&1";
+    const std::string make = std::string(MAKE_CLASS) + " " + dir_.string() + " alice bob:alice >" +
+                             dir_.string() + ".make.log 2>&1";
     ASSERT_EQ(std::system(make.c_str()), 0) << ReadFile(dir_.string() + ".make.log");
     domain_ = testing::ClaimTestDomain();
     ASSERT_GT(domain_, 0);
@@ -308,13 +310,17 @@ class SecureClass : public ::testing::Test {
 
   // mpdrig serve --security with rigs alice and bob, real time at 100 Hz, noise-free sensors;
   // waits until the instructor sees alice's sensors (authentication, then discovery).
-  void StartService() {
+  void StartService(const std::vector<std::string>& extra = {}) {
     service_log_ = dir_.string() + "/serve.log";
-    service_.emplace(std::vector<std::string>{MPDRIG_EXE, "serve", "--security",
-                                              (dir_ / "service").string(), "--domain",
-                                              std::to_string(domain_), "--rig", "alice", "--rig",
-                                              "bob", "--sensor-noise", "none", "--duration", "120"},
-                     service_log_);
+    std::vector<std::string> args{MPDRIG_EXE,       "serve",
+                                  "--security",     (dir_ / "service").string(),
+                                  "--domain",       std::to_string(domain_),
+                                  "--rig",          "alice",
+                                  "--rig",          "bob",
+                                  "--sensor-noise", "none",
+                                  "--duration",     "120"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    service_.emplace(args, service_log_);
     ASSERT_TRUE(service_->started());
     instructor_ = Peer::Create(domain_, (dir_ / "instructor").string());
     ASSERT_NE(instructor_, nullptr);
@@ -390,8 +396,8 @@ TEST_F(SecureClass, ServiceRefusesAnInvalidSecurityDirectorySayingWhy) {
   EXPECT_NE(ReadFile(log).find("is not signed DDS Security permissions"), std::string::npos)
       << ReadFile(log);
   {
-    Process echo({RIG_ECHO_EXE, "--security", (dir_ / "alice").string(), "--rig", "al*",
-                  "--domain", std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
+    Process echo({RIG_ECHO_EXE, "--security", (dir_ / "alice").string(), "--rig", "al*", "--domain",
+                  std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
                  log);
     EXPECT_GT(echo.Wait(20.0), 0);
   }
@@ -453,9 +459,8 @@ TEST_F(SecureClass, StudentCannotCommandAnotherStudentsRigAndTheServiceReportsTh
   auto fake_sensors = alice->MakeWriter<mpdrig_RigSensors>(
       dds::RigPartition("alice"), &mpdrig_RigSensors_desc, "mpdrig_sensors", dds::SensorQos());
   EXPECT_FALSE(fake_sensors.ok()) << "a student may publish sensor data";
-  auto peek = alice->MakeReader<mpdrig_RigSensors>(dds::RigPartition("bob"),
-                                                   &mpdrig_RigSensors_desc, "mpdrig_sensors",
-                                                   dds::SensorQos());
+  auto peek = alice->MakeReader<mpdrig_RigSensors>(
+      dds::RigPartition("bob"), &mpdrig_RigSensors_desc, "mpdrig_sensors", dds::SensorQos());
   EXPECT_FALSE(peek.ok()) << "alice may read bob's rig";
   RigWatch bob_watches_alice(*bob, "alice");
   EXPECT_TRUE(bob_watches_alice.WaitFor(10.0, [](double) { return true; }));
@@ -515,6 +520,75 @@ TEST_F(SecureClass, InstructorTakesOverAStudentsRig) {
       << "bob's choke at " << watch_bob_->choke_deg();
 }
 
+// A student asks for private rigs in their own partition (mpdrig serve --private-rigs).
+void AskForPrivateRigs(Peer& student, const std::string& rig, std::uint32_t how_many) {
+  dds::Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto writer = student.MakeWriter<mpdrig_RigRequest>(
+      dds::RigPartition(rig), &mpdrig_RigRequest_desc, "mpdrig_rig_request", qos);
+  ASSERT_TRUE(writer.ok()) << writer.status().message();
+  // The service's reader must have matched (secure discovery) before the request is written.
+  dds_publication_matched_status_t matched{};
+  for (int i = 0; i < 100 && matched.current_count == 0; ++i) {
+    ASSERT_EQ(dds_get_publication_matched_status(writer->handle(), &matched), DDS_RETCODE_OK);
+    if (matched.current_count == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_GT(matched.current_count, 0u) << "the service's request reader did not match";
+  mpdrig_RigRequest request{const_cast<char*>(rig.c_str()), how_many};
+  ASSERT_TRUE(writer->Write(request).ok());
+  ASSERT_EQ(dds_wait_for_acks(writer->handle(), DDS_SECS(5)), DDS_RETCODE_OK);
+}
+
+TEST_F(SecureClass, StudentGetsAPrivateRigWithinTheServicesLimits) {
+  StartService({"--private-rigs", "1", "--max-rigs", "3"});
+  auto alice = Peer::Create(domain_, Dir("alice"));
+  auto bob = Peer::Create(domain_, Dir("bob"));
+  ASSERT_NE(alice, nullptr);
+  ASSERT_NE(bob, nullptr);
+  RigWatch instructor_on_private(*instructor_, "alice.1");
+  EXPECT_FALSE(instructor_on_private.WaitFor(1.0, [](double) { return true; }))
+      << "alice.1 ran before anyone asked";
+  AskForPrivateRigs(*alice, "alice", 1);
+  EXPECT_TRUE(instructor_on_private.WaitFor(15.0, [](double) { return true; }))
+      << "no private rig alice.1; serve said:\n"
+      << ReadFile(service_log_);
+  // Alice reads and commands it; bob may not even read it.
+  RigWatch alice_on_private(*alice, "alice.1");
+  Choke choke(*alice, "alice.1", 10);
+  ASSERT_TRUE(choke.created().ok()) << choke.created().message();
+  choke.Send("alice.1", 55.0);
+  EXPECT_TRUE(alice_on_private.WaitFor(10.0, [](double c) { return std::fabs(c - 55.0) < 0.01; }))
+      << "alice.1's choke at " << alice_on_private.choke_deg();
+  auto peek = bob->MakeReader<mpdrig_RigSensors>(
+      dds::RigPartition("alice.1"), &mpdrig_RigSensors_desc, "mpdrig_sensors", dds::SensorQos());
+  EXPECT_FALSE(peek.ok()) << "bob may read alice's private rig";
+
+  // The limits: one private rig per student (--private-rigs 1), three rigs in all (--max-rigs 3).
+  AskForPrivateRigs(*alice, "alice", 2);
+  RigWatch instructor_on_second(*instructor_, "alice.2");
+  bool refused = false;
+  for (int i = 0; i < 50 && !refused; ++i) {
+    watch_alice_->MaxDeviation(0.1, 0.0);
+    refused = watch_alice_->last_rejection().find("beyond 1") != std::string::npos;
+  }
+  EXPECT_TRUE(refused) << "alice's status: '" << watch_alice_->last_rejection() << "'";
+  AskForPrivateRigs(*bob, "bob", 1);
+  RigWatch instructor_on_bobs(*instructor_, "bob.1");
+  refused = false;
+  for (int i = 0; i < 50 && !refused; ++i) {
+    watch_bob_->MaxDeviation(0.1, 0.0);
+    refused = watch_bob_->last_rejection().find("limit of 3 rigs") != std::string::npos;
+  }
+  EXPECT_TRUE(refused) << "bob's status: '" << watch_bob_->last_rejection() << "'";
+  EXPECT_FALSE(instructor_on_second.WaitFor(1.0, [](double) { return true; }));
+  EXPECT_FALSE(instructor_on_bobs.WaitFor(1.0, [](double) { return true; }));
+  // alice.1 kept running through all that.
+  const long before = instructor_on_private.samples();
+  EXPECT_TRUE(instructor_on_private.WaitFor(
+      2.0, [&](double) { return instructor_on_private.samples() > before + 50; }));
+}
+
 // The 8 bytes of a double as it goes on the wire (little-endian CDR on this machine).
 std::string Bytes(double value) {
   std::string bytes(sizeof value, '\0');
@@ -551,7 +625,8 @@ TEST_F(SecureClass, PayloadsAreNotReadableOnTheWire) {
   Choke alices(*alice, "alice", 10);
   const double secret_deg = 37.0123456789;
   alices.Send("alice", secret_deg);
-  ASSERT_TRUE(alice_watches.WaitFor(10.0, [&](double c) { return std::fabs(c - secret_deg) < 1e-6; }))
+  ASSERT_TRUE(
+      alice_watches.WaitFor(10.0, [&](double c) { return std::fabs(c - secret_deg) < 1e-6; }))
       << "alice's choke at " << alice_watches.choke_deg();
   EXPECT_GT(alice_watches.samples(), 50);
 
@@ -587,7 +662,8 @@ TEST_F(SecureClass, PayloadsAreNotReadableOnTheWire) {
   EXPECT_EQ(wire.find(CdrString("alice")), std::string::npos) << "alice's samples are readable";
   // tshark's RTPS dissector: the secured traffic goes in SEC_BODY submessages (id 0x30).
   const std::string count_log = dir_.string() + "/sec_body.txt";
-  const std::string count = "tshark -r " + capture + " -Y 'rtps.sm.id == 0x30' 2>/dev/null | wc -l >" + count_log;
+  const std::string count =
+      "tshark -r " + capture + " -Y 'rtps.sm.id == 0x30' 2>/dev/null | wc -l >" + count_log;
   ASSERT_EQ(std::system(count.c_str()), 0);
   EXPECT_GT(std::atol(ReadFile(count_log).c_str()), 50) << "no encrypted RTPS submessages decoded";
 }
