@@ -6,10 +6,12 @@
 // runs it beside ddsperf's round trip.
 //
 //   mpdrig_command_latency --domain 9 --rig rig-1 --count 2000
+//   mpdrig_command_latency --domain 9 --rig rig-1 --security class/rig-1   # DDS Security
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <random>
 #include <string>
 #include <vector>
@@ -18,6 +20,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 
 namespace {
 
@@ -37,20 +40,24 @@ int main(int argc, char** argv) {
   app.add_option("--domain", domain, "DDS domain id")->capture_default_str();
   app.add_option("--rig", rig_id, "rig id")->capture_default_str();
   app.add_option("--count", count, "commands to time")->check(CLI::Range(10, 1000000));
+  std::string security;
+  app.add_option("--security", security,
+                 "DDS Security identity directory (deploy/security/make-class OUT NAME: OUT/NAME)");
   CLI11_PARSE(app, argc, argv);
 
   using namespace mpdrig;
   auto created = dds::Domain::Create(domain, dds::LoopbackConfig());
   if (!created.ok()) return Fail(created.status().message());
-  auto participant = dds::CreateParticipant(domain);
-  if (!participant.ok()) return Fail(participant.status().message());
-  const dds_entity_t p = participant->handle();
+  auto scope = dds::CreateClientScope(domain, security, rig_id);
+  if (!scope.ok()) return Fail(scope.status().message());
+  const dds_entity_t p = scope->participant.handle();
   auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors");
   auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, "mpdrig_pump_command");
   if (!sensors_topic.ok() || !pump_topic.ok()) return Fail("cannot create topics");
-  auto sensors =
-      dds::Reader<mpdrig_RigSensors>::Create(p, sensors_topic->handle(), dds::SensorQos());
-  auto pump = dds::Writer<mpdrig_PumpCommand>::Create(p, pump_topic->handle(), dds::CommandQos());
+  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), sensors_topic->handle(),
+                                                        dds::SensorQos());
+  auto pump = dds::Writer<mpdrig_PumpCommand>::Create(scope->pub(), pump_topic->handle(),
+                                                      dds::CommandQos());
   if (!sensors.ok() || !pump.ok()) return Fail("cannot create the reader or the writer");
 
   // Waits for the first sample whose FT2 is `flow_lpm`; seconds since `since`, or -1 on timeout.
@@ -76,6 +83,8 @@ int main(int argc, char** argv) {
   }
 
   std::vector<double> latency_s;
+  const std::clock_t cpu_started = std::clock();
+  const Clock::time_point wall_started = Clock::now();
   std::mt19937 random(12345);
   // Commands at random phases of the sensor period: 5-15 ms apart.
   std::uniform_int_distribution<int> gap_us(5000, 15000);
@@ -88,13 +97,16 @@ int main(int argc, char** argv) {
     if (seconds < 0.0) return Fail("no sample showed command " + std::to_string(i));
     latency_s.push_back(seconds);
   }
+  const double cpu_s = static_cast<double>(std::clock() - cpu_started) / CLOCKS_PER_SEC;
+  const double wall_s = std::chrono::duration<double>(Clock::now() - wall_started).count();
   std::sort(latency_s.begin(), latency_s.end());
   auto quantile = [&](double q) {
     return 1e3 * latency_s[static_cast<std::size_t>(q * (latency_s.size() - 1))];
   };
   std::printf(
       "command->sensor latency (pump command -> FT2), %zu commands: p50 %.3f ms, p90 %.3f ms, "
-      "p99 %.3f ms, max %.3f ms\n",
-      latency_s.size(), quantile(0.5), quantile(0.9), quantile(0.99), 1e3 * latency_s.back());
+      "p99 %.3f ms, max %.3f ms; probe CPU %.1f%% of one core (%s)\n",
+      latency_s.size(), quantile(0.5), quantile(0.9), quantile(0.99), 1e3 * latency_s.back(),
+      100.0 * cpu_s / wall_s, security.empty() ? "no security" : "DDS Security");
   return 0;
 }

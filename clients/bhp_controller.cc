@@ -44,6 +44,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 
 namespace {
 
@@ -119,6 +120,7 @@ struct Args {
   std::string rig_id = "rig-1";
   int domain = 0;
   std::string dds_config;
+  std::string security;  // DDS Security identity directory (make-class's OUT/NAME)
   ControllerOptions control;
   bool use_estimate = false;
   bool open_loop = false;
@@ -172,9 +174,10 @@ int Run(const Args& args) {
   }
   auto domain = dds::Domain::Create(args.domain, config);
   if (!domain.ok()) return Fail(domain.status().message());
-  auto participant = dds::CreateParticipant(args.domain);
-  if (!participant.ok()) return Fail(participant.status().message());
-  const dds_entity_t p = participant->handle();
+  // With --security the rig's topics are in its partition (make-class's permissions name it).
+  auto scope = dds::CreateClientScope(args.domain, args.security, args.rig_id);
+  if (!scope.ok()) return Fail(scope.status().message());
+  const dds_entity_t p = scope->participant.handle();
   auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors");
   auto estimate_topic = dds::CreateTopic(p, &mpdrig_RigEstimate_desc, "mpdrig_estimate");
   auto choke_topic = dds::CreateTopic(p, &mpdrig_ChokeCommand_desc, "mpdrig_choke_command");
@@ -184,16 +187,17 @@ int Run(const Args& args) {
   }
   // In lockstep the controller sets the pace and must see every sample (keep all, like the
   // service); in real time only the newest matters.
-  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(p, sensors_topic->handle(),
+  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), sensors_topic->handle(),
                                                         dds::SensorQos(args.lockstep));
-  auto estimates = dds::Reader<mpdrig_RigEstimate>::Create(p, estimate_topic->handle(),
+  auto estimates = dds::Reader<mpdrig_RigEstimate>::Create(scope->sub(), estimate_topic->handle(),
                                                            dds::SensorQos(args.lockstep));
-  auto choke = dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic->handle(),
+  auto choke = dds::Writer<mpdrig_ChokeCommand>::Create(scope->pub(), choke_topic->handle(),
                                                         dds::CommandQos(args.strength));
   dds::Qos step_qos;
   dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto steps = dds::Writer<mpdrig_StepRequest>::Create(p, step_topic->handle(), step_qos);
+  auto steps =
+      dds::Writer<mpdrig_StepRequest>::Create(scope->pub(), step_topic->handle(), step_qos);
   if (!sensors.ok()) return Fail(sensors.status().message());
   if (!estimates.ok()) return Fail(estimates.status().message());
   if (!choke.ok()) return Fail(choke.status().message());
@@ -442,8 +446,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--strength", args.strength,
                  "ownership strength of the choke commands: of several controllers the "
-                 "strongest live one wins")
+                 "strongest live one wins (an instructor taking over a class's rig: 100)")
       ->capture_default_str();
+  app.add_option("--security", args.security,
+                 "DDS Security: this student's (or the instructor's) identity directory of a "
+                 "class (deploy/security/make-class OUT NAME: OUT/NAME); the rig's topics are "
+                 "then in partition rig.<rig id>. Refuses an invalid directory, saying why");
   app.add_flag("--open-loop", args.open_loop,
                "write no commands: only measure (the fixed-choke baseline)");
   app.add_flag("--lockstep", args.lockstep,

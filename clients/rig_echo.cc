@@ -20,6 +20,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 
 namespace {
 
@@ -81,6 +82,7 @@ int main(int argc, char** argv) {
   long max_samples = 0;
   double timeout_s = 0.0;
   std::string dds_config;
+  std::string security;
   bool timing = false;
   app.add_flag("--timing", timing, "report the sensor period jitter as received (stderr)");
   app.add_option("--rig", rig_id, "rig id to record")->capture_default_str();
@@ -92,19 +94,24 @@ int main(int argc, char** argv) {
   app.add_option("--timeout", timeout_s,
                  "give up after this many seconds without a sample (0: wait)");
   app.add_option("--dds-config", dds_config, "Cyclone DDS XML (default: loopback only)");
+  app.add_option("--security", security,
+                 "DDS Security: an identity directory of a class (deploy/security/make-class OUT "
+                 "NAME: OUT/NAME) allowed to read the rig; the rig's topics are then in "
+                 "partition rig.<rig id>. Refuses an invalid directory, saying why");
   CLI11_PARSE(app, argc, argv);
 
   auto created = mpdrig::dds::Domain::Create(
       domain, dds_config.empty() ? mpdrig::dds::LoopbackConfig() : dds_config);
   if (!created.ok()) return Fail(created.status());
-  auto participant = mpdrig::dds::CreateParticipant(domain);
-  if (!participant.ok()) return Fail(participant.status());
-  auto topic =
-      mpdrig::dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc, "mpdrig_sensors");
+  // With --security the rig's topics are in its partition (make-class's permissions name it).
+  auto scope = mpdrig::dds::CreateClientScope(domain, security, rig_id);
+  if (!scope.ok()) return Fail(scope.status());
+  auto topic = mpdrig::dds::CreateTopic(scope->participant.handle(), &mpdrig_RigSensors_desc,
+                                        "mpdrig_sensors");
   if (!topic.ok()) return Fail(topic.status());
   // Keep all: a recording should not drop samples the rig sent.
-  auto reader = mpdrig::dds::Reader<mpdrig_RigSensors>::Create(
-      participant->handle(), topic->handle(), mpdrig::dds::SensorQos(true));
+  auto reader = mpdrig::dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), topic->handle(),
+                                                               mpdrig::dds::SensorQos(true));
   if (!reader.ok()) return Fail(reader.status());
 
   std::ofstream file;

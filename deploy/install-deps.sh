@@ -15,6 +15,9 @@ packages=(
   libceres-dev           # `mpdrig fit`: bounded nonlinear least squares and covariance
   # headless browser for the test that renders the comparison report (tests/service/report_test)
   chromium
+  # DDS Security for a class (deploy/security/make-class): the CA, identities, signed
+  # governance and permissions; tshark for the test that reads the wire (tests/security)
+  openssl tshark
 )
 
 missing=()

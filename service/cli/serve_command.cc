@@ -1,4 +1,5 @@
 // mpdrig serve: the virtual rig as a DDS service (service/rig/rig_service.h).
+#include <algorithm>
 #include <chrono>
 #include <csignal>
 #include <cstdint>
@@ -28,6 +29,9 @@ struct ServeArgs {
   std::string clock = "realtime";
   int domain = 0;
   std::string dds_config;  // XML or a file; default: loopback only
+  std::string security;    // DDS Security identity directory (make-class's OUT/service)
+  std::uint32_t private_rigs = 0;
+  std::size_t max_rigs = 0;  // 0: from the sensor rate (kRigSamplesPerSecond)
   double duration_s = 0.0;
   double choke_deg = 31.0;
   double pump_lpm = 0.0;
@@ -110,6 +114,37 @@ int RunServe(const ServeArgs& args) {
       serve.dds_config = args.dds_config;  // inline XML
     }
   }
+  if (!args.security.empty()) {
+    auto security = dds::LoadSecurityDirectory(args.security);
+    if (!security.ok()) return Fail(name, security.status().Within("--security"));
+    serve.security = std::move(security).value();
+  }
+  if (args.private_rigs > 0) {
+    if (args.security.empty()) {
+      return Fail(name, Status::Error("--private-rigs needs --security (a student asks for "
+                                      "private rigs in their own rig's partition)"));
+    }
+    serve.private_rigs = args.private_rigs;
+    // Measured (README, rigs on one machine): 120 rigs at 100 Hz with the observer took about
+    // 20 % of one core; the default keeps a service below that many rig samples per second.
+    constexpr double kRigSamplesPerSecond = 12000.0;
+    serve.max_rigs =
+        args.max_rigs > 0
+            ? args.max_rigs
+            : std::max<std::size_t>(args.rigs.size(),
+                                    static_cast<std::size_t>(kRigSamplesPerSecond / args.rate_hz));
+    // A private rig starts as the others did: the same model, initial commands, heave, noise.
+    serve.make_rig =
+        [params = *params, options = *options, rate = args.rate_hz,
+         initial = service::InitialCommands{args.choke_deg, args.pump_lpm, args.outlet_barg},
+         sensors, heave,
+         heaved = args.heave_amp_m != 0.0](const std::string& id) -> Result<service::RigHost> {
+      auto rig = service::RigHost::Create(id, params, options, rate, initial, {}, sensors);
+      if (!rig.ok()) return rig.status();
+      if (heaved) MPDRIG_RETURN_IF_ERROR(rig->SetPiston(heave));
+      return rig;
+    };
+  }
   auto service = service::RigService::Create(std::move(rigs), serve);
   if (!service.ok()) return Fail(name, service.status());
 
@@ -123,9 +158,13 @@ int RunServe(const ServeArgs& args) {
       "  topics: mpdrig_sensors, mpdrig_estimate, mpdrig_pressure_profile, mpdrig_status (out); "
       "mpdrig_choke_command, "
       "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
-      "mpdrig_step_request (in)\n  sensor noise: %s\n  stop with Ctrl-C\n",
+      "mpdrig_step_request (in)\n  sensor noise: %s\n  security: %s\n  stop with Ctrl-C\n",
       ids.c_str(), args.domain, args.dds_config.empty() ? "loopback only" : "configured network",
-      args.clock.c_str(), args.rate_hz, (*service)->rigs().front().DescribeSensorNoise().c_str());
+      args.clock.c_str(), args.rate_hz, (*service)->rigs().front().DescribeSensorNoise().c_str(),
+      args.security.empty() ? "none (any participant on the domain may command any rig)"
+                            : ("DDS Security with " + serve.security->dir +
+                               "; each rig's topics in partition rig.<rig id>")
+                                  .c_str());
   const auto started = std::chrono::steady_clock::now();
   const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
@@ -182,6 +221,20 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   command->add_option("--dds-config", args->dds_config,
                       "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
+  command->add_option(
+      "--security", args->security,
+      "DDS Security: the service's identity directory of a class (deploy/security/make-class "
+      "OUT ...: OUT/service). Authenticated, access-controlled and encrypted; each rig's topics "
+      "in partition rig.<rig id>, so a student's permissions name the rigs they may command and "
+      "read. Refuses to start if the directory is not a valid identity, saying why");
+  command->add_option(
+      "--private-rigs", args->private_rigs,
+      "with --security: a student may ask (mpdrig_rig_request, in their rig's partition) for up "
+      "to this many private rigs NAME.1 .. NAME.N, made while the service runs (0: none)");
+  command->add_option("--max-rigs", args->max_rigs,
+                      "with --private-rigs: the most rigs the service runs in all (default: "
+                      "12000 / --rate-hz, about 20 % of one core as measured; at least the "
+                      "--rig count)");
   command
       ->add_option("--duration", args->duration_s,
                    "stop after this much rig time [s] (realtime/fast; 0: run until Ctrl-C)")

@@ -106,7 +106,7 @@ Result<Entity> CreateParticipant(dds_domainid_t domain);
 Result<Entity> CreateTopic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
                            const std::string& name);
 
-// Typed writer for an idlc-generated struct T.
+// Typed writer for an idlc-generated struct T. `participant` may also be a publisher.
 template <typename T>
 class Writer {
  public:
@@ -125,14 +125,18 @@ class Writer {
   Entity entity_;
 };
 
-// Typed reader with a waitset on "data available".
+// Typed reader with a waitset on "data available". `participant` may also be a subscriber.
 template <typename T>
 class Reader {
  public:
   static Result<Reader> Create(dds_entity_t participant, dds_entity_t topic, const Qos& qos) {
     Entity reader(dds_create_reader(participant, topic, qos.get(), nullptr));
     if (reader.handle() < 0) return Check(reader.handle(), "dds_create_reader");
-    Entity waitset(dds_create_waitset(participant));
+    // `participant` may be a subscriber (a partition of its own): the waitset needs the
+    // participant.
+    const dds_entity_t owner = dds_get_participant(reader.handle());
+    if (owner < 0) return Check(owner, "dds_get_participant");
+    Entity waitset(dds_create_waitset(owner));
     if (waitset.handle() < 0) return Check(waitset.handle(), "dds_create_waitset");
     const dds_entity_t condition = dds_create_readcondition(reader.handle(), DDS_ANY_STATE);
     if (condition < 0) return Check(condition, "dds_create_readcondition");

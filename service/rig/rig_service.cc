@@ -66,15 +66,150 @@ struct RigService::Impl {
   dds::Entity participant;
   dds::Entity sensors_topic, choke_topic, piston_topic, pump_topic, outlet_topic, step_topic,
       status_topic, estimate_topic, profile_topic;
-  std::optional<dds::Writer<mpdrig_RigSensors>> sensors;
-  std::optional<dds::Writer<mpdrig_RigEstimate>> estimate;
-  std::optional<dds::Writer<mpdrig_PressureProfile>> profile;
-  std::optional<dds::Writer<mpdrig_RigStatus>> status;
-  std::optional<dds::Reader<mpdrig_ChokeCommand>> choke;
-  std::optional<dds::Reader<mpdrig_PistonCommand>> piston;
-  std::optional<dds::Reader<mpdrig_PumpCommand>> pump;
-  std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
-  std::optional<dds::Reader<mpdrig_StepRequest>> steps;
+  dds::Entity request_topic;  // private rigs (security)
+  // The service's writers and readers: one set for every rig in the default partition, or, with
+  // security, one set per rig in the rig's partition (permissions name partitions, not keys).
+  struct Endpoints {
+    int rig = -1;  // the rig whose partition this is; -1: every rig (the default partition)
+    dds::Entity publisher, subscriber;  // with security: in the rig's partition
+    std::optional<dds::Writer<mpdrig_RigSensors>> sensors;
+    std::optional<dds::Writer<mpdrig_RigEstimate>> estimate;
+    std::optional<dds::Writer<mpdrig_PressureProfile>> profile;
+    std::optional<dds::Writer<mpdrig_RigStatus>> status;
+    std::optional<dds::Reader<mpdrig_ChokeCommand>> choke;
+    std::optional<dds::Reader<mpdrig_PistonCommand>> piston;
+    std::optional<dds::Reader<mpdrig_PumpCommand>> pump;
+    std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
+    std::optional<dds::Reader<mpdrig_StepRequest>> steps;
+    std::optional<dds::Reader<mpdrig_RigRequest>> requests;  // private rigs (security)
+  };
+  std::vector<std::unique_ptr<Endpoints>> endpoints;
+  dds::Entity step_waitset;  // every set's step requests (lockstep)
+
+  Status CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool keep_all, Endpoints* set);
+
+  Endpoints& EndpointsOf(std::size_t rig_index) {
+    return endpoints.front()->rig < 0 ? *endpoints.front() : *endpoints[rig_index];
+  }
+  // One set of endpoints: every rig's in the default partition (rig < 0), or with security rig
+  // `rig`'s in its partition. Its step (and rig) requests wake the lockstep loop.
+  Status AddEndpoints(int rig) {
+    const dds_entity_t p = participant.handle();
+    auto set = std::make_unique<Endpoints>();
+    set->rig = rig;
+    dds_entity_t pub = p;
+    dds_entity_t sub = p;
+    if (rig >= 0) {
+      const std::string partition = dds::RigPartition(rigs[static_cast<std::size_t>(rig)].rig_id());
+      auto publisher = dds::CreatePublisher(p, partition);
+      if (!publisher.ok()) return publisher.status();
+      set->publisher = std::move(publisher).value();
+      auto subscriber = dds::CreateSubscriber(p, partition);
+      if (!subscriber.ok()) return subscriber.status();
+      set->subscriber = std::move(subscriber).value();
+      pub = set->publisher.handle();
+      sub = set->subscriber.handle();
+    }
+    MPDRIG_RETURN_IF_ERROR(
+        CreateEndpoints(pub, sub, options.clock == ClockMode::kLockstep, set.get()));
+    std::vector<dds_entity_t> wake = {set->steps->handle()};
+    if (options.private_rigs > 0) {
+      dds::Qos qos;  // requests are not state: reliable, keep all, volatile
+      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+      auto requests = dds::Reader<mpdrig_RigRequest>::Create(sub, request_topic.handle(), qos);
+      if (!requests.ok()) return requests.status();
+      set->requests.emplace(std::move(requests).value());
+      wake.push_back(set->requests->handle());
+    }
+    for (dds_entity_t reader : wake) {
+      const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+      if (condition < 0) return dds::Check(condition, "dds_create_readcondition");
+      MPDRIG_RETURN_IF_ERROR(dds::Check(dds_waitset_attach(step_waitset.handle(), condition, 0),
+                                        "dds_waitset_attach"));
+    }
+    endpoints.push_back(std::move(set));
+    return Status::Ok();
+  }
+
+  // Private rigs students asked for (security): "<student>.1" .. "<student>.N" within the
+  // limits; each in its own partition, which only that student's permissions name.
+  Status TakeRigRequests() {
+    if (options.private_rigs == 0) return Status::Ok();
+    std::vector<std::pair<std::size_t, std::uint32_t>> asked;  // requesting rig, how many
+    for (std::size_t i = 0; i < endpoints.size(); ++i) {
+      Endpoints& set = *endpoints[i];
+      auto taken =
+          set.requests->TakeEach([&](const mpdrig_RigRequest& r, const dds_sample_info_t& info) {
+            if (!FromItsPartition(set, kRigRequestTopic, r.rig_id, set.requests->handle(),
+                                  info.publication_handle))
+              return;
+            asked.push_back({static_cast<std::size_t>(set.rig), r.private_rigs});
+          });
+      if (!taken.ok()) return taken.status();
+    }
+    for (auto [index, count] : asked) {
+      const std::string student = rigs[index].rig_id();
+      if (student.find('.') != std::string::npos) {
+        (void)rigs[index].Refuse(std::string(kRigRequestTopic) + " refused: " + student +
+                                 " is a private rig itself");
+        MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+        continue;
+      }
+      if (count > options.private_rigs) {
+        (void)rigs[index].Refuse(std::string(kRigRequestTopic) + " for " + std::to_string(count) +
+                                 " private rigs refused beyond " +
+                                 std::to_string(options.private_rigs) +
+                                 ": this service allows that many per student (--private-rigs)");
+        count = options.private_rigs;
+      }
+      for (std::uint32_t k = 1; k <= count; ++k) {
+        const std::string id = student + "." + std::to_string(k);
+        if (Find(id.c_str()) != nullptr) continue;
+        if (options.max_rigs > 0 && rigs.size() >= options.max_rigs) {
+          (void)rigs[index].Refuse("private rig " + id +
+                                   " refused: this service runs its limit of " +
+                                   std::to_string(options.max_rigs) + " rigs (--max-rigs)");
+          break;
+        }
+        auto rig = options.make_rig(id);
+        if (!rig.ok()) {
+          (void)rigs[index].Refuse("private rig " + id + ": " + rig.status().message());
+          break;
+        }
+        rigs.push_back(std::move(rig).value());
+        observers.emplace_back();
+        observer_failed.push_back(false);
+        last_step_request.push_back(0);
+        MPDRIG_RETURN_IF_ERROR(AddEndpoints(static_cast<int>(rigs.size() - 1)));
+        rigs.back().NoteEvent("private rig of " + student + ", made on its request");
+        rigs[index].NoteEvent("private rig " + id + " runs");
+        MPDRIG_RETURN_IF_ERROR(PublishStatus(rigs.size() - 1));
+      }
+      MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+    }
+    return Status::Ok();
+  }
+
+  // With security, a command arrives in its writer's partition, which its permissions allow:
+  // one for another rig (a student's command to a classmate's rig) is refused, with its writer.
+  bool FromItsPartition(const Endpoints& set, const char* topic, const char* rig_id,
+                        dds_entity_t reader, dds_instance_handle_t publication) {
+    if (set.rig < 0 || rigs[static_cast<std::size_t>(set.rig)].rig_id() == rig_id) return true;
+    RigHost& own = rigs[static_cast<std::size_t>(set.rig)];
+    const std::string reason =
+        std::string(topic) + " for rig " + ReportedId(rig_id) + " refused: it came in rig '" +
+        own.rig_id() + "''s partition " + dds::RigPartition(own.rig_id()) + " (" +
+        DescribeWriter(reader, publication) + "); a client commands only its partition's rig";
+    (void)own.Refuse(reason);
+    if (RigHost* target = Find(rig_id)) (void)target->Refuse(reason);
+    return false;
+  }
+  // An instance whose writers are gone matters only in its own rig's partition.
+  static bool OwnInstance(const Endpoints& set, const std::vector<RigHost>& rigs,
+                          const char* rig_id) {
+    return set.rig < 0 || rigs[static_cast<std::size_t>(set.rig)].rig_id() == rig_id;
+  }
 
   // Who commands each rig's actuators: "choke" -> "strength 20, writer 1a2b...", per rig index.
   std::vector<std::map<std::string, std::string>> owners;
@@ -130,6 +265,14 @@ struct RigService::Impl {
 
   // Applies every pending command. Refusals are recorded by the rigs themselves.
   Status TakeCommands() {
+    for (auto& set : endpoints) MPDRIG_RETURN_IF_ERROR(TakeCommands(*set));
+    return Status::Ok();
+  }
+  Status TakeCommands(Endpoints& endpoints_set) {
+    auto& choke = endpoints_set.choke;
+    auto& pump = endpoints_set.pump;
+    auto& outlet = endpoints_set.outlet;
+    auto& piston = endpoints_set.piston;
     auto apply = [this](const char* topic, const char* rig_id, const auto& set) {
       RigHost* rig = Find(rig_id);
       if (rig == nullptr) {
@@ -139,7 +282,8 @@ struct RigService::Impl {
       (void)set(*rig);  // a refusal is counted and kept by the rig
     };
     // No choke controller left for a rig: the configured safe opening, or keep the last one.
-    auto choke_lost = [this](const mpdrig_ChokeCommand& c) {
+    auto choke_lost = [this, &endpoints_set](const mpdrig_ChokeCommand& c) {
+      if (!OwnInstance(endpoints_set, rigs, c.rig_id)) return;
       NoteNoOwner(c.rig_id, "choke");
       RigHost* rig = Find(c.rig_id);
       if (rig == nullptr) return;
@@ -152,6 +296,9 @@ struct RigService::Impl {
     };
     auto taken = choke->TakeEach(
         [&](const mpdrig_ChokeCommand& c, const dds_sample_info_t& info) {
+          if (!FromItsPartition(endpoints_set, kChokeCommandTopic, c.rig_id, choke->handle(),
+                                info.publication_handle))
+            return;
           NoteOwner(c.rig_id, "choke", choke->handle(), info);
           apply(kChokeCommandTopic, c.rig_id,
                 [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
@@ -159,18 +306,25 @@ struct RigService::Impl {
         choke_lost);
     if (!taken.ok()) return taken.status();
     taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
+      if (!FromItsPartition(endpoints_set, kPumpCommandTopic, c.rig_id, pump->handle(),
+                            info.publication_handle))
+        return;
       NoteOwner(c.rig_id, "pump", pump->handle(), info);
       apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
     });
     if (!taken.ok()) return taken.status();
     taken = outlet->TakeEach([&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
+      if (!FromItsPartition(endpoints_set, kOutletCommandTopic, c.rig_id, outlet->handle(),
+                            info.publication_handle))
+        return;
       NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
       apply(kOutletCommandTopic, c.rig_id,
             [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
     });
     if (!taken.ok()) return taken.status();
     // No piston controller left: the heave generator stops where it is.
-    auto piston_lost = [this](const mpdrig_PistonCommand& c) {
+    auto piston_lost = [this, &endpoints_set](const mpdrig_PistonCommand& c) {
+      if (!OwnInstance(endpoints_set, rigs, c.rig_id)) return;
       NoteNoOwner(c.rig_id, "piston");
       RigHost* rig = Find(c.rig_id);
       if (rig == nullptr) return;
@@ -179,6 +333,9 @@ struct RigService::Impl {
     };
     taken = piston->TakeEach(
         [&](const mpdrig_PistonCommand& c, const dds_sample_info_t& info) {
+          if (!FromItsPartition(endpoints_set, kPistonCommandTopic, c.rig_id, piston->handle(),
+                                info.publication_handle))
+            return;
           NoteOwner(c.rig_id, "piston", piston->handle(), info);
           apply(kPistonCommandTopic, c.rig_id,
                 [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
@@ -196,12 +353,13 @@ struct RigService::Impl {
     }
     const std::uint64_t counter = rig.counters().samples - 1;
     const double atmosphere = rig.params().atmospheric_pressure_pa;
-    MPDRIG_RETURN_IF_ERROR(sensors->Write(ToWire(rig.rig_id(), counter, *sample, atmosphere)));
-
     const std::size_t index = static_cast<std::size_t>(&rig - rigs.data());
+    Endpoints& out = EndpointsOf(index);
+    MPDRIG_RETURN_IF_ERROR(out.sensors->Write(ToWire(rig.rig_id(), counter, *sample, atmosphere)));
+
     RigObserver* observer = Observe(index, *sample);
     if (observer != nullptr && counter % estimate_every == 0) {
-      MPDRIG_RETURN_IF_ERROR(estimate->Write(
+      MPDRIG_RETURN_IF_ERROR(out.estimate->Write(
           ToWire(rig.rig_id(), counter, sample->time_s, observer->Estimate(), atmosphere)));
     }
     if (profile_every > 0 && counter % profile_every == 0) {
@@ -209,7 +367,7 @@ struct RigService::Impl {
       if (observer != nullptr) {
         for (double x : rig.pressure_positions_m()) estimated.push_back(observer->PressureAtPa(x));
       }
-      MPDRIG_RETURN_IF_ERROR(profile->Write(
+      MPDRIG_RETURN_IF_ERROR(out.profile->Write(
           ToWire(rig.rig_id(), counter, sample->time_s, rig.pressure_positions_m(),
                  sample->pressure_at_positions_pa, estimated, atmosphere, &profile_buffers)));
     }
@@ -300,7 +458,7 @@ struct RigService::Impl {
     wire.actuator_owners._release = false;
     const std::string sensor_noise = rig.DescribeSensorNoise();
     wire.sensor_noise = const_cast<char*>(sensor_noise.c_str());
-    return status->Write(wire);
+    return EndpointsOf(index).status->Write(wire);
   }
 
   Status PublishAllStatus() {
@@ -317,6 +475,7 @@ struct RigService::Impl {
     while (!stop.load()) {
       if (options.duration_s > 0.0 && rigs.front().time_s() >= options.duration_s - 0.5 * period)
         break;
+      MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
       MPDRIG_RETURN_IF_ERROR(TakeCommands());
       for (RigHost& rig : rigs) MPDRIG_RETURN_IF_ERROR(TickAndPublish(rig));
       if (rigs.front().time_s() >= next_status_s) {
@@ -361,15 +520,29 @@ struct RigService::Impl {
     };
     while (!stop.load()) {
       if (!busy()) {
-        auto ready = steps->Wait(DDS_MSECS(50));
-        if (!ready.ok()) return ready.status();
-        if (!*ready) continue;
+        const dds_return_t ready =
+            dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
+        if (ready < 0) return dds::Check(ready, "dds_waitset_wait");
+        if (ready == 0) continue;
       }
+      MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
+      queues.resize(rigs.size());
       std::vector<std::pair<std::string, Pending>> requests;
-      auto taken = steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t&) {
-        requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
-      });
-      if (!taken.ok()) return taken.status();
+      bool refused = false;  // a request from another rig's partition (security)
+      for (auto& set : endpoints) {
+        auto& steps = set->steps;
+        auto taken =
+            steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
+              if (!FromItsPartition(*set, kStepRequestTopic, r.rig_id, steps->handle(),
+                                    info.publication_handle)) {
+                refused = true;
+                return;
+              }
+              requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
+            });
+        if (!taken.ok()) return taken.status();
+      }
+      if (refused) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
       for (auto& [rig_id, request] : requests) {
         RigHost* rig = Find(rig_id.c_str());
         if (rig == nullptr) {
@@ -402,6 +575,50 @@ struct RigService::Impl {
     return Status::Ok();
   }
 };
+
+Status RigService::Impl::CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool keep_all,
+                                         Endpoints* set) {
+  auto sensors =
+      dds::Writer<mpdrig_RigSensors>::Create(pub, sensors_topic.handle(), dds::SensorQos(keep_all));
+  if (!sensors.ok()) return sensors.status();
+  set->sensors.emplace(std::move(sensors).value());
+  // Estimates and profiles are sensor-like streams: the same QoS, for the same reasons.
+  auto estimate = dds::Writer<mpdrig_RigEstimate>::Create(pub, estimate_topic.handle(),
+                                                          dds::SensorQos(keep_all));
+  if (!estimate.ok()) return estimate.status();
+  set->estimate.emplace(std::move(estimate).value());
+  auto profile = dds::Writer<mpdrig_PressureProfile>::Create(pub, profile_topic.handle(),
+                                                             dds::SensorQos(keep_all));
+  if (!profile.ok()) return profile.status();
+  set->profile.emplace(std::move(profile).value());
+  auto status = dds::Writer<mpdrig_RigStatus>::Create(pub, status_topic.handle(), dds::StatusQos());
+  if (!status.ok()) return status.status();
+  set->status.emplace(std::move(status).value());
+
+  auto choke =
+      dds::Reader<mpdrig_ChokeCommand>::Create(sub, choke_topic.handle(), dds::CommandQos());
+  if (!choke.ok()) return choke.status();
+  set->choke.emplace(std::move(choke).value());
+  auto piston =
+      dds::Reader<mpdrig_PistonCommand>::Create(sub, piston_topic.handle(), dds::CommandQos());
+  if (!piston.ok()) return piston.status();
+  set->piston.emplace(std::move(piston).value());
+  auto pump = dds::Reader<mpdrig_PumpCommand>::Create(sub, pump_topic.handle(), dds::CommandQos());
+  if (!pump.ok()) return pump.status();
+  set->pump.emplace(std::move(pump).value());
+  auto outlet =
+      dds::Reader<mpdrig_OutletCommand>::Create(sub, outlet_topic.handle(), dds::CommandQos());
+  if (!outlet.ok()) return outlet.status();
+  set->outlet.emplace(std::move(outlet).value());
+  // Step requests are not state: reliable, keep all, volatile.
+  dds::Qos step_qos;
+  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto steps = dds::Reader<mpdrig_StepRequest>::Create(sub, step_topic.handle(), step_qos);
+  if (!steps.ok()) return steps.status();
+  set->steps.emplace(std::move(steps).value());
+  return Status::Ok();
+}
 
 Status ServeOptions::Validate(double sensor_rate_hz) const {
   auto out_of_range = [sensor_rate_hz](const char* what, double value, const char* zero) {
@@ -449,6 +666,13 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   impl->observer_failed.assign(impl->rigs.size(), false);
   const double rate_hz = 1.0 / impl->rigs.front().sensor_period_s();
   MPDRIG_RETURN_IF_ERROR(options.Validate(rate_hz));
+  if (options.security) {
+    for (const RigHost& rig : impl->rigs)
+      MPDRIG_RETURN_IF_ERROR(dds::CheckSecureRigId(rig.rig_id()));
+  }
+  if (options.private_rigs > 0 && (!options.security || !options.make_rig)) {
+    return Status::Error("private rigs need security (a student asks in their own partition)");
+  }
   // Every k-th sample: the nearest whole divisor of the sensor rate (at least every sample).
   if (options.estimate_hz > 0.0) {
     impl->estimate_every = std::max<std::uint64_t>(
@@ -462,7 +686,8 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   auto domain = dds::Domain::Create(options.domain, options.dds_config);
   if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
   impl->domain.emplace(std::move(domain).value());
-  auto participant = dds::CreateParticipant(options.domain);
+  auto participant =
+      dds::CreateParticipant(options.domain, options.security ? &*options.security : nullptr);
   if (!participant.ok()) return participant.status();
   impl->participant = std::move(participant).value();
   const dds_entity_t p = impl->participant.handle();
@@ -487,48 +712,20 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   MPDRIG_RETURN_IF_ERROR(
       topic(&mpdrig_PressureProfile_desc, kPressureProfileTopic, &impl->profile_topic));
 
-  auto sensors = dds::Writer<mpdrig_RigSensors>::Create(
-      p, impl->sensors_topic.handle(), dds::SensorQos(options.clock == ClockMode::kLockstep));
-  if (!sensors.ok()) return sensors.status();
-  impl->sensors.emplace(std::move(sensors).value());
-  // Estimates and profiles are sensor-like streams: the same QoS, for the same reasons.
-  const bool keep_all = options.clock == ClockMode::kLockstep;
-  auto estimate = dds::Writer<mpdrig_RigEstimate>::Create(p, impl->estimate_topic.handle(),
-                                                          dds::SensorQos(keep_all));
-  if (!estimate.ok()) return estimate.status();
-  impl->estimate.emplace(std::move(estimate).value());
-  auto profile = dds::Writer<mpdrig_PressureProfile>::Create(p, impl->profile_topic.handle(),
-                                                             dds::SensorQos(keep_all));
-  if (!profile.ok()) return profile.status();
-  impl->profile.emplace(std::move(profile).value());
-  auto status =
-      dds::Writer<mpdrig_RigStatus>::Create(p, impl->status_topic.handle(), dds::StatusQos());
-  if (!status.ok()) return status.status();
-  impl->status.emplace(std::move(status).value());
-
-  auto choke =
-      dds::Reader<mpdrig_ChokeCommand>::Create(p, impl->choke_topic.handle(), dds::CommandQos());
-  if (!choke.ok()) return choke.status();
-  impl->choke.emplace(std::move(choke).value());
-  auto piston =
-      dds::Reader<mpdrig_PistonCommand>::Create(p, impl->piston_topic.handle(), dds::CommandQos());
-  if (!piston.ok()) return piston.status();
-  impl->piston.emplace(std::move(piston).value());
-  auto pump =
-      dds::Reader<mpdrig_PumpCommand>::Create(p, impl->pump_topic.handle(), dds::CommandQos());
-  if (!pump.ok()) return pump.status();
-  impl->pump.emplace(std::move(pump).value());
-  auto outlet =
-      dds::Reader<mpdrig_OutletCommand>::Create(p, impl->outlet_topic.handle(), dds::CommandQos());
-  if (!outlet.ok()) return outlet.status();
-  impl->outlet.emplace(std::move(outlet).value());
-  // Step requests are not state: reliable, keep all, volatile.
-  dds::Qos step_qos;
-  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto steps = dds::Reader<mpdrig_StepRequest>::Create(p, impl->step_topic.handle(), step_qos);
-  if (!steps.ok()) return steps.status();
-  impl->steps.emplace(std::move(steps).value());
+  // One set of endpoints in the default partition, or with security one per rig in its own.
+  if (options.private_rigs > 0) {
+    MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigRequest_desc, kRigRequestTopic, &impl->request_topic));
+  }
+  dds::Entity step_waitset(dds_create_waitset(p));
+  if (step_waitset.handle() < 0) return dds::Check(step_waitset.handle(), "dds_create_waitset");
+  impl->step_waitset = std::move(step_waitset);
+  if (options.security) {
+    for (std::size_t i = 0; i < impl->rigs.size(); ++i) {
+      MPDRIG_RETURN_IF_ERROR(impl->AddEndpoints(static_cast<int>(i)));
+    }
+  } else {
+    MPDRIG_RETURN_IF_ERROR(impl->AddEndpoints(-1));
+  }
 
   return std::unique_ptr<RigService>(new RigService(std::move(impl)));
 }

@@ -28,13 +28,16 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "model/common/status.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 #include "service/rig/rig_host.h"
 #include "service/rig/rig_observer.h"
 
@@ -60,6 +63,20 @@ struct ServeOptions {
   // Pressure along the pipe (RigHost::pressure_positions_m) on mpdrig_pressure_profile at this
   // rate of rig time (0: off); with the observer's estimate at the same positions.
   double profile_hz = 10.0;
+  // DDS Security (service/dds/security.h; the identity of make-class's OUT/service): then each
+  // rig's topics live in partition "rig.<rig id>", so permissions decide who commands and reads
+  // which rig, and a command that arrives in one rig's partition for another rig is refused
+  // (counted, reported on both rigs' status with its writer). Unset: no security, the default
+  // partition, as before.
+  std::optional<dds::SecurityFiles> security;
+  // Private rigs, with security only: a student's RigRequest (sent in their rig's partition)
+  // makes the service run "<student>.1" .. "<student>.N", N up to `private_rigs` per student
+  // (0: requests are not taken), each made by `make_rig`, while the service runs fewer than
+  // `max_rigs` rigs in all (0: no limit). A request beyond a limit is refused on the student's
+  // status.
+  std::uint32_t private_rigs = 0;
+  std::size_t max_rigs = 0;
+  std::function<Result<RigHost>(const std::string& rig_id)> make_rig;
 
   Status Validate(double sensor_rate_hz) const;
 };

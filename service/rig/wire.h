@@ -22,6 +22,7 @@ inline constexpr const char* kStepRequestTopic = "mpdrig_step_request";
 inline constexpr const char* kStatusTopic = "mpdrig_status";
 inline constexpr const char* kEstimateTopic = "mpdrig_estimate";
 inline constexpr const char* kPressureProfileTopic = "mpdrig_pressure_profile";
+inline constexpr const char* kRigRequestTopic = "mpdrig_rig_request";
 
 // A sample in the lab's units (bar gauge with the rig's atmospheric pressure, L/min, deg, m).
 // `rig_id` must outlive the returned struct (the wire struct points at it).

@@ -1,0 +1,125 @@
+// rig_request: a student asks a class's service for private rigs (issue 12), NAME.1 .. NAME.N,
+// which only they may command and read (make-class's permissions: rig.NAME.*). The service must
+// run with `--security ... --private-rigs N`; it makes the rigs within its limits and says on the
+// student's rig's status what it made or refused. A client: it speaks only the DDS topics.
+//
+//   rig_request --security class/alice --rig alice --private-rigs 1
+//   bhp_controller --security class/alice --rig alice.1      # then use it like any rig
+#include <chrono>
+#include <cstdio>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "mpdrig.h"
+#include "service/dds/dds.h"
+#include "service/dds/security.h"
+
+namespace {
+
+int Fail(const std::string& what) {
+  std::fprintf(stderr, "rig_request: %s\n", what.c_str());
+  return 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("rig_request - ask a class's mpdrig service for private rigs NAME.1 .. NAME.N");
+  std::string security;
+  std::string rig_id;
+  unsigned private_rigs = 1;
+  int domain = 0;
+  std::string dds_config;
+  double timeout_s = 20.0;
+  app.add_option("--security", security,
+                 "this student's identity directory (deploy/security/make-class OUT NAME: "
+                 "OUT/NAME)")
+      ->required();
+  app.add_option("--rig", rig_id, "this student's rig id (NAME)")->required();
+  app.add_option("--private-rigs", private_rigs, "how many private rigs in all (NAME.1 ..)")
+      ->check(CLI::Range(1u, 9999u))
+      ->capture_default_str();
+  app.add_option("--domain", domain, "DDS domain id")
+      ->check(CLI::Range(0, 230))
+      ->capture_default_str();
+  app.add_option("--dds-config", dds_config, "Cyclone DDS XML (default: loopback only)");
+  app.add_option("--timeout", timeout_s, "give up after this long [s]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  using namespace mpdrig;
+  auto created =
+      dds::Domain::Create(domain, dds_config.empty() ? dds::LoopbackConfig() : dds_config);
+  if (!created.ok()) return Fail(created.status().message());
+  auto scope = dds::CreateClientScope(domain, security, rig_id);
+  if (!scope.ok()) return Fail(scope.status().message());
+  const dds_entity_t p = scope->participant.handle();
+  auto request_topic = dds::CreateTopic(p, &mpdrig_RigRequest_desc, "mpdrig_rig_request");
+  auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, "mpdrig_status");
+  if (!request_topic.ok()) return Fail(request_topic.status().message());
+  if (!status_topic.ok()) return Fail(status_topic.status().message());
+  dds::Qos qos;  // requests are not state: reliable, keep all, volatile (as the service reads)
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto writer = dds::Writer<mpdrig_RigRequest>::Create(scope->pub(), request_topic->handle(), qos);
+  if (!writer.ok()) return Fail(writer.status().message());
+  auto status =
+      dds::Reader<mpdrig_RigStatus>::Create(scope->sub(), status_topic->handle(), dds::StatusQos());
+  if (!status.ok()) return Fail(status.status().message());
+
+  // The service's request reader must have matched (authentication, secure discovery) first.
+  using Clock = std::chrono::steady_clock;
+  const auto until = Clock::now() + std::chrono::duration<double>(timeout_s);
+  dds_publication_matched_status_t matched{};
+  while (matched.current_count == 0) {
+    const dds_return_t rc = dds_get_publication_matched_status(writer->handle(), &matched);
+    if (rc < 0) return Fail(dds::Check(rc, "dds_get_publication_matched_status").message());
+    if (matched.current_count > 0) break;
+    if (Clock::now() > until) {
+      return Fail("no service takes private-rig requests for rig '" + rig_id + "' on domain " +
+                  std::to_string(domain) + " (mpdrig serve --security ... --private-rigs N)");
+    }
+    dds_sleepfor(DDS_MSECS(50));
+  }
+  // What the rig's status says before the request, so only news is reported.
+  std::string before_event, before_rejection;
+  (void)status->Wait(DDS_MSECS(500));
+  (void)status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+    if (rig_id != s.rig_id) return;
+    before_rejection = s.last_rejection;
+    for (std::uint32_t i = 0; i < s.warnings._length; ++i) before_event = s.warnings._buffer[i];
+  });
+  mpdrig_RigRequest request{rig_id.data(), private_rigs};
+  const Status written = writer->Write(request);
+  if (!written.ok()) return Fail(written.message());
+  if (dds_wait_for_acks(writer->handle(), DDS_SECS(5)) != DDS_RETCODE_OK) {
+    return Fail("the service did not acknowledge the request");
+  }
+  // The service publishes the rig's status after a request: report what changed (exit code 1
+  // if it refused some or all of it).
+  bool refused = false;
+  while (Clock::now() < until) {
+    auto ready = status->Wait(DDS_MSECS(200));
+    if (!ready.ok()) return Fail(ready.status().message());
+    bool answered = false;
+    (void)status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+      if (rig_id != s.rig_id) return;
+      if (s.last_rejection != before_rejection) {
+        std::printf("refused: %s\n", s.last_rejection);
+        refused = answered = true;
+      }
+      for (std::uint32_t i = 0; i < s.warnings._length; ++i) {
+        if (before_event != s.warnings._buffer[i]) {
+          std::printf("%s\n", s.warnings._buffer[i]);
+          answered = true;
+        }
+      }
+    });
+    if (answered) return refused ? 1 : 0;
+  }
+  std::printf("sent; the service reported nothing new (the rigs may run already: %s.1 ..)\n",
+              rig_id.c_str());
+  return 0;
+}
