@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Builds the container images from a host build of mpdrig (deploy/build.sh):
+#   localhost/mpdrig-base:bookworm   Debian 12 from debootstrap (base-image.sh; cached)
+#   localhost/mpdrig:latest          runtime: mpdrig, bhp_controller, rig_echo + their libraries
+# and prints the runtime image's size. podman caches the library layer, so a rebuild after a
+# code change copies the binaries only.
+#
+#   BUILD_DIR=build deploy/container/build-images.sh
+#
+# Why the binaries come from the host build rather than a build container: the host is Debian 12
+# like the image (same library versions, checked by `ldd` in the image), CI builds them anyway, and
+# a second compile in a container would double CI's longest step on 2 cores (8-15 min) and pull
+# ~1.1 GB of -dev packages (libsundials-dev alone brings MPI and PETSc) into an image.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+build="${BUILD_DIR:-$root/build}"
+[[ "$build" = /* ]] || build="$root/$build"
+source "$here/podman-env.sh"
+
+exes=("$build/service/mpdrig" "$build/clients/bhp_controller" "$build/clients/rig_echo")
+for exe in "${exes[@]}"; do
+  [[ -x "$exe" ]] || { echo "build-images.sh: $exe not built (deploy/build.sh)" >&2; exit 1; }
+done
+
+"$here/base-image.sh"
+
+context="$(mktemp -d /var/tmp/mpdrig-context.XXXXXX)"
+trap 'rm -rf "$context"' EXIT
+mkdir -p "$context/bin" "$context/etc"
+cp "${exes[@]}" "$context/bin/"
+strip --strip-unneeded "$context"/bin/* 2>/dev/null || true
+"$here/runtime-packages.sh" "${exes[@]}" >"$context/runtime-packages.txt"
+cp "$root"/deploy/cyclonedds-*.xml "$context/etc/" 2>/dev/null || true
+
+podman build --quiet --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
+  -f "$here/Containerfile.runtime" -t "$MPDRIG_RUNTIME_IMAGE" "$context" >/dev/null
+size="$(podman image inspect --format '{{.Size}}' "$MPDRIG_RUNTIME_IMAGE")"
+echo "build-images.sh: $MPDRIG_RUNTIME_IMAGE $(awk -v s="$size" 'BEGIN { printf "%.0f MB", s / 1e6 }') ($(wc -l <"$context/runtime-packages.txt") library packages)"
