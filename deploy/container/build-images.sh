@@ -6,6 +6,8 @@
 # code change copies the binaries only.
 #
 #   BUILD_DIR=build deploy/container/build-images.sh
+#   BUILD_DIR=build deploy/container/build-images.sh --dev   # and localhost/mpdrig-dev:latest,
+#       the build image for students' compiled controllers (Containerfile.dev)
 #
 # Why the binaries come from the host build rather than a build container: the host is Debian 12
 # like the image (same library versions, checked by `ldd` in the image), CI builds them anyway, and
@@ -17,6 +19,8 @@ root="$(cd "$here/../.." && pwd)"
 build="${BUILD_DIR:-$root/build}"
 [[ "$build" = /* ]] || build="$root/$build"
 source "$here/podman-env.sh"
+dev=0
+[[ "${1:-}" == --dev ]] && dev=1
 
 exes=("$build/service/mpdrig" "$build/clients/bhp_controller" "$build/clients/rig_echo")
 for exe in "${exes[@]}"; do
@@ -37,3 +41,18 @@ podman build --quiet --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
   -f "$here/Containerfile.runtime" -t "$MPDRIG_RUNTIME_IMAGE" "$context" >/dev/null
 size="$(podman image inspect --format '{{.Size}}' "$MPDRIG_RUNTIME_IMAGE")"
 echo "build-images.sh: $MPDRIG_RUNTIME_IMAGE $(awk -v s="$size" 'BEGIN { printf "%.0f MB", s / 1e6 }') ($(wc -l <"$context/runtime-packages.txt") library packages)"
+
+if [[ $dev == 1 ]]; then
+  # The client SDK: what clients/ build from in the repository, at the same relative paths.
+  sdk="$context/dev/sdk"
+  mkdir -p "$sdk/idl" "$sdk/service/dds" "$sdk/model/common" "$sdk/clients"
+  cp "$here/sdk/CMakeLists.txt" "$here/sdk/mpdrig-build-controller" "$sdk/"
+  cp "$root/idl/mpdrig.idl" "$sdk/idl/"
+  cp "$root/service/dds/dds.h" "$root/service/dds/dds.cc" "$sdk/service/dds/"
+  cp "$root/model/common/status.h" "$sdk/model/common/"
+  cp "$root"/clients/*.cc "$sdk/clients/"
+  podman build --quiet --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
+    -f "$here/Containerfile.dev" -t "$MPDRIG_DEV_IMAGE" "$context/dev" >/dev/null
+  size="$(podman image inspect --format '{{.Size}}' "$MPDRIG_DEV_IMAGE")"
+  echo "build-images.sh: $MPDRIG_DEV_IMAGE $(awk -v s="$size" 'BEGIN { printf "%.0f MB", s / 1e6 }')"
+fi
