@@ -40,7 +40,7 @@ trap cleanup EXIT
 
 podman image exists "$MPDRIG_RUNTIME_IMAGE" ||
   { echo "grade.sh: no $MPDRIG_RUNTIME_IMAGE: run deploy/container/build-images.sh" >&2; exit 2; }
-podman build --quiet -t "$CONTROLLER_IMAGE" "$student_dir" >/dev/null ||
+podman_build_replacing "$CONTROLLER_IMAGE" "$student_dir" ||
   { echo "FAIL: the controller directory does not build ($student_dir)"; exit 1; }
 
 # docker-compose (v1) speaks the Docker API: podman serves it on a socket of our own.

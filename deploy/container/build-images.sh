@@ -37,8 +37,8 @@ strip --strip-unneeded "$context"/bin/* 2>/dev/null || true
 "$here/runtime-packages.sh" "${exes[@]}" >"$context/runtime-packages.txt"
 cp "$root"/deploy/cyclonedds-*.xml "$context/etc/" 2>/dev/null || true
 
-podman build --quiet --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
-  -f "$here/Containerfile.runtime" -t "$MPDRIG_RUNTIME_IMAGE" "$context" >/dev/null
+podman_build_replacing "$MPDRIG_RUNTIME_IMAGE" --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
+  -f "$here/Containerfile.runtime" "$context"
 size="$(podman image inspect --format '{{.Size}}' "$MPDRIG_RUNTIME_IMAGE")"
 echo "build-images.sh: $MPDRIG_RUNTIME_IMAGE $(awk -v s="$size" 'BEGIN { printf "%.0f MB", s / 1e6 }') ($(wc -l <"$context/runtime-packages.txt") library packages)"
 
@@ -51,8 +51,8 @@ if [[ $dev == 1 ]]; then
   cp "$root/service/dds/dds.h" "$root/service/dds/dds.cc" "$sdk/service/dds/"
   cp "$root/model/common/status.h" "$sdk/model/common/"
   cp "$root"/clients/*.cc "$sdk/clients/"
-  podman build --quiet --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
-    -f "$here/Containerfile.dev" -t "$MPDRIG_DEV_IMAGE" "$context/dev" >/dev/null
+  podman_build_replacing "$MPDRIG_DEV_IMAGE" --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
+    -f "$here/Containerfile.dev" "$context/dev"
   size="$(podman image inspect --format '{{.Size}}' "$MPDRIG_DEV_IMAGE")"
   echo "build-images.sh: $MPDRIG_DEV_IMAGE $(awk -v s="$size" 'BEGIN { printf "%.0f MB", s / 1e6 }')"
 fi
