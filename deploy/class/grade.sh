@@ -20,7 +20,6 @@ name="$(basename "$(cd "$student_dir" && pwd)" | tr -c 'a-z0-9\n' '-')"
 work="$(mktemp -d /tmp/mpdrig-grade.XXXXXX)"
 out="${2:-$work/out}"
 mkdir -p "$out"
-chmod 1777 "$out"  # the recorder runs as the image's unprivileged user
 export OUT_DIR="$(cd "$out" && pwd)"
 export CONTROLLER_IMAGE="localhost/mpdrig-student-$name:latest"
 project="mpdrig-grade-$name-$$"
@@ -54,6 +53,7 @@ compose=(docker-compose -p "$project" -f "$here/docker-compose.yml")
 "${compose[@]}" up -d >"$work/compose.log" 2>&1 || { cat "$work/compose.log" >&2; exit 2; }
 # The recorder ends when it has DURATION_S of both rigs (or 30 s after the last sample).
 recorder="$("${compose[@]}" ps -q recorder)"
+[[ -n "$recorder" ]] || { echo "grade.sh: the recorder did not start" >&2; cat "$work/compose.log" >&2; exit 2; }
 podman wait "$recorder" >/dev/null || true
 "${compose[@]}" logs --no-color >"$OUT_DIR/compose-logs.txt" 2>&1 || true
 "${compose[@]}" down -t 2 >/dev/null 2>&1 || true
