@@ -48,11 +48,17 @@ if [[ $dev == 1 ]]; then
   mkdir -p "$sdk/idl" "$sdk/service/dds" "$sdk/model/common" "$sdk/clients"
   cp "$here/sdk/CMakeLists.txt" "$here/sdk/mpdrig-build-controller" "$sdk/"
   cp "$root/idl/mpdrig.idl" "$sdk/idl/"
-  cp "$root/service/dds/dds.h" "$root/service/dds/dds.cc" "$sdk/service/dds/"
+  cp "$root"/service/dds/*.h "$root"/service/dds/*.cc "$sdk/service/dds/"
   cp "$root/model/common/status.h" "$sdk/model/common/"
   cp "$root"/clients/*.cc "$sdk/clients/"
+  old_dev="$(podman image inspect --format '{{.Id}}' "$MPDRIG_DEV_IMAGE" 2>/dev/null || true)"
   podman_build_replacing "$MPDRIG_DEV_IMAGE" --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
     -f "$here/Containerfile.dev" "$context/dev"
+  if [[ -n "$old_dev" && "$old_dev" != "$(podman image inspect --format '{{.Id}}' "$MPDRIG_DEV_IMAGE")" ]]; then
+    # cached build stages of student controllers grew on the old image and keep its layers
+    podman image prune -f --filter label=org.mpdrig.image=dev >/dev/null 2>&1 || true
+    podman rmi "$old_dev" >/dev/null 2>&1 || true
+  fi
   size="$(podman image inspect --format '{{.Size}}' "$MPDRIG_DEV_IMAGE")"
   echo "build-images.sh: $MPDRIG_DEV_IMAGE $(awk -v s="$size" 'BEGIN { printf "%.0f MB", s / 1e6 }')"
 fi
