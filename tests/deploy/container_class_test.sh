@@ -19,12 +19,7 @@ source "$src/deploy/container/podman-env.sh"
 podman info >/dev/null 2>&1 || skip "podman cannot start: $(podman info 2>&1 | tail -1)"
 
 start=$SECONDS
-if ! podman image exists "$MPDRIG_BASE_IMAGE"; then
-  # A base image needs the Debian mirror; a machine without it cannot build images.
-  mirror="$(awk '/^URIs:/ { print $2; exit }' /etc/apt/sources.list.d/debian.sources 2>/dev/null || true)"
-  host="$(sed -E 's|^[a-z]+://([^/:]+).*|\1|' <<<"${mirror:-http://deb.debian.org/debian}")"
-  getent hosts "$host" >/dev/null || skip "no base image and the Debian mirror $host does not resolve"
-fi
+need_base_image_or_mirror
 BUILD_DIR="$build" "$src/deploy/container/build-images.sh" --dev
 echo "images ready in $((SECONDS - start)) s"
 # podman itself may be installed yet unable to run containers here (cgroups, ulimits).

@@ -77,6 +77,8 @@ if [[ "$mode" != containers ]]; then
   cat "$work/fixed.out" "$work/controlled.out" >"$work/summary"
 else
   source "$src/deploy/container/podman-env.sh"
+  podman info >/dev/null 2>&1 || skip "podman cannot start: $(podman info 2>&1 | tail -1)"
+  need_base_image_or_mirror
   BUILD_DIR="$build" "$src/deploy/container/build-images.sh"
   err="$(podman run --rm --network none "$MPDRIG_RUNTIME_IMAGE" true 2>&1)" ||
     skip "podman cannot run a container on this machine: $err"
