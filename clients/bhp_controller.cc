@@ -167,9 +167,13 @@ struct Swing {
 int Run(const Args& args) {
   using namespace mpdrig;
   // In lockstep every step waits for the choke command's acknowledgement: fast heartbeats (added
-  // to an inline fragment; a complete <CycloneDDS> document should set them itself).
+  // to an inline fragment, or layered over a configuration file as Cyclone's comma-separated
+  // list "file:///lab.xml,<Internal>..."; a complete inline <CycloneDDS> document should set
+  // them itself).
   std::string config = args.dds_config.empty() ? dds::LoopbackConfig() : args.dds_config;
-  if (args.lockstep && config.find("CycloneDDS") == std::string::npos) {
+  if (args.lockstep && config.rfind("<", 0) != 0) {
+    config += "," + dds::FastAckConfig();
+  } else if (args.lockstep && config.find("CycloneDDS") == std::string::npos) {
     config += dds::FastAckConfig();
   }
   auto domain = dds::Domain::Create(args.domain, config);

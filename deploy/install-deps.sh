@@ -1,7 +1,18 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages mpdrig needs, if any are missing. Non-interactive and
 # idempotent: a second run installs nothing and does not touch the network.
+#
+#   deploy/install-deps.sh                # build, run and test mpdrig
+#   deploy/install-deps.sh --containers   # and the container tools (deploy/container, deploy/class)
 set -euo pipefail
+
+containers=0
+for arg in "$@"; do
+  case "$arg" in
+    --containers) containers=1 ;;
+    *) echo "deploy/install-deps.sh: unknown option $arg (--containers)" >&2; exit 2 ;;
+  esac
+done
 
 packages=(
   g++ cmake ninja-build
@@ -19,6 +30,14 @@ packages=(
   # governance and permissions; tshark for the test that reads the wire (tests/security)
   openssl tshark
 )
+if [ "$containers" -eq 1 ]; then
+  packages+=(
+    podman runc          # images and containers; runc because crun 1.8 fails on these machines' cgroups
+    debootstrap          # the Debian 12 base image, without an image registry
+    docker-compose       # compose files (v1) against podman's API socket
+    iproute2             # network namespaces and veth pairs for the several-hosts test
+  )
+fi
 
 missing=()
 for package in "${packages[@]}"; do
