@@ -689,7 +689,24 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
       auto parameter = DefaultFitParameter(value.key);
       if (parameter.ok()) parameters.push_back(*parameter);
     }
-    auto polished = FitParameters(fit_log, candidate.fitted, parameters, fit_options);
+    // On the levels that suit this candidate (estimated at its fit), as the baseline was refitted
+    // on its own: an effect that moves the mean pressure (gas entrainment's slower waves at low
+    // pressure) is otherwise fitted on levels bent to the baseline's misfit.
+    FitOptions own_options = fit_options;
+    MeasuredLog own_fit_log = fit_log;
+    if (replay.reconstruct_inputs && replay.estimate_levels &&
+        !measured.reconstruction.levels.applied()) {
+      auto levels = EstimateInputLevels(measured, candidate.fitted, simulation, options.replay);
+      diagnosis.replays += 3;
+      if (levels.ok() && levels->applied()) {
+        MeasuredLog own_log = measured;
+        own_options.replay = options.replay;
+        ApplyInputLevels(*levels, &own_log);
+        ApplyInputLevels(*levels, &own_options.replay);
+        own_fit_log = MeasuredLogUntil(own_log, diagnosis.fit_end_s);
+      }
+    }
+    auto polished = FitParameters(own_fit_log, candidate.fitted, parameters, own_options);
     if (!polished.ok()) continue;
     diagnosis.replays += polished->replays;
     if (!(polished->error_after < candidate.fit_error)) continue;
