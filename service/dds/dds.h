@@ -7,6 +7,7 @@
 #include <dds/dds.h>
 
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -148,15 +149,17 @@ class Reader {
     return n > 0;
   }
 
-  // Takes every available sample and hands each valid one to `visit` while it is on loan (its
-  // strings belong to DDS and are gone after the call). When an instance has lost all its
-  // writers (deleted, or their liveliness lease ran out), `on_no_writers` gets the sample, whose
-  // key fields identify the instance. Returns how many valid samples were visited.
+  // Takes every available sample (at most `max_samples`, the rest stay for the next call) and
+  // hands each valid one to `visit` while it is on loan (its strings belong to DDS and are gone
+  // after the call). When an instance has lost all its writers (deleted, or their liveliness
+  // lease ran out), `on_no_writers` gets the sample, whose key fields identify the instance.
+  // Returns how many valid samples were visited.
   Result<int> TakeEach(const std::function<void(const T&, const dds_sample_info_t&)>& visit,
-                       const std::function<void(const T&)>& on_no_writers = {}) const {
+                       const std::function<void(const T&)>& on_no_writers = {},
+                       int max_samples = std::numeric_limits<int>::max()) const {
     constexpr int kBatch = 16;
     int visited = 0;
-    for (;;) {
+    for (int taken = 0; taken < max_samples;) {
       void* samples[kBatch] = {nullptr};
       dds_sample_info_t infos[kBatch];
       const dds_return_t n = dds_take(entity_.handle(), samples, infos, kBatch, kBatch);
@@ -174,7 +177,9 @@ class Reader {
             Check(dds_return_loan(entity_.handle(), samples, n), "dds_return_loan"));
       }
       if (n < kBatch) return visited;
+      taken += n;
     }
+    return visited;
   }
 
   dds_entity_t handle() const { return entity_.handle(); }
