@@ -171,8 +171,8 @@ int main(int argc, char** argv) {
   if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
   std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", written, rig_id.c_str());
   if (lost) {
-    std::fprintf(stderr, "rig_echo: rig %s lost: %s; the recording ends there\n",
-                 rig_id.c_str(), lost->c_str());
+    std::fprintf(stderr, "rig_echo: rig %s lost: %s; the recording ends there\n", rig_id.c_str(),
+                 lost->c_str());
     return mpdrig::clients::kExitRigLost;
   }
   if (timing) {

@@ -103,8 +103,7 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
     }
   }
   const pb::FieldDescriptor* effect_field = descriptor->FindFieldByName("effect");
-  const pb::FieldDescriptor* param_field =
-      config::Effect::descriptor()->FindFieldByName("param");
+  const pb::FieldDescriptor* param_field = config::Effect::descriptor()->FindFieldByName("param");
   auto position_of = [&source_name](const pb::TextFormat::ParseLocation& where) {
     return source_name + ":" + std::to_string(where.line + 1) + ":" +
            std::to_string(where.column + 1);
@@ -123,8 +122,7 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
       return Status::Error(position + ": unknown effect '" + effect.name() +
                            "'; valid effects: " + EffectNames());
     }
-    const pb::TextFormat::ParseInfoTree* effect_tree =
-        locations.GetTreeForNested(effect_field, i);
+    const pb::TextFormat::ParseInfoTree* effect_tree = locations.GetTreeForNested(effect_field, i);
     EffectSetting setting{effect.name(), {}};
     for (int j = 0; j < effect.param_size(); ++j) {
       const config::EffectParam& param = effect.param(j);

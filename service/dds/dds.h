@@ -143,14 +143,13 @@ Status SendOnce(dds_entity_t participant, dds_entity_t topic, const T& sample,
                                "dds_set_status_mask"));
   Entity waitset(dds_create_waitset(participant));
   if (waitset.handle() < 0) return Check(waitset.handle(), "dds_create_waitset");
-  MPDRIG_RETURN_IF_ERROR(Check(dds_waitset_attach(waitset.handle(), writer.handle(), 0),
-                               "dds_waitset_attach"));
+  MPDRIG_RETURN_IF_ERROR(
+      Check(dds_waitset_attach(waitset.handle(), writer.handle(), 0), "dds_waitset_attach"));
   const dds_time_t deadline = dds_time() + timeout;
   for (;;) {
     dds_publication_matched_status_t matched{};
-    MPDRIG_RETURN_IF_ERROR(
-        Check(dds_get_publication_matched_status(writer.handle(), &matched),
-              "dds_get_publication_matched_status"));
+    MPDRIG_RETURN_IF_ERROR(Check(dds_get_publication_matched_status(writer.handle(), &matched),
+                                 "dds_get_publication_matched_status"));
     if (matched.current_count > 0) break;
     const dds_return_t woke = dds_waitset_wait_until(waitset.handle(), nullptr, 0, deadline);
     if (woke < 0) return Check(woke, "dds_waitset_wait_until");

@@ -231,16 +231,20 @@ struct RigService::Impl {
         },
         choke_lost, kMaxCommandsPerTick);
     if (!taken.ok()) return taken.status();
-    taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
-      NoteOwner(c.rig_id, "pump", pump->handle(), info);
-      apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
-    }, {}, kMaxCommandsPerTick);
+    taken = pump->TakeEach(
+        [&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
+          NoteOwner(c.rig_id, "pump", pump->handle(), info);
+          apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
+        },
+        {}, kMaxCommandsPerTick);
     if (!taken.ok()) return taken.status();
-    taken = outlet->TakeEach([&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
-      NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
-      apply(kOutletCommandTopic, c.rig_id,
-            [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
-    }, {}, kMaxCommandsPerTick);
+    taken = outlet->TakeEach(
+        [&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
+          NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
+          apply(kOutletCommandTopic, c.rig_id,
+                [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
+        },
+        {}, kMaxCommandsPerTick);
     if (!taken.ok()) return taken.status();
     // No piston controller left: the heave generator stops where it is.
     auto piston_lost = [this](const mpdrig_PistonCommand& c) {
@@ -567,14 +571,14 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
     return dds::Check(dds_set_topic_filter_and_arg(on.handle(), accept, impl->gates.back().get()),
                       "dds_set_topic_filter_and_arg");
   };
-  MPDRIG_RETURN_IF_ERROR(gate(kChokeCommandTopic,
-                              &UnknownRigGate::Accept<mpdrig_ChokeCommand>, impl->choke_topic));
-  MPDRIG_RETURN_IF_ERROR(gate(kPistonCommandTopic,
-                              &UnknownRigGate::Accept<mpdrig_PistonCommand>, impl->piston_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kChokeCommandTopic, &UnknownRigGate::Accept<mpdrig_ChokeCommand>, impl->choke_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kPistonCommandTopic, &UnknownRigGate::Accept<mpdrig_PistonCommand>, impl->piston_topic));
   MPDRIG_RETURN_IF_ERROR(
       gate(kPumpCommandTopic, &UnknownRigGate::Accept<mpdrig_PumpCommand>, impl->pump_topic));
-  MPDRIG_RETURN_IF_ERROR(gate(kOutletCommandTopic,
-                              &UnknownRigGate::Accept<mpdrig_OutletCommand>, impl->outlet_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kOutletCommandTopic, &UnknownRigGate::Accept<mpdrig_OutletCommand>, impl->outlet_topic));
   MPDRIG_RETURN_IF_ERROR(
       gate(kStepRequestTopic, &UnknownRigGate::Accept<mpdrig_StepRequest>, impl->step_topic));
   MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigStatus_desc, kStatusTopic, &impl->status_topic));

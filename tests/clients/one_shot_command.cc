@@ -16,7 +16,8 @@
 
 int main(int argc, char** argv) {
   if (argc != 5) {
-    std::fprintf(stderr, "usage: one_shot_command DOMAIN RIG_ID FLOW_LPM careless|acked|reliable\n");
+    std::fprintf(stderr,
+                 "usage: one_shot_command DOMAIN RIG_ID FLOW_LPM careless|acked|reliable\n");
     return 2;
   }
   const int domain = std::atoi(argv[1]);
@@ -32,9 +33,8 @@ int main(int argc, char** argv) {
   if (!topic.ok()) return 1;
   mpdrig_PumpCommand command{rig_id.data(), flow_lpm};
   if (mode == "reliable") {
-    const Status sent =
-        dds::SendOnce<mpdrig_PumpCommand>(participant->handle(), topic->handle(), command,
-                                          DDS_SECS(10));
+    const Status sent = dds::SendOnce<mpdrig_PumpCommand>(participant->handle(), topic->handle(),
+                                                          command, DDS_SECS(10));
     if (!sent.ok()) std::fprintf(stderr, "one_shot_command: %s\n", sent.message().c_str());
     return sent.ok() ? 0 : 1;
   }

@@ -45,9 +45,9 @@ TEST(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   const int claimed = testing::ClaimTestDomain();
   ASSERT_GT(claimed, 0);
   const std::string domain = std::to_string(claimed);
-  const pid_t serve = Spawn({MPDRIG_EXE, "serve", "--clock", "realtime", "--rate-hz", "100",
-                             "--rig", "rig-1", "--domain", domain, "--sensor-noise", "none",
-                             "--no-observer", "--pump-lpm", "0"});
+  const pid_t serve =
+      Spawn({MPDRIG_EXE, "serve", "--clock", "realtime", "--rate-hz", "100", "--rig", "rig-1",
+             "--domain", domain, "--sensor-noise", "none", "--no-observer", "--pump-lpm", "0"});
   ASSERT_GT(serve, 0);
   struct Reaper {
     pid_t pid;
@@ -61,8 +61,8 @@ TEST(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   ASSERT_TRUE(dds_domain.ok());
   auto participant = dds::CreateParticipant(claimed);
   ASSERT_TRUE(participant.ok());
-  auto topic = dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc,
-                                service::kSensorsTopic);
+  auto topic =
+      dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc, service::kSensorsTopic);
   ASSERT_TRUE(topic.ok());
   auto sensors = dds::Reader<mpdrig_RigSensors>::Create(participant->handle(), topic->handle(),
                                                         dds::SensorQos());
@@ -87,8 +87,8 @@ TEST(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   std::string missed;
   for (int i = 0; i < kCommands; ++i) {
     const double flow_lpm = 1.5 + i;  // each distinct from the one before
-    const pid_t sender = Spawn({ONE_SHOT_COMMAND_EXE, domain, "rig-1", std::to_string(flow_lpm),
-                                "reliable"});
+    const pid_t sender =
+        Spawn({ONE_SHOT_COMMAND_EXE, domain, "rig-1", std::to_string(flow_lpm), "reliable"});
     ASSERT_GT(sender, 0);
     int status = 0;
     ASSERT_EQ(::waitpid(sender, &status, 0), sender);

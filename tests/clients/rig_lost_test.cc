@@ -78,17 +78,16 @@ class RigLost : public ::testing::Test {
     dir_ = testing::TestTempDir("rig_lost_");
   }
   std::vector<std::string> Serve() const {
-    return {MPDRIG_EXE, "serve",      "--clock",         "realtime", "--rate-hz",
-            "100",      "--domain",   domain_,           "--rig",    "rig-1",
-            "--pump-lpm", "5",        "--choke-deg",     "31"};
+    return {MPDRIG_EXE, "serve", "--clock", "realtime",   "--rate-hz", "100",         "--domain",
+            domain_,    "--rig", "rig-1",   "--pump-lpm", "5",         "--choke-deg", "31"};
   }
   std::vector<std::string> Controller(const std::string& timeout_s) const {
     return {BHP_CONTROLLER_EXE, "--rig", "rig-1", "--domain", domain_, "--timeout", timeout_s};
   }
   std::vector<std::string> Echo(const std::string& timeout_s) const {
-    return {RIG_ECHO_EXE, "--rig",     "rig-1",     "--domain",
-            domain_,      "--timeout", timeout_s,   "--out",
-            (dir_ / "echo.csv").string()};
+    return {RIG_ECHO_EXE, "--rig", "rig-1",
+            "--domain",   domain_, "--timeout",
+            timeout_s,    "--out", (dir_ / "echo.csv").string()};
   }
   std::string Output(const char* name) const { return testing::ReadFile(dir_ / name); }
   // The recording up to the loss is a rig log the model reads, ending on a whole row.

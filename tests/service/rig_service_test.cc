@@ -660,9 +660,10 @@ std::uint64_t ResidentBytes(pid_t pid) {
 // every one is still refused and counted, and the service's memory does not grow with them.
 TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMemory) {
   const dds_domainid_t domain = TestDomain();
-  std::vector<std::string> args = {MPDRIG_EXE, "serve",   "--clock", "realtime",
-                                   "--rate-hz", "100",    "--rig",   "rig-1",
-                                   "--domain",  std::to_string(domain), "--no-observer"};
+  std::vector<std::string> args = {
+      MPDRIG_EXE,     "serve", "--clock", "realtime", "--rate-hz",
+      "100",          "--rig", "rig-1",   "--domain", std::to_string(domain),
+      "--no-observer"};
   std::vector<char*> argv;
   for (std::string& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);

@@ -39,7 +39,8 @@ TEST(RigConfigFuzz, MutatedConfigsParseToValidParamsOrFailNamingTheSource) {
     if (!parsed.ok()) {
       ASSERT_EQ(parsed.status().message().rfind("fuzz.pbtxt:", 0), 0u)
           << "seed " << seed << ", iteration " << i << ": " << parsed.status().message()
-          << "\ninput:\n" << text;
+          << "\ninput:\n"
+          << text;
       continue;
     }
     ++accepted;

@@ -32,8 +32,8 @@ std::vector<std::string> SeedLogs() {
   for (int i = 0; i < 12; ++i) {
     char row[400];
     std::snprintf(row, sizeof row,
-                  "%.3f,%.4f,31.0,20.1,5.0,5.1,-0.2,0.02,3.9%d,4.5,4.4,4.2,5.2,4.1,3.9\n",
-                  0.01 * i, 0.01 * std::sin(i), i % 10);
+                  "%.3f,%.4f,31.0,20.1,5.0,5.1,-0.2,0.02,3.9%d,4.5,4.4,4.2,5.2,4.1,3.9\n", 0.01 * i,
+                  0.01 * std::sin(i), i % 10);
     full += row;
   }
   full += "# a comment after the header\n0.2,0,31,,nan,5,0,0,3,4,4,4,5,4,3\n\n";
@@ -51,8 +51,8 @@ std::vector<std::string> SeedLogs() {
 std::string ReadAndCheck(const std::string& text) {
   static const std::regex kError(R"(^fuzz\.csv:[0-9]+:[0-9]+: .+)");
   const ReadOptions options;
-  auto reader = RigLogReader::FromStream(std::make_unique<std::istringstream>(text), "fuzz.csv",
-                                         options);
+  auto reader =
+      RigLogReader::FromStream(std::make_unique<std::istringstream>(text), "fuzz.csv", options);
   if (!reader.ok()) {
     const std::string message = reader.status().message();
     return std::regex_search(message, kError) ? "" : "error without a position: " + message;
@@ -105,14 +105,12 @@ TEST(RigLogFuzz, MutatedLogsAreReadOrRefusedWithAPosition) {
 // infinite) and a choke at -50 deg (replayed).
 TEST(RigLogFuzz, FormerlyHarmfulLogsAreRefusedAtTheirPosition) {
   const std::string header = "time_s,choke_position_deg,PT1_barg\n";
-  for (const std::string& rows : {std::string("0,31,4\n1e308,31,4\n"),
-                                  std::string("0,31,4\n1e-12,31,4\n"),
-                                  std::string("0,31,4\n0.01,31,1e308\n"),
-                                  std::string("0,31,4\n0.01,-50,4\n")}) {
+  for (const std::string& rows :
+       {std::string("0,31,4\n1e308,31,4\n"), std::string("0,31,4\n1e-12,31,4\n"),
+        std::string("0,31,4\n0.01,31,1e308\n"), std::string("0,31,4\n0.01,-50,4\n")}) {
     const std::string text = header + rows;
     EXPECT_EQ(ReadAndCheck(text), "") << text;
-    auto reader =
-        RigLogReader::FromStream(std::make_unique<std::istringstream>(text), "fuzz.csv");
+    auto reader = RigLogReader::FromStream(std::make_unique<std::istringstream>(text), "fuzz.csv");
     ASSERT_TRUE(reader.ok());
     std::vector<double> values;
     ASSERT_TRUE(reader->Next(&values).ok());
