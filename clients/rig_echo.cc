@@ -137,17 +137,7 @@ int main(int argc, char** argv) {
   mpdrig::clients::RigWatch watch(timeout_s);
   std::optional<std::string> lost;
   auto last_sample = std::chrono::steady_clock::now();
-  while (!g_stop && !lost && (max_samples == 0 || written < max_samples)) {
-    auto ready = reader->Wait(DDS_MSECS(100));
-    if (!ready.ok()) return Fail(ready.status());
-    const double idle_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
-    dds_subscription_matched_status_t matched{};
-    dds_get_subscription_matched_status(reader->handle(), &matched);
-    lost = watch.Check(idle_s, matched.current_count > 0);
-    if (lost) break;
-    if (!watch.seen() && timeout_s > 0.0 && idle_s >= timeout_s) break;  // no rig: exit 1
-    if (!*ready) continue;
+  auto take = [&]() -> mpdrig::Status {
     auto taken = reader->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
       if (rig_id != s.rig_id || lost) return;
       lost = watch.Sample(s.sample_counter, s.sim_time_s);
@@ -165,7 +155,31 @@ int main(int argc, char** argv) {
       previous_time = s.sim_time_s;
       ++written;
     });
-    if (!taken.ok()) return Fail(taken.status());
+    return taken.status();
+  };
+  while (!g_stop && !lost && (max_samples == 0 || written < max_samples)) {
+    auto ready = reader->Wait(DDS_MSECS(100));
+    if (!ready.ok()) return Fail(ready.status());
+    if (*ready) {
+      const mpdrig::Status taken = take();
+      if (!taken.ok()) return Fail(taken);
+    }
+    if (lost) break;
+    const double idle_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
+    dds_subscription_matched_status_t matched{};
+    dds_get_subscription_matched_status(reader->handle(), &matched);
+    lost = watch.Check(idle_s, matched.current_count > 0);
+    if (lost) {
+      // What the departed writer sent before it went is in the reader already: keep it.
+      const std::optional<std::string> why = lost;
+      lost.reset();
+      const mpdrig::Status taken = take();
+      if (!taken.ok()) return Fail(taken);
+      if (!lost) lost = why;
+      break;
+    }
+    if (!watch.seen() && timeout_s > 0.0 && idle_s >= timeout_s) break;  // no rig: exit 1
   }
   out->flush();
   if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
