@@ -85,8 +85,8 @@ std::optional<double> RigHost::piston_sine_hz() const {
   return std::nullopt;
 }
 
-Status RigHost::Refuse(const std::string& reason) {
-  ++counters_.rejected_commands;
+Status RigHost::Refuse(const std::string& reason, std::uint64_t count) {
+  counters_.rejected_commands += count;
   counters_.last_rejection = reason;
   return Status::Error(reason);
 }
