@@ -15,6 +15,8 @@ packages=(
   libceres-dev           # `mpdrig fit`: bounded nonlinear least squares and covariance
   # headless browser for the test that renders the comparison report (tests/service/report_test)
   chromium
+  # Python client module (clients/python): bindings, numpy arrays, its tests and the live plot
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )
 
 missing=()
