@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import sys
 import time
 
 import mpdrig
@@ -15,6 +16,7 @@ EXAMPLES = os.path.join(os.environ.get("MPDRIG_SOURCE_DIR", ""), "clients", "pyt
 def load_example(name: str):
     spec = importlib.util.spec_from_file_location(name, os.path.join(EXAMPLES, name + ".py"))
     module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # dataclasses look their module up there
     spec.loader.exec_module(module)
     return module
 
@@ -38,7 +40,9 @@ def test_python_controller_attenuates_the_heave_induced_bhp_oscillation(serve):
           f"estimate, Python) {controlled.amplitude_bar:.4f} bar, ratio {ratio:.1f}; means "
           f"{fixed.mean_barg:.4f} / {controlled.mean_barg:.4f} barg; "
           f"{time.monotonic() - started:.1f} s of wall time")
-    assert fixed.n == controlled.n == 2000  # the last 20 s at 100 Hz, every sample seen
+    # The last 20 s at 100 Hz, every sample seen (the window's first edge may fall either side
+    # of a sample time in floating point: one more or less).
+    assert abs(fixed.n - 2000) <= 1 and abs(controlled.n - 2000) <= 1
     assert fixed.amplitude_bar > 0.3, "the heave must move the BHP by tenths of a bar"
     # The C++ controller reaches about 20x; 5x, as its test asks, leaves room for tuning, not
     # for a controller that merely does no harm (PI alone: 0.97x).
