@@ -187,7 +187,8 @@ def main() -> int:
     except (mpdrig.RigError, TimeoutError) as error:
         print(f"bhp_controller.py: {error}", file=sys.stderr)
         return 1
-    mode = "fixed-choke" if args.open_loop else ("pi" if args.no_feedforward else "pi+ff")
+    mode = ("fixed-choke" if args.open_loop else "pi" if args.no_feedforward
+            else "pi+ff(estimate)" if args.use_estimate else "pi+ff")
     print(f"rig={args.rig} mode={mode} window_s={args.measure_last:g} samples={swing.n} "
           f"PT1_amplitude_bar={swing.amplitude_bar:.5f} PT1_mean_barg={swing.mean_barg:.5f}")
     return 0
