@@ -108,8 +108,9 @@ Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Inter
   if (options.domain < 0 || options.domain > 232) {
     return Status::Error("DDS domain " + std::to_string(options.domain) + " is not in 0..232");
   }
-  if (!(options.timeout_s > 0.0) || !std::isfinite(options.timeout_s)) {
-    return Status::Error("the timeout must be a positive number of seconds");
+  // At most a day: the timeout becomes DDS nanoseconds (int64) in places.
+  if (!(options.timeout_s > 0.0 && options.timeout_s <= 86400.0)) {
+    return Status::Error("the timeout must be a number of seconds in (0, 86400]");
   }
   std::unique_ptr<Rig> rig(new Rig(options));
   Dds& d = *rig->dds_;
