@@ -51,6 +51,9 @@ class Rig(_Rig):
     Commands: ``choke(deg)``, ``pump(lpm)``, ``outlet(barg)``, ``piston_hold()``,
     ``piston_position(m)``, ``piston_sine(amplitude_m, frequency_hz)``, ``piston_sweep(...)``.
     Lockstep: ``step(n)``. Leaving: ``close()``, or use ``with mpdrig.Rig(...) as rig:``.
+
+    A Rig is for one thread at a time (its calls wait without holding the GIL); several Rigs,
+    even of the same rig, may live in one process.
     """
 
     def sensors(self, fresh: bool = False) -> Sensors:
