@@ -29,8 +29,7 @@ std::shared_ptr<dds::Domain> SharedDomain(int id, const std::string& config, Sta
 }
 
 double WallSeconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 constexpr std::size_t kQueueLimit = 10000;
@@ -82,8 +81,8 @@ struct Rig::Dds {
   std::optional<dds::Reader<mpdrig_RigStatus>> status;
   std::optional<dds::Writer<mpdrig_StepRequest>> steps;
   std::array<dds::Entity, 4> command_writers;  // made on the first command of each kind
-  dds::Entity waitset;                          // every reader's data, for one wait
-  std::uint64_t status_received = 0;            // statuses taken so far
+  dds::Entity waitset;                         // every reader's data, for one wait
+  std::uint64_t status_received = 0;           // statuses taken so far
   // Deleting the participant deletes its children; the writers go first so that their instances
   // are unregistered while the readers still exist.
   ~Dds() {
@@ -159,12 +158,11 @@ Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Inter
   // The rig's status says it exists and which clock it runs: the sensor readers' history depends
   // on that (keep all in lockstep, where the client sets the pace and must see every step).
   rig->last_failure_ = Failure::kNone;
-  const Status found = rig->WaitFor([&] { return rig->rig_status_.has_value(); },
-                                    "no rig '" + options.rig_id + "' on DDS domain " +
-                                        std::to_string(options.domain) +
-                                        " (is `mpdrig serve --rig " + options.rig_id +
-                                        "` running there?)",
-                                    interrupt);
+  const Status found = rig->WaitFor(
+      [&] { return rig->rig_status_.has_value(); },
+      "no rig '" + options.rig_id + "' on DDS domain " + std::to_string(options.domain) +
+          " (is `mpdrig serve --rig " + options.rig_id + "` running there?)",
+      interrupt);
   if (!found.ok()) return found;
   rig->lockstep_ = rig->rig_status_->clock == "lockstep";
   rig->rejections_seen_ = rig->rig_status_->rejected_commands;
@@ -281,7 +279,8 @@ Status Rig::Drain() {
 
 Status Rig::WaitFor(const std::function<bool()>& done, const std::string& what,
                     const Interrupt& interrupt) {
-  if (!dds_) return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
+  if (!dds_)
+    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
   if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
   const double deadline = WallSeconds() + options_.timeout_s;
   for (;;) {
@@ -298,12 +297,12 @@ Status Rig::WaitFor(const std::function<bool()>& done, const std::string& what,
 }
 
 Result<Sensors> Rig::Latest(bool fresh, const Interrupt& interrupt) {
-  MPDRIG_RETURN_IF_ERROR(WaitFor(
-      [&] { return newest_.has_value() && !(fresh && newest_returned_); },
-      "no new sample from rig " + options_.rig_id + " within " +
-          std::to_string(options_.timeout_s) + " s" +
-          (lockstep_ ? " (a lockstep rig moves only when stepped: Step)" : ""),
-      interrupt));
+  MPDRIG_RETURN_IF_ERROR(
+      WaitFor([&] { return newest_.has_value() && !(fresh && newest_returned_); },
+              "no new sample from rig " + options_.rig_id + " within " +
+                  std::to_string(options_.timeout_s) + " s" +
+                  (lockstep_ ? " (a lockstep rig moves only when stepped: Step)" : ""),
+              interrupt));
   queue_.clear();
   newest_returned_ = true;
   return *newest_;
@@ -322,7 +321,8 @@ Result<Sensors> Rig::Next(const Interrupt& interrupt) {
 }
 
 Result<std::vector<Sensors>> Rig::TakeArrived() {
-  if (!dds_) return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
+  if (!dds_)
+    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
   if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
   MPDRIG_RETURN_IF_ERROR(Drain());
   std::vector<Sensors> out(queue_.begin(), queue_.end());
@@ -345,26 +345,26 @@ Result<Estimate> Rig::EstimateFor(std::optional<std::uint64_t> counter,
   };
   MPDRIG_RETURN_IF_ERROR(WaitFor(
       find,
-      counter ? "no estimate for sample " + std::to_string(*counter) + " of rig " +
-                    options_.rig_id + " (does the service run its observer? --no-observer, "
-                    "--estimate-hz)"
-              : "no estimate from rig " + options_.rig_id + " (is its observer off?)",
+      counter
+          ? "no estimate for sample " + std::to_string(*counter) + " of rig " + options_.rig_id +
+                " (does the service run its observer? --no-observer, "
+                "--estimate-hz)"
+          : "no estimate from rig " + options_.rig_id + " (is its observer off?)",
       interrupt));
   return *found;
 }
 
 Result<Profile> Rig::LatestProfile(const Interrupt& interrupt) {
-  MPDRIG_RETURN_IF_ERROR(WaitFor([&] { return profile_.has_value(); },
-                                 "no pressure profile from rig " + options_.rig_id +
-                                     " (serve --profile-hz 0 turns it off)",
-                                 interrupt));
+  MPDRIG_RETURN_IF_ERROR(WaitFor(
+      [&] { return profile_.has_value(); },
+      "no pressure profile from rig " + options_.rig_id + " (serve --profile-hz 0 turns it off)",
+      interrupt));
   return *profile_;
 }
 
 Result<RigStatus> Rig::LatestStatus(const Interrupt& interrupt) {
-  MPDRIG_RETURN_IF_ERROR(
-      WaitFor([&] { return rig_status_.has_value(); }, "no status from rig " + options_.rig_id,
-              interrupt));
+  MPDRIG_RETURN_IF_ERROR(WaitFor([&] { return rig_status_.has_value(); },
+                                 "no status from rig " + options_.rig_id, interrupt));
   return *rig_status_;
 }
 
@@ -379,7 +379,8 @@ Result<std::pair<std::uint64_t, std::string>> Rig::NewRejections(const Interrupt
 
 template <typename T>
 Status Rig::SendCommand(int topic_index, const T& sample, const Interrupt& interrupt) {
-  if (!dds_) return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
+  if (!dds_)
+    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
   if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
   Dds& d = *dds_;
   dds::Entity& writer = d.command_writers[topic_index];
@@ -430,10 +431,18 @@ Status Rig::Piston(const PistonCommand& command, const Interrupt& interrupt) {
   mpdrig_PistonCommand c{};
   c.rig_id = options_.rig_id.data();
   switch (command.mode) {
-    case PistonCommand::Mode::kHold: c.mode = mpdrig_PISTON_HOLD; break;
-    case PistonCommand::Mode::kPosition: c.mode = mpdrig_PISTON_POSITION; break;
-    case PistonCommand::Mode::kSine: c.mode = mpdrig_PISTON_SINE; break;
-    case PistonCommand::Mode::kSweep: c.mode = mpdrig_PISTON_SWEEP; break;
+    case PistonCommand::Mode::kHold:
+      c.mode = mpdrig_PISTON_HOLD;
+      break;
+    case PistonCommand::Mode::kPosition:
+      c.mode = mpdrig_PISTON_POSITION;
+      break;
+    case PistonCommand::Mode::kSine:
+      c.mode = mpdrig_PISTON_SINE;
+      break;
+    case PistonCommand::Mode::kSweep:
+      c.mode = mpdrig_PISTON_SWEEP;
+      break;
   }
   c.position_m = command.position_m;
   c.mean_m = command.mean_m;
@@ -452,15 +461,16 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
                                      "lockstep`) is stepped");
   }
   if (steps == 0) return Fail(Failure::kError, "steps must be at least 1");
-  if (!dds_) return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
+  if (!dds_)
+    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
   if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
   Dds& d = *dds_;
   // The service takes the commands when it starts a request: each must be acknowledged (in the
   // service's reader) before the request is sent.
   for (int i = 0; i < 4; ++i) {
     if (!unacknowledged_[i]) continue;
-    const dds_return_t acked = dds_wait_for_acks(d.command_writers[i].handle(),
-                                                 static_cast<dds_duration_t>(options_.timeout_s * 1e9));
+    const dds_return_t acked = dds_wait_for_acks(
+        d.command_writers[i].handle(), static_cast<dds_duration_t>(options_.timeout_s * 1e9));
     if (acked == DDS_RETCODE_TIMEOUT) {
       return Fail(Failure::kTimeout, std::string("no acknowledgement of the ") +
                                          kCommandTopicNames[i] + " within the timeout");
@@ -492,9 +502,9 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
       "step request of " + std::to_string(steps) + " steps not completed by rig " +
           options_.rig_id + " within " + std::to_string(options_.timeout_s) + " s",
       interrupt));
-  MPDRIG_RETURN_IF_ERROR(WaitFor(
-      [&] { return newest_.has_value() && newest_->time_s >= done_time_s - 1e-9; },
-      "the samples of a completed step did not arrive", interrupt));
+  MPDRIG_RETURN_IF_ERROR(
+      WaitFor([&] { return newest_.has_value() && newest_->time_s >= done_time_s - 1e-9; },
+              "the samples of a completed step did not arrive", interrupt));
   newest_returned_ = true;
   return *newest_;
 }

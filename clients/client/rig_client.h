@@ -46,8 +46,8 @@ struct RigOptions {
   // Cyclone DDS configuration: an XML fragment or a whole <CycloneDDS> document (empty: loopback
   // only). A fragment gets dds::FastAckConfig() appended, for lockstep acknowledgements.
   std::string dds_config;
-  int strength = 0;        // ownership strength of this client's commands
-  double timeout_s = 10.0; // waiting for the rig, a sample, an acknowledgement or a step
+  int strength = 0;         // ownership strength of this client's commands
+  double timeout_s = 10.0;  // waiting for the rig, a sample, an acknowledgement or a step
 };
 
 // One sample of every lab channel (mpdrig_sensors), in the wire's lab units.

@@ -29,10 +29,18 @@ PyObject* g_rig_lost = nullptr;
 // Raises the Python exception for a failed call of `rig` (with the GIL held).
 [[noreturn]] void Raise(const Rig* rig, Failure failure, const std::string& message) {
   switch (failure) {
-    case Failure::kTimeout: PyErr_SetString(PyExc_TimeoutError, message.c_str()); break;
-    case Failure::kLost: PyErr_SetString(g_rig_lost, message.c_str()); break;
-    case Failure::kInterrupted: PyErr_SetNone(PyExc_KeyboardInterrupt); break;
-    default: PyErr_SetString(g_rig_error, message.c_str()); break;
+    case Failure::kTimeout:
+      PyErr_SetString(PyExc_TimeoutError, message.c_str());
+      break;
+    case Failure::kLost:
+      PyErr_SetString(g_rig_lost, message.c_str());
+      break;
+    case Failure::kInterrupted:
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+      break;
+    default:
+      PyErr_SetString(g_rig_error, message.c_str());
+      break;
   }
   (void)rig;
   throw py::error_already_set();
@@ -90,7 +98,8 @@ py::dict AsRow(const mpdrig::client::Sensors& s) {
 
 PYBIND11_MODULE(_mpdrig, m) {
   m.doc() = "Binding of the mpdrig client library (clients/client/rig_client.h); use `mpdrig`.";
-  g_rig_error = PyErr_NewExceptionWithDoc("mpdrig.RigError",
+  g_rig_error =
+      PyErr_NewExceptionWithDoc("mpdrig.RigError",
                                 "A call to the rig failed: no such rig, a DDS error, a bad "
                                 "argument. The message says what and why.",
                                 PyExc_RuntimeError, nullptr);
@@ -105,11 +114,13 @@ PYBIND11_MODULE(_mpdrig, m) {
   m.attr("RigLost") = py::handle(g_rig_lost);
 
   using mpdrig::client::Sensors;
-  py::class_<Sensors> sensors(m, "Sensors",
-                      "One sample of every lab channel of the rig, in lab units: pressures in "
-                      "bar gauge (barg), flows in L/min (lpm), the choke in degrees (0 closed .. "
-                      "90 open), positions in metres, time in seconds of rig time.");
-  sensors.def_readonly("sample_counter", &Sensors::sample_counter,
+  py::class_<Sensors> sensors(
+      m, "Sensors",
+      "One sample of every lab channel of the rig, in lab units: pressures in "
+      "bar gauge (barg), flows in L/min (lpm), the choke in degrees (0 closed .. "
+      "90 open), positions in metres, time in seconds of rig time.");
+  sensors
+      .def_readonly("sample_counter", &Sensors::sample_counter,
                     "0, 1, 2, ... per rig, without gaps unless samples were dropped")
       .def_readonly("time_s", &Sensors::time_s, "the rig's own clock [s]")
       .def_readonly("piston_position_m", &Sensors::piston_position_m,
@@ -149,8 +160,8 @@ PYBIND11_MODULE(_mpdrig, m) {
     for (int i = 0; i < 10; ++i) {
       const std::string& name = texts.emplace_back("PT" + std::to_string(i + 1) + "_barg");
       const std::string& doc =
-          texts.emplace_back("pressure transmitter PT" + std::to_string(i + 1) + " at x = " +
-                             std::to_string(100 * i) + " m [barg]");
+          texts.emplace_back("pressure transmitter PT" + std::to_string(i + 1) +
+                             " at x = " + std::to_string(100 * i) + " m [barg]");
       sensors.def_property_readonly(
           name.c_str(), [i](const Sensors& s) { return s.PT_barg[i]; }, doc.c_str());
     }
@@ -186,11 +197,13 @@ PYBIND11_MODULE(_mpdrig, m) {
       });
 
   using mpdrig::client::Profile;
-  py::class_<Profile>(m, "Profile", "Pressure along the pipe at one sample, for plots of the waves.")
+  py::class_<Profile>(m, "Profile",
+                      "Pressure along the pipe at one sample, for plots of the waves.")
       .def_readonly("sample_counter", &Profile::sample_counter)
       .def_readonly("time_s", &Profile::time_s, "rig time [s]")
       .def_property_readonly(
-          "position_m", [](const Profile& p) { return Array(p.position_m.data(), p.position_m.size()); },
+          "position_m",
+          [](const Profile& p) { return Array(p.position_m.data(), p.position_m.size()); },
           "numpy array: positions [m] from the inlet (x = 0, bottom) to the choke (900 m)")
       .def_property_readonly(
           "pressure_barg",
@@ -240,9 +253,9 @@ PYBIND11_MODULE(_mpdrig, m) {
              if (!connected.ok()) {
                const std::string message = connected.status().message();
                Raise(nullptr,
-                     message == "interrupted"                ? Failure::kInterrupted
-                     : message.rfind("no rig '", 0) == 0     ? Failure::kTimeout
-                                                             : Failure::kError,
+                     message == "interrupted"            ? Failure::kInterrupted
+                     : message.rfind("no rig '", 0) == 0 ? Failure::kTimeout
+                                                         : Failure::kError,
                      message);
              }
              return std::move(connected).value();
@@ -257,23 +270,24 @@ PYBIND11_MODULE(_mpdrig, m) {
       .def_property_readonly("lost", [](const Rig& r) { return r.lost(); })
       .def_property_readonly("closed", &Rig::closed)
       .def("close", &Rig::Close)
-      .def("sensors",
-           [](Rig& r, bool fresh) {
-             return Blocking(r, [&](const Rig::Interrupt& i) { return r.Latest(fresh, i); });
-           },
-           py::arg("fresh") = false)
+      .def(
+          "sensors",
+          [](Rig& r, bool fresh) {
+            return Blocking(r, [&](const Rig::Interrupt& i) { return r.Latest(fresh, i); });
+          },
+          py::arg("fresh") = false)
       .def("next_sensors",
            [](Rig& r) { return Blocking(r, [&](const Rig::Interrupt& i) { return r.Next(i); }); })
       .def("pending",
            [](Rig& r) {
              return Blocking(r, [&](const Rig::Interrupt&) { return r.TakeArrived(); });
            })
-      .def("estimate",
-           [](Rig& r, std::optional<std::uint64_t> counter) {
-             return Blocking(r,
-                             [&](const Rig::Interrupt& i) { return r.EstimateFor(counter, i); });
-           },
-           py::arg("sample_counter") = py::none())
+      .def(
+          "estimate",
+          [](Rig& r, std::optional<std::uint64_t> counter) {
+            return Blocking(r, [&](const Rig::Interrupt& i) { return r.EstimateFor(counter, i); });
+          },
+          py::arg("sample_counter") = py::none())
       .def("profile",
            [](Rig& r) {
              return Blocking(r, [&](const Rig::Interrupt& i) { return r.LatestProfile(i); });
@@ -286,21 +300,24 @@ PYBIND11_MODULE(_mpdrig, m) {
            [](Rig& r) {
              return Blocking(r, [&](const Rig::Interrupt& i) { return r.NewRejections(i); });
            })
-      .def("choke",
-           [](Rig& r, double deg) {
-             Blocking(r, [&](const Rig::Interrupt& i) { return r.Choke(deg, i); });
-           },
-           py::arg("opening_deg"))
-      .def("pump",
-           [](Rig& r, double lpm) {
-             Blocking(r, [&](const Rig::Interrupt& i) { return r.Pump(lpm, i); });
-           },
-           py::arg("flow_lpm"))
-      .def("outlet",
-           [](Rig& r, double barg) {
-             Blocking(r, [&](const Rig::Interrupt& i) { return r.Outlet(barg, i); });
-           },
-           py::arg("pressure_barg"))
+      .def(
+          "choke",
+          [](Rig& r, double deg) {
+            Blocking(r, [&](const Rig::Interrupt& i) { return r.Choke(deg, i); });
+          },
+          py::arg("opening_deg"))
+      .def(
+          "pump",
+          [](Rig& r, double lpm) {
+            Blocking(r, [&](const Rig::Interrupt& i) { return r.Pump(lpm, i); });
+          },
+          py::arg("flow_lpm"))
+      .def(
+          "outlet",
+          [](Rig& r, double barg) {
+            Blocking(r, [&](const Rig::Interrupt& i) { return r.Outlet(barg, i); });
+          },
+          py::arg("pressure_barg"))
       .def("_piston",
            [](Rig& r, int mode, double position_m, double mean_m, double amplitude_m,
               double frequency_hz, double sweep_end_hz, double sweep_duration_s) {
@@ -315,14 +332,15 @@ PYBIND11_MODULE(_mpdrig, m) {
              c.sweep_duration_s = sweep_duration_s;
              Blocking(r, [&](const Rig::Interrupt& i) { return r.Piston(c, i); });
            })
-      .def("step",
-           [](Rig& r, long long steps) {
-             if (steps < 1 || steps > 0xffffffffLL) {
-               Raise(&r, Failure::kError, "steps must be in 1 .. 2^32 - 1");
-             }
-             return Blocking(r, [&](const Rig::Interrupt& i) {
-               return r.Step(static_cast<std::uint32_t>(steps), i);
-             });
-           },
-           py::arg("steps") = 1);
+      .def(
+          "step",
+          [](Rig& r, long long steps) {
+            if (steps < 1 || steps > 0xffffffffLL) {
+              Raise(&r, Failure::kError, "steps must be in 1 .. 2^32 - 1");
+            }
+            return Blocking(r, [&](const Rig::Interrupt& i) {
+              return r.Step(static_cast<std::uint32_t>(steps), i);
+            });
+          },
+          py::arg("steps") = 1);
 }
