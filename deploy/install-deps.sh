@@ -29,6 +29,8 @@ packages=(
   # DDS Security for a class (deploy/security/make-class): the CA, identities, signed
   # governance and permissions; tshark for the test that reads the wire (tests/security)
   openssl tshark
+  # Python client module (clients/python): bindings, numpy arrays, its tests and the live plot
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
 )
 if [ "$containers" -eq 1 ]; then
   packages+=(

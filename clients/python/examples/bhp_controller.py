@@ -1,0 +1,198 @@
+#!/usr/bin/env python3
+"""Hold a rig's bottom-hole pressure at a set point against heave with the choke, in Python.
+
+The same control law as clients/bhp_controller.cc (its header explains it), in a page:
+
+    e = BHP - set point                           [bar]
+    choke = u_I + Kp e + Re{theta z}              [deg]   (opening the choke lowers the BHP)
+    u_I' = Ki e                                   (frozen while clamped and pushing further)
+    theta' = -gamma * 2 e conj(z) / |z|^2 / G^,   G^ = -g exp(-j omega tau)
+
+PI alone cannot reject a 0.1-0.2 Hz heave: the choke acts on the bottom through 1.06 s of pipe
+(l/c) plus the actuator's lag. The feed-forward term cancels the heave using the observer's
+heave phasor z = v_d^ + j omega x_d^ (topic mpdrig_estimate), adapting theta until the
+oscillation at omega is gone.
+
+    mpdrig serve --clock lockstep --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 5 \\
+        --choke-deg 31 --sensor-noise none --rig fixed --rig controlled --domain 7 &
+    python3 bhp_controller.py --rig fixed --domain 7 --duration 60 --open-loop
+    python3 bhp_controller.py --rig controlled --domain 7 --duration 60 --use-estimate
+
+Prints one key=value line like the C++ controller: PT1's half peak-to-peak swing over the last
+--measure-last seconds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import cmath
+import math
+import sys
+from dataclasses import dataclass
+from typing import Optional
+
+import mpdrig
+
+
+@dataclass
+class Gains:
+    kp_deg_per_bar: float = 0.1
+    ki_deg_per_bar_s: float = 0.05
+    feedforward: bool = True
+    adapt_per_s: float = 0.2          # gamma: converges in about 1/gamma s
+    choke_gain_bar_per_deg: float = 0.7  # g of the rough plant model G^
+    delay_s: float = 1.3              # tau: l/c + actuator lag + the pipe's phase
+    choke_min_deg: float = 2.0
+    choke_max_deg: float = 88.0
+    learn_s: float = 10.0             # without a set point: watch this long, then hold the mean
+
+
+class BhpController:
+    """The control law; time and signals are arguments, the rig is elsewhere."""
+
+    def __init__(self, gains: Gains, initial_choke_deg: float,
+                 setpoint_barg: Optional[float] = None):
+        self.g = gains
+        self.setpoint_barg = setpoint_barg
+        self.integral_deg = initial_choke_deg
+        self.theta = 0j
+        self._last_t: Optional[float] = None
+        self._learn_start: Optional[float] = None
+        self._learn_sum = 0.0
+        self._learn_n = 0
+
+    def update(self, t_s: float, bhp_barg: float, z: complex, frequency_hz: float) -> float:
+        """One sample; returns the choke reference [deg]. z = 0: no feed-forward this sample."""
+        dt = min(max(t_s - self._last_t, 0.0), 1.0) if self._last_t is not None else 0.0
+        self._last_t = t_s
+        g = self.g
+        if self.setpoint_barg is None:
+            # Watch with the choke held; the mean over whole heave periods is the BHP without heave.
+            if self._learn_start is None:
+                self._learn_start = t_s
+            self._learn_sum += bhp_barg
+            self._learn_n += 1
+            if t_s - self._learn_start < g.learn_s:
+                return self.integral_deg
+            self.setpoint_barg = self._learn_sum / self._learn_n
+        e = bhp_barg - self.setpoint_barg
+        heave_known = g.feedforward and frequency_hz > 0.0 and abs(z) > 1e-4
+        if heave_known:
+            omega = 2.0 * math.pi * frequency_hz
+            plant = -g.choke_gain_bar_per_deg * cmath.exp(-1j * omega * g.delay_s)
+            demodulated = 2.0 * e * z.conjugate() / (abs(z) ** 2)
+            self.theta -= g.adapt_per_s * dt * demodulated / plant
+        feedforward = (self.theta * z).real if heave_known else 0.0
+        wanted = self.integral_deg + g.kp_deg_per_bar * e + feedforward
+        command = min(max(wanted, g.choke_min_deg), g.choke_max_deg)
+        pushing_up = wanted > g.choke_max_deg and e > 0.0
+        pushing_down = wanted < g.choke_min_deg and e < 0.0
+        if not (pushing_up or pushing_down):
+            self.integral_deg += g.ki_deg_per_bar_s * e * dt
+        return command
+
+
+@dataclass
+class Swing:
+    """PT1 over the measured window: half peak-to-peak and mean."""
+    lo: float = math.inf
+    hi: float = -math.inf
+    total: float = 0.0
+    n: int = 0
+
+    def add(self, pt1_barg: float) -> None:
+        self.lo = min(self.lo, pt1_barg)
+        self.hi = max(self.hi, pt1_barg)
+        self.total += pt1_barg
+        self.n += 1
+
+    @property
+    def amplitude_bar(self) -> float:
+        return 0.5 * (self.hi - self.lo)
+
+    @property
+    def mean_barg(self) -> float:
+        return self.total / self.n
+
+
+def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop: bool = False,
+        use_estimate: bool = False, gains: Optional[Gains] = None,
+        setpoint_barg: Optional[float] = None) -> Swing:
+    """Controls (or, open loop, only watches) `rig` until rig time `duration_s`.
+
+    Returns PT1's swing over the last `measure_last_s` seconds. In lockstep every sample is
+    controlled before the next step; in real time the controller acts on each sample it gets.
+    """
+    gains = gains or Gains()
+    wants_estimate = use_estimate or gains.feedforward
+    swing = Swing()
+    controller: Optional[BhpController] = None
+    if open_loop and rig.lockstep:
+        # Nothing to decide between samples: step a second at a time and read them all.
+        while True:
+            rig.step(100)
+            for s in rig.pending():
+                if s.time_s > duration_s - measure_last_s and s.time_s <= duration_s + 1e-9:
+                    swing.add(s.PT1_barg)
+                if s.time_s >= duration_s - 1e-9:
+                    return swing
+    for s in rig.stream():
+        if not open_loop:
+            if controller is None:
+                controller = BhpController(gains, s.choke_position_deg, setpoint_barg)
+            z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
+            if wants_estimate:
+                # Lockstep: the estimate of this very sample; real time: the newest one.
+                est = rig.estimate(s.sample_counter if rig.lockstep else None)
+                z = complex(est.piston_velocity_est_mps,
+                            2.0 * math.pi * est.disturbance_frequency_hz * est.piston_position_est_m)
+                frequency_hz = est.disturbance_frequency_hz
+                if use_estimate:
+                    bhp = est.BHP_est_barg
+            rig.choke(controller.update(s.time_s, bhp, z, frequency_hz))
+        if s.time_s > duration_s - measure_last_s:
+            swing.add(s.PT1_barg)
+        if s.time_s >= duration_s - 1e-9:
+            break
+    return swing
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--rig", default="rig-1", help="rig id (default rig-1)")
+    parser.add_argument("--domain", type=int, default=0, help="DDS domain id (default 0)")
+    parser.add_argument("--duration", type=float, default=60.0, help="stop at this rig time [s]")
+    parser.add_argument("--measure-last", type=float, default=20.0,
+                        help="report PT1's swing over the last this many seconds")
+    parser.add_argument("--setpoint-barg", type=float, default=None,
+                        help="BHP to hold [barg] (default: the mean of the first 10 s)")
+    parser.add_argument("--use-estimate", action="store_true",
+                        help="control the observer's BHP_est instead of PT1")
+    parser.add_argument("--no-feedforward", action="store_true", help="PI only")
+    parser.add_argument("--open-loop", action="store_true", help="no commands: the baseline")
+    parser.add_argument("--strength", type=int, default=10, help="ownership strength")
+    args = parser.parse_args()
+    if not 0.0 <= args.measure_last <= args.duration:
+        parser.error("--measure-last must be within --duration")
+    gains = Gains(feedforward=not args.no_feedforward)
+    try:
+        with mpdrig.Rig(args.rig, domain=args.domain, strength=args.strength) as rig:
+            swing = run(rig, args.duration, args.measure_last, open_loop=args.open_loop,
+                        use_estimate=args.use_estimate, gains=gains,
+                        setpoint_barg=args.setpoint_barg)
+    except mpdrig.RigLost as lost:
+        print(f"bhp_controller.py: {lost}", file=sys.stderr)
+        return 3
+    except (mpdrig.RigError, TimeoutError) as error:
+        print(f"bhp_controller.py: {error}", file=sys.stderr)
+        return 1
+    mode = ("fixed-choke" if args.open_loop else "pi" if args.no_feedforward
+            else "pi+ff(estimate)" if args.use_estimate else "pi+ff")
+    print(f"rig={args.rig} mode={mode} window_s={args.measure_last:g} samples={swing.n} "
+          f"PT1_amplitude_bar={swing.amplitude_bar:.5f} PT1_mean_barg={swing.mean_barg:.5f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,182 @@
+"""Talk to an mpdrig rig (the virtual twin of the NTNU MPD heave lab rig) from Python.
+
+A rig is what ``mpdrig serve`` runs (or the lab's rig behind a bridge that speaks the same DDS
+topics). Everything is in lab units: pressures in bar gauge, flows in L/min, the choke in
+degrees (0 closed .. 90 open), positions in metres, time in seconds of rig time.
+
+    import mpdrig
+    rig = mpdrig.Rig("rig-1", domain=0)       # waits up to 10 s for the rig
+    s = rig.sensors()                          # the newest sample: s.PT1_barg, s.C2_barg, ...
+    rig.choke(30.0)                            # choke opening reference [deg]
+    for s in rig.stream(max_samples=500):      # every sample in order (lockstep: one step each)
+        rig.choke(30.0 + 0.1 * (s.PT1_barg - 4.0))
+
+On a lockstep rig (``mpdrig serve --clock lockstep``) nothing happens until you step it:
+``rig.step(10)`` advances ten sensor periods, applying every command sent before.
+
+Errors are exceptions: ``TimeoutError`` (nothing within ``timeout`` seconds), ``RigLost`` (the
+rig restarted, left or went silent: start again with a new Rig), ``RigError`` (anything else).
+A command the rig refuses (NaN, out of range) is not an exception here (the rig decides, and
+keeps its last valid command): ``rig.rejections()`` and ``rig.status()`` report it.
+"""
+
+from __future__ import annotations
+
+from typing import Iterator, Optional
+
+from ._mpdrig import Estimate, Profile, RigError, RigLost, Sensors, Status
+from ._mpdrig import _Rig
+
+__all__ = ["Rig", "Sensors", "Estimate", "Profile", "Status", "RigError", "RigLost"]
+
+_PISTON_HOLD, _PISTON_POSITION, _PISTON_SINE, _PISTON_SWEEP = 0, 1, 2, 3
+
+
+class Rig(_Rig):
+    """One rig of an ``mpdrig serve`` (or the lab's bridge), reached over DDS.
+
+    Rig(rig_id="rig-1", domain=0, *, strength=0, timeout=10.0, dds_config="")
+
+    - ``rig_id``: the rig's id (``mpdrig serve --rig ID``; default service: "rig-1").
+    - ``domain``: the DDS domain id (``mpdrig serve --domain N``), 0..232.
+    - ``strength``: ownership strength of this client's commands. Of several controllers of
+      one actuator the strongest live one wins; when it closes or dies the next takes over.
+    - ``timeout``: seconds to wait for the rig, a sample, a step; after the first sample, this
+      long without one means the rig is lost (``RigLost``).
+    - ``dds_config``: Cyclone DDS XML (default: loopback only, 127.0.0.1).
+
+    Reading: ``sensors()`` (newest sample), ``next_sensors()`` (next in order), ``stream()``,
+    ``estimate()`` (the observer's BHP estimate and heave), ``profile()`` (pressure along the
+    pipe, numpy arrays), ``status()``, ``rejections()``.
+    Commands: ``choke(deg)``, ``pump(lpm)``, ``outlet(barg)``, ``piston_hold()``,
+    ``piston_position(m)``, ``piston_sine(amplitude_m, frequency_hz)``, ``piston_sweep(...)``.
+    Lockstep: ``step(n)``. Leaving: ``close()``, or use ``with mpdrig.Rig(...) as rig:``.
+
+    A Rig is for one thread at a time (its calls wait without holding the GIL); several Rigs,
+    even of the same rig, may live in one process.
+    """
+
+    def sensors(self, fresh: bool = False) -> Sensors:
+        """The newest sample that has arrived (older unread ones are dropped).
+
+        Waits up to ``timeout`` if none has arrived yet or, with ``fresh=True``, if none has
+        arrived since the last sample returned. A loop that must see every sample uses
+        ``stream()`` or ``next_sensors()`` instead.
+        """
+        return super().sensors(fresh)
+
+    def next_sensors(self) -> Sensors:
+        """The next sample in order (waits up to ``timeout``). Keeps up to 10000 unread."""
+        return super().next_sensors()
+
+    def pending(self) -> list[Sensors]:
+        """Every sample that has arrived and not been returned yet, in order, without waiting.
+
+        After ``step(100)``: the 100 samples of those steps.
+        """
+        return super().pending()
+
+    def estimate(self, sample_counter: Optional[int] = None) -> Estimate:
+        """The observer's estimate for ``sample_counter`` (waits for it), or the newest one.
+
+        The service runs the backstepping observer (thesis ch. 10) on C2 and FT1 only and
+        publishes one estimate per sample, right after it: ``BHP_est_barg``,
+        ``piston_velocity_est_mps``, ``piston_position_est_m``, ``disturbance_frequency_hz``.
+        """
+        return super().estimate(sample_counter)
+
+    def profile(self) -> Profile:
+        """The newest pressure profile along the pipe (numpy arrays; ``serve --profile-hz``)."""
+        return super().profile()
+
+    def status(self) -> Status:
+        """The rig's newest status: clock, rig time, refused commands and why, warnings,
+        which controller owns each actuator."""
+        return super().status()
+
+    def rejections(self) -> tuple[int, str]:
+        """``(count, last_reason)`` of the commands the rig refused since the last call.
+
+        The rig refuses NaN, infinite or out-of-range commands (choke 0..90 deg, pump 0..60
+        L/min, outlet -0.5..16 barg, piston within +-0.6 m and 2 Hz) and keeps running on the
+        last valid one. On a lockstep rig the refusal shows once a step has taken the command.
+        """
+        return super().rejections()
+
+    def choke(self, opening_deg: float) -> None:
+        """Choke opening reference [deg], 0 closed .. 90 open (through the actuator's lag).
+
+        Opening the choke lowers the pressure upstream of it (C2) and the bottom-hole pressure.
+        The first command of a kind waits until the rig's reader has matched (up to ``timeout``).
+        """
+        super().choke(opening_deg)
+
+    def pump(self, flow_lpm: float) -> None:
+        """Back-pressure pump flow [L/min], 0..60."""
+        super().pump(flow_lpm)
+
+    def outlet(self, pressure_barg: float) -> None:
+        """Pressure downstream of the choke (C1) [barg], -0.5..16."""
+        super().outlet(pressure_barg)
+
+    def piston_hold(self) -> None:
+        """Heave generator: stay where it is."""
+        self._piston(_PISTON_HOLD, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+    def piston_position(self, position_m: float) -> None:
+        """Heave generator: go to ``position_m`` [m] (stream these for your own heave profile)."""
+        self._piston(_PISTON_POSITION, position_m, 0.0, 0.0, 0.0, 0.0, 0.0)
+
+    def piston_sine(self, amplitude_m: float, frequency_hz: float, mean_m: float = 0.0) -> None:
+        """Heave generator: ``mean_m + amplitude_m sin(2 pi frequency_hz t)``, made by the rig."""
+        self._piston(_PISTON_SINE, 0.0, mean_m, amplitude_m, frequency_hz, 0.0, 0.0)
+
+    def piston_sweep(self, amplitude_m: float, start_hz: float, end_hz: float,
+                     duration_s: float, mean_m: float = 0.0) -> None:
+        """Heave generator: a linear chirp from ``start_hz`` to ``end_hz`` over ``duration_s``."""
+        self._piston(_PISTON_SWEEP, 0.0, mean_m, amplitude_m, start_hz, end_hz, duration_s)
+
+    def step(self, steps: int = 1) -> Sensors:
+        """Lockstep rig only: advance ``steps`` sensor periods and return the last sample.
+
+        Every command sent before is acknowledged by the rig first, so it applies from the
+        first of these steps: a lockstep controller is deterministic however loaded the
+        machine is. All the samples of the steps are in ``pending()`` (and ``next_sensors()``).
+        """
+        return super().step(steps)
+
+    def stream(self, max_samples: Optional[int] = None) -> Iterator[Sensors]:
+        """Every sample in order, forever or ``max_samples`` of them.
+
+        On a lockstep rig each iteration first steps the rig once, so the same loop
+        ``for s in rig.stream(): rig.choke(...)`` controls a real-time and a lockstep rig (in
+        lockstep each command applies from the next sample on). Ends with ``RigLost`` if the
+        rig is lost and ``TimeoutError`` if no sample comes for ``timeout`` seconds.
+        """
+        n = 0
+        while max_samples is None or n < max_samples:
+            if self.lockstep:
+                arrived = self.pending()
+                if not arrived:
+                    self.step(1)
+                    arrived = self.pending()
+                for s in arrived:
+                    if max_samples is not None and n >= max_samples:
+                        return
+                    yield s
+                    n += 1
+            else:
+                yield self.next_sensors()
+                n += 1
+
+    def __enter__(self) -> "Rig":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        state = "closed" if self.closed else ("lost" if self.lost else "connected")
+        clock = "lockstep" if self.lockstep else "real time"
+        return (f"<mpdrig.Rig {self.rig_id!r} domain={self.domain} {clock} "
+                f"strength={self.strength} {state}>")

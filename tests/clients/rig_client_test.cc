@@ -1,0 +1,124 @@
+// The C++ client library (clients/client/rig_client.h) against a lockstep `mpdrig serve` process
+// over loopback, in a domain of the test's own: what the Python module relies on, tested without
+// Python (tests/clients/python tests the module on top).
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "clients/client/rig_client.h"
+#include "tests/support/test_domain.h"
+
+extern char** environ;
+
+namespace mpdrig {
+namespace {
+
+pid_t Spawn(std::vector<std::string> args) {
+  std::vector<char*> argv;
+  for (std::string& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  pid_t pid = -1;
+  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+  posix_spawn_file_actions_destroy(&actions);
+  return pid;
+}
+
+struct Reaper {
+  pid_t pid;
+  ~Reaper() {
+    if (pid <= 0) return;  // already reaped (kill(-1) would signal every process)
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, nullptr, 0);
+  }
+};
+
+TEST(RigClient, StepsReadsCommandsAndReportsRefusalsOfALockstepRig) {
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  const pid_t serve = Spawn({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100",
+                             "--rig", "r1", "--domain", std::to_string(domain), "--sensor-noise",
+                             "none", "--pump-lpm", "5", "--choke-deg", "31"});
+  ASSERT_GT(serve, 0);
+  Reaper reaper{serve};
+
+  client::RigOptions options;
+  options.rig_id = "r1";
+  options.domain = domain;
+  options.timeout_s = 20.0;
+  auto rig = client::Rig::Connect(options);
+  ASSERT_TRUE(rig.ok()) << rig.status().message();
+  client::Rig& r = **rig;
+  EXPECT_TRUE(r.lockstep());
+
+  auto first = r.Step(10);
+  ASSERT_TRUE(first.ok()) << first.status().message();
+  auto arrived = r.TakeArrived();
+  ASSERT_TRUE(arrived.ok());
+  ASSERT_EQ(arrived->size(), 10u);  // every sample of the steps, in order
+  for (std::size_t i = 1; i < arrived->size(); ++i) {
+    EXPECT_EQ((*arrived)[i].sample_counter, (*arrived)[i - 1].sample_counter + 1);
+  }
+  EXPECT_EQ(arrived->back().sample_counter, first->sample_counter);
+
+  // A command applies from the next step: the choke (0.1 s actuator lag) is there within 3 s.
+  ASSERT_TRUE(r.Choke(45.0).ok());
+  auto opened = r.Step(300);
+  ASSERT_TRUE(opened.ok()) << opened.status().message();
+  EXPECT_NEAR(opened->choke_position_deg, 45.0, 0.5);
+
+  // NaN is refused by the rig, reported once, and the rig keeps the last valid command.
+  ASSERT_TRUE(r.Choke(std::nan("")).ok());
+  auto held = r.Step(100);
+  ASSERT_TRUE(held.ok());
+  EXPECT_NEAR(held->choke_position_deg, 45.0, 0.5);
+  auto rejections = r.NewRejections();
+  ASSERT_TRUE(rejections.ok());
+  EXPECT_EQ(rejections->first, 1u);
+  EXPECT_NE(rejections->second.find("choke"), std::string::npos) << rejections->second;
+  rejections = r.NewRejections();
+  ASSERT_TRUE(rejections.ok());
+  EXPECT_EQ(rejections->first, 0u);
+
+  // The observer's estimate of the last sample is there, paired by counter.
+  auto estimate = r.EstimateFor(held->sample_counter);
+  ASSERT_TRUE(estimate.ok()) << estimate.status().message();
+  EXPECT_EQ(estimate->sample_counter, held->sample_counter);
+
+  // Bad input is a value, never a crash.
+  EXPECT_FALSE(r.Step(0).ok());
+  client::RigOptions missing = options;
+  missing.rig_id = "nope";
+  missing.timeout_s = 0.5;
+  auto none = client::Rig::Connect(missing);
+  EXPECT_FALSE(none.ok());
+  missing.timeout_s = std::nan("");
+  EXPECT_FALSE(client::Rig::Connect(missing).ok());
+  missing.timeout_s = 1.0;
+  missing.domain = 999;
+  EXPECT_FALSE(client::Rig::Connect(missing).ok());
+
+  // The service stops: the rig is lost (its sensor writer left), and every call says so.
+  ::kill(serve, SIGTERM);
+  ::waitpid(serve, nullptr, 0);
+  reaper.pid = -1;
+  auto after = r.Step(1);
+  ASSERT_FALSE(after.ok());
+  EXPECT_EQ(r.last_failure(), client::Failure::kLost) << after.status().message();
+  EXPECT_TRUE(r.lost().has_value());
+  r.Close();
+  EXPECT_FALSE(r.Choke(30.0).ok());
+}
+
+}  // namespace
+}  // namespace mpdrig
