@@ -705,6 +705,7 @@ Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams&
   ApplyInputLevels(*levels, &options.replay);
   auto second = FitParameters(*log, first->params, parameters, options);
   if (!second.ok()) return second.status().Within("refitting on the estimated input levels");
+  second->initial = first->initial;  // the user's start, not the second fit's
   second->error_before = first->error_before;
   second->iterations += first->iterations;
   second->replays += first->replays + 3;
