@@ -77,6 +77,9 @@ struct ServeOptions {
   std::uint32_t private_rigs = 0;
   std::size_t max_rigs = 0;
   std::function<Result<RigHost>(const std::string& rig_id)> make_rig;
+  // A mystery rig for teaching (`mpdrig serve --hidden-effect`): the status names no effect, it
+  // says only "a hidden effect is active" (`mpdrig reveal` tells which).
+  bool hide_effects = false;
 
   Status Validate(double sensor_rate_hz) const;
 };
