@@ -118,6 +118,7 @@ int RunServe(const ServeArgs& args) {
   serve.duration_s = args.duration_s;
   serve.safe_choke_deg = args.safe_choke_deg;
   serve.hide_effects = !args.hidden_effect.empty();
+  serve.catch_up = !args.playback.empty();
   serve.observer = !args.no_observer;
   serve.estimate_hz = args.estimate_hz;
   serve.profile_hz = args.profile_hz;
@@ -194,7 +195,7 @@ int RunServe(const ServeArgs& args) {
                                   .c_str());
   if (!args.playback.empty()) {
     std::fprintf(stderr, "  playback: %s at %g Hz; commands are refused (a recording)\n",
-                 (*service)->rigs().front().DescribeSensorNoise().c_str(),
+                 (*service)->rigs().front().playback()->Describe().c_str(),
                  1.0 / (*service)->rigs().front().sensor_period_s());
   }
   if (!args.hidden_effect.empty()) {

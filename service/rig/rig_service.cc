@@ -504,11 +504,15 @@ struct RigService::Impl {
           // the wall clock. Count them; the status says when it happened (StallWarning).
           const double late_s = std::chrono::duration<double>(now - next).count();
           ++deadline_misses;
-          lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
           longest_stall_s = std::max(longest_stall_s, late_s);
           last_stall_s = late_s;
           last_stall_sim_time_s = rigs.front().time_s();
-          next = now + period_wall;
+          if (options.catch_up) {
+            next += period_wall;  // the schedule stands: the next ticks run at once until on it
+          } else {
+            lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
+            next = now + period_wall;
+          }
         } else {
           std::this_thread::sleep_until(next);
           next += period_wall;
