@@ -99,7 +99,7 @@ int RunServe(const ServeArgs& args) {
     rigs.push_back(std::move(rig).value());
   }
   for (const std::string& id : args.rigs) {
-    if (!rigs.empty()) break;  // the playback
+    if (!args.playback.empty()) break;  // the playback is the one rig
     auto rig =
         service::RigHost::Create(id, *params, *options, args.rate_hz,
                                  {args.choke_deg, args.pump_lpm, args.outlet_barg}, {}, sensors);

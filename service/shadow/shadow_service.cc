@@ -52,6 +52,7 @@ struct ShadowService::Impl {
   std::ofstream log;
   std::uint64_t samples = 0, published = 0;
   std::uint64_t rejected = 0;
+  std::uint64_t last_command_id = 0;
   std::string last_rejection;
   std::string last_change;
   double last_change_s = -1.0;
@@ -71,6 +72,7 @@ struct ShadowService::Impl {
       // Another shadow's command: on a shared domain several shadows may listen.
       return;
     }
+    last_command_id = command.command_id;
     const double before = model->error();
     RigParams params = model->params();
     std::string change;
@@ -145,6 +147,7 @@ struct ShadowService::Impl {
     wire.error_at_last_change = error_at_change;
     wire.rejected_commands = rejected;
     wire.last_rejection = const_cast<char*>(last_rejection.c_str());
+    wire.last_command_id = last_command_id;
     MPDRIG_RETURN_IF_ERROR(status->Write(wire));
     if (log.is_open()) {
       char number[64];
