@@ -87,8 +87,8 @@ int main(int argc, char** argv) {
   auto status_topic = dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, "mpdrig_shadow_status");
   if (!command_topic.ok()) return Fail(command_topic.status().message());
   if (!status_topic.ok()) return Fail(status_topic.status().message());
-  auto status = dds::Reader<mpdrig_ShadowStatus>::Create(p, status_topic->handle(),
-                                                         dds::StatusQos());
+  auto status =
+      dds::Reader<mpdrig_ShadowStatus>::Create(p, status_topic->handle(), dds::StatusQos());
   if (!status.ok()) return Fail(status.status().message());
   dds::Qos qos;  // as the shadow's reader: reliable, keep all
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
@@ -96,8 +96,7 @@ int main(int argc, char** argv) {
   auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), qos);
   if (!writer.ok()) return Fail(writer.status().message());
 
-  const auto deadline =
-      std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   // The shadow's current status first (transient-local: it arrives once matched).
   bool have = false;
   std::uint64_t before_rejected = 0;
@@ -111,7 +110,8 @@ int main(int argc, char** argv) {
       Print(s);
     });
   }
-  if (!have) return Fail("no shadow of rig '" + rig_id + "' answered (is `mpdrig shadow` running?)");
+  if (!have)
+    return Fail("no shadow of rig '" + rig_id + "' answered (is `mpdrig shadow` running?)");
   std::string argument;
   mpdrig_ShadowAction action;
   if (!effect_on.empty()) {

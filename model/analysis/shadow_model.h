@@ -32,10 +32,10 @@ namespace mpdrig {
 
 struct ShadowOptions {
   SimulationOptions simulation;
-  double window_s = 10.0;             // the error's sliding window
-  double warmup_s = kReplayWarmupS;   // model output not compared after a (re)start
-  double smoothing_s = 0.05;          // piston smoothing (compare's --piston-smoothing-s)
-  long smoothing_block_rows = 8;      // latency of the model behind the rig: this many rows
+  double window_s = 10.0;            // the error's sliding window
+  double warmup_s = kReplayWarmupS;  // model output not compared after a (re)start
+  double smoothing_s = 0.05;         // piston smoothing (compare's --piston-smoothing-s)
+  long smoothing_block_rows = 8;     // latency of the model behind the rig: this many rows
 
   Status Validate() const;
 };

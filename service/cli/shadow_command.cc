@@ -116,8 +116,9 @@ void AddShadowCommand(CLI::App* app, int* exit_code) {
                    "window of the local quadratic that smooths the piston position [s]")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  command->add_option("--status-period-s", args->status_period_s,
-                      "status (and a --log row) every this much rig time [s]")
+  command
+      ->add_option("--status-period-s", args->status_period_s,
+                   "status (and a --log row) every this much rig time [s]")
       ->check(CLI::Range(0.01, 60.0))
       ->capture_default_str();
   command->callback([args, exit_code]() { *exit_code = RunShadow(*args); });

@@ -90,8 +90,7 @@ Result<RigSample> LogPlayback::Next(std::size_t pressure_points) {
   }
   RigSample sample = std::move(ahead_.front());
   ahead_.pop_front();
-  sample.pressure_at_positions_pa.assign(pressure_points,
-                                         std::numeric_limits<double>::quiet_NaN());
+  sample.pressure_at_positions_pa.assign(pressure_points, std::numeric_limits<double>::quiet_NaN());
   ++rows_played_;
   // Look one row ahead so the end is known when the last row goes out.
   if (ahead_.empty()) {

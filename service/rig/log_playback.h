@@ -68,9 +68,9 @@ class LogPlayback {
   std::vector<long> column_of_;
   std::deque<RigSample> ahead_;  // read, not yet handed out
   std::vector<double> values_;
-  double first_time_s_ = 0.0;    // of the log (each pass starts there)
-  double last_time_s_ = 0.0;     // of the pass being read
-  double time_offset_s_ = 0.0;   // added to the file's times in this pass
+  double first_time_s_ = 0.0;   // of the log (each pass starts there)
+  double last_time_s_ = 0.0;    // of the pass being read
+  double time_offset_s_ = 0.0;  // added to the file's times in this pass
   std::uint64_t rows_played_ = 0, passes_ = 0;
   bool file_done_ = false;
   bool finished_ = false;

@@ -501,7 +501,8 @@ struct RigService::Impl {
         const Clock::time_point now = Clock::now();
         if (now > next + period_wall) {  // more than a whole period late: a missed deadline
           // The periods between the deadline and now are skipped: the rig runs on that far behind
-          // the wall clock. Count them; the status says when it happened (StallWarning).
+          // the wall clock. Count them; the status says when it happened (StallWarning). With
+          // catch_up (a playback) they are run at once instead, and none is lost.
           const double late_s = std::chrono::duration<double>(now - next).count();
           ++deadline_misses;
           longest_stall_s = std::max(longest_stall_s, late_s);

@@ -101,7 +101,8 @@ struct ShadowService::Impl {
         change = "reset";
         break;
       default:
-        status = Status::Error("unknown action " + std::to_string(static_cast<int>(command.action)));
+        status =
+            Status::Error("unknown action " + std::to_string(static_cast<int>(command.action)));
     }
     if (status.ok()) status = model->SetParams(params);
     if (!status.ok()) {
@@ -249,8 +250,8 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
   MPDRIG_RETURN_IF_ERROR(
       topic(&mpdrig_ShadowCommand_desc, kShadowCommandTopic, &impl->command_topic));
   // Keep all: the model needs every sample in order (a gap is a hold of the inputs).
-  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(p, impl->sensors_topic.handle(),
-                                                        dds::SensorQos(true));
+  auto sensors =
+      dds::Reader<mpdrig_RigSensors>::Create(p, impl->sensors_topic.handle(), dds::SensorQos(true));
   if (!sensors.ok()) return sensors.status();
   impl->sensors.emplace(std::move(sensors).value());
   auto shadow_sensors = dds::Writer<mpdrig_RigSensors>::Create(

@@ -62,8 +62,8 @@ void Spawn(const char* exe, std::vector<std::string> args, const std::string& st
   argv.push_back(nullptr);
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(),
-                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
   ASSERT_EQ(posix_spawn(&child->pid, exe, &actions, nullptr, argv.data(), environ), 0);
   posix_spawn_file_actions_destroy(&actions);
 }
@@ -87,8 +87,8 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
       char pt5[32] = "";
       if (i != 123) std::snprintf(pt5, sizeof pt5, "%.4f", 4.1 + 0.3 * s);
       std::snprintf(line, sizeof line, "%.2f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%s,%.4f,%.4f\n", t,
-                    0.1 * s, 31.0 + 0.05 * s, 8.0 + 0.01 * s, 0.01, 4.0 + 0.2 * s,
-                    4.3 + 0.5 * s, pt5, 4.0 + 0.21 * s, 8.0 + 2.0 * s);
+                    0.1 * s, 31.0 + 0.05 * s, 8.0 + 0.01 * s, 0.01, 4.0 + 0.2 * s, 4.3 + 0.5 * s,
+                    pt5, 4.0 + 0.21 * s, 8.0 + 2.0 * s);
       out << line;
     }
   }

@@ -56,8 +56,8 @@ std::string WriteLog(const std::string& name) {
 // the conversion, far below the log's 4 decimals.
 void ExpectSame(double logged, double received, const char* what, int row) {
   if (std::isnan(logged)) {
-    EXPECT_TRUE(std::isnan(received)) << what << " row " << row << ": not measured, got "
-                                      << received;
+    EXPECT_TRUE(std::isnan(received))
+        << what << " row " << row << ": not measured, got " << received;
   } else {
     EXPECT_NEAR(received, logged, 1e-12 * std::max(1.0, std::fabs(logged)))
         << what << " row " << row;
@@ -87,14 +87,14 @@ TEST(LogPlayback, PlaysEveryRowInOrderAndMarksMissingChannelsNotMeasured) {
     auto sample = rig->Tick();
     ASSERT_TRUE(sample.ok()) << sample.status().message();
     EXPECT_EQ(sample->time_s, log->time_s[i]);
-    for (Channel channel : {Channel::kPistonPosition, Channel::kChokePosition, Channel::kFT2,
-                            Channel::kC2, Channel::kPT1, Channel::kPT5, Channel::kPT10,
-                            Channel::kFT1}) {
+    for (Channel channel :
+         {Channel::kPistonPosition, Channel::kChokePosition, Channel::kFT2, Channel::kC2,
+          Channel::kPT1, Channel::kPT5, Channel::kPT10, Channel::kFT1}) {
       ExpectSame((*log->Find(channel))[i], (*sample)[channel],
                  std::string(riglog::ChannelName(channel)).c_str(), i);
     }
-    for (Channel absent : {Channel::kP1, Channel::kP2, Channel::kPT2, Channel::kFT3,
-                           Channel::kFT4}) {
+    for (Channel absent :
+         {Channel::kP1, Channel::kP2, Channel::kPT2, Channel::kFT3, Channel::kFT4}) {
       EXPECT_TRUE(std::isnan((*sample)[absent])) << riglog::ChannelName(absent);
     }
   }

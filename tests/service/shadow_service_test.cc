@@ -6,9 +6,9 @@
 
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <cmath>
 #include <optional>
 #include <string>
 #include <thread>
@@ -89,8 +89,8 @@ class ShadowServiceTest : public ::testing::Test {
     step_topic_ = *dds::CreateTopic(p, &mpdrig_StepRequest_desc, kStepRequestTopic);
     shadow_status_topic_ = *dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, kShadowStatusTopic);
     command_topic_ = *dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, kShadowCommandTopic);
-    rig_status_reader_.emplace(*dds::Reader<mpdrig_RigStatus>::Create(
-        p, rig_status_topic_.handle(), dds::StatusQos()));
+    rig_status_reader_.emplace(
+        *dds::Reader<mpdrig_RigStatus>::Create(p, rig_status_topic_.handle(), dds::StatusQos()));
     shadow_reader_.emplace(*dds::Reader<mpdrig_ShadowStatus>::Create(
         p, shadow_status_topic_.handle(), dds::StatusQos()));
     dds::Qos keep_all;
@@ -156,9 +156,8 @@ class ShadowServiceTest : public ::testing::Test {
           seen.rejected >= rejected)
         return seen;
     }
-    ADD_FAILURE() << "the shadow did not catch up: status at " << seen.sim_time_s
-                  << " s, rig at " << rig_time_s_ << " s, last change '" << seen.last_change
-                  << "'";
+    ADD_FAILURE() << "the shadow did not catch up: status at " << seen.sim_time_s << " s, rig at "
+                  << rig_time_s_ << " s, last change '" << seen.last_change << "'";
     return seen;
   }
 
