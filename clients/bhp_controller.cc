@@ -29,6 +29,7 @@
 //   bhp_controller --lockstep --duration 120 --measure-last 40 --open-loop   # baseline
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <csignal>
@@ -42,6 +43,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "clients/rig_watch.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
@@ -281,12 +283,36 @@ int Run(const Args& args) {
     const mpdrig::Status asked = ask_step();
     if (!asked.ok()) return Fail(asked.message());
   }
-  double idle_s = 0.0;
+  // A lost rig (clients/rig_watch.h): say why and stop with kExitRigLost, carrying nothing over.
+  clients::RigWatch watch(args.timeout_s);
+  std::optional<std::string> lost;
+  auto rig_lost = [&](const std::string& why) {
+    std::fprintf(stderr, "bhp_controller: rig %s lost: %s; stopping after %ld choke commands\n",
+                 rig_id.c_str(), why.c_str(), commands);
+    return clients::kExitRigLost;
+  };
+  using WallClock = std::chrono::steady_clock;
+  WallClock::time_point last_sample = WallClock::now();
+  // Wall time since this rig's last sample, and whether the rig's sensor writer is still there;
+  // the rig is lost, or (before any sample) not found, when that lasts --timeout.
+  auto idle_check = [&]() -> std::optional<int> {
+    const double idle_s = std::chrono::duration<double>(WallClock::now() - last_sample).count();
+    dds_subscription_matched_status_t matched{};
+    dds_get_subscription_matched_status(sensors->handle(), &matched);
+    if (auto why = watch.Check(idle_s, matched.current_count > 0)) return rig_lost(*why);
+    if (!watch.seen() && idle_s > args.timeout_s) {
+      return Fail("no sensor samples from " + rig_id);
+    }
+    return std::nullopt;
+  };
   while (!g_stop && !finished) {
     auto ready = sensors->Wait(DDS_MSECS(100));
     if (!ready.ok()) return Fail(ready.status().message());
     auto took = sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
-      if (rig_id != s.rig_id) return;
+      if (rig_id != s.rig_id || lost) return;
+      lost = watch.Sample(s.sample_counter, s.sim_time_s);
+      if (lost) return;
+      last_sample = WallClock::now();
       Reading r;
       r.counter = s.sample_counter;
       r.time_s = s.sim_time_s;
@@ -295,6 +321,7 @@ int Run(const Args& args) {
       pending.push_back(r);
     });
     if (!took.ok()) return Fail(took.status().message());
+    if (lost) return rig_lost(*lost);
     if (!wants_estimate || !args.lockstep) {
       // Real time: pair each sample with the newest estimate (they come right after it).
       auto e_took = estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
@@ -310,14 +337,9 @@ int Run(const Args& args) {
       });
       if (!e_took.ok()) return Fail(e_took.status().message());
       if (pending.empty()) {
-        if (!*ready) idle_s += 0.1;
-        if (idle_s > args.timeout_s) {
-          if (controller) break;  // the rig stopped: report what was measured
-          return Fail("no sensor samples from " + rig_id);
-        }
+        if (auto code = idle_check()) return *code;
         continue;
       }
-      idle_s = 0.0;
       Reading r = pending.back();  // the newest: a real-time controller does not catch up
       pending.clear();
       if (last_estimate) {
@@ -337,14 +359,9 @@ int Run(const Args& args) {
     }
     // Lockstep with the estimate: sample k and estimate k, then the next step.
     if (pending.empty()) {
-      if (!*ready) idle_s += 0.1;
-      if (idle_s > args.timeout_s) {
-        if (controller) break;  // the rig stopped: report what was measured
-        return Fail("no sensor samples from " + rig_id);
-      }
+      if (auto code = idle_check()) return *code;
       continue;
     }
-    idle_s = 0.0;
     Reading r = pending.back();
     pending.clear();
     if (!controller) next_counter = r.counter;  // the rig may have run before we came
@@ -472,7 +489,9 @@ int main(int argc, char** argv) {
   app.add_option("--log", args.log_path,
                  "write a CSV of time, PT1, BHP_est, choke position and reference, set point "
                  "(rig-log column names)");
-  app.add_option("--timeout", args.timeout_s, "give up after this long without samples [s]")
+  app.add_option("--timeout", args.timeout_s,
+                 "give up after this long without samples [s]: before the first, exit 1 (no "
+                 "rig); after it, the rig is lost (exit 3, see below)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   app.footer(
@@ -486,7 +505,11 @@ int main(int argc, char** argv) {
       "  bhp_controller --rig rig-1                 # watches 10 s, then holds the mean BHP\n"
       "  bhp_controller --rig rig-1 --use-estimate  # on the observer's estimate, no PT1\n"
       "  bhp_controller --rig rig-1 --no-feedforward  # PI only: watch it fail at 0.2 Hz\n"
-      "Attenuation, fixed choke vs controlled: bench/bhp_attenuation.sh");
+      "Attenuation, fixed choke vs controlled: bench/bhp_attenuation.sh\n"
+      "A lost rig: when the rig's time or sample counter goes back (the service restarted), its\n"
+      "sensor writer leaves (the service exited, or crashed and its lease ran out) or no sample\n"
+      "comes for --timeout s, the controller says why on stderr and exits with status 3, without\n"
+      "its summary line: its integrator, set point and adaptation belong to the lost run.");
   CLI11_PARSE(app, argc, argv);
   c.feedforward = !no_feedforward;
   if (!(c.choke_min_deg < c.choke_max_deg)) {

@@ -13,11 +13,14 @@
 #include <cstdio>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "clients/rig_watch.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
@@ -92,7 +95,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--samples", max_samples, "stop after this many samples (0: until Ctrl-C)");
   app.add_option("--timeout", timeout_s,
-                 "give up after this many seconds without a sample (0: wait)");
+                 "give up after this many seconds without a sample (0: wait): before the first, "
+                 "exit 1; after it, the rig is lost (exit 3)");
+  app.footer(
+      "The rig is lost when its time or sample counter goes back (the service restarted), its\n"
+      "sensor writer leaves (the service exited, or crashed and its lease ran out), or no sample\n"
+      "comes for --timeout s: rig_echo says why, keeps the rows recorded so far and exits 3.");
   app.add_option("--dds-config", dds_config, "Cyclone DDS XML (default: loopback only)");
   app.add_option("--security", security,
                  "DDS Security: an identity directory of a class (deploy/security/make-class OUT "
@@ -131,19 +139,19 @@ int main(int argc, char** argv) {
   std::vector<double> arrival_s, source_s;
   const auto started = std::chrono::steady_clock::now();
   double previous_time = -1e300;
-  double waited_s = 0.0;
-  while (!g_stop && (max_samples == 0 || written < max_samples)) {
-    auto ready = reader->Wait(DDS_MSECS(100));
-    if (!ready.ok()) return Fail(ready.status());
-    if (!*ready) {
-      waited_s += 0.1;
-      if (timeout_s > 0.0 && waited_s >= timeout_s) break;
-      continue;
-    }
-    waited_s = 0.0;
+  // A lost rig (clients/rig_watch.h) ends the recording: the file keeps what came before, on
+  // whole rows, and the exit status says the recording did not end as asked.
+  mpdrig::clients::RigWatch watch(timeout_s);
+  std::optional<std::string> lost;
+  auto last_sample = std::chrono::steady_clock::now();
+  auto take = [&]() -> mpdrig::Status {
     auto taken = reader->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
-      // Only this rig, and only increasing times (a rig log's time is strictly increasing).
-      if (rig_id != s.rig_id || !(s.sim_time_s > previous_time)) return;
+      if (rig_id != s.rig_id || lost) return;
+      lost = watch.Sample(s.sample_counter, s.sim_time_s);
+      if (lost) return;
+      last_sample = std::chrono::steady_clock::now();
+      // Only increasing times (a rig log's time is strictly increasing).
+      if (!(s.sim_time_s > previous_time)) return;
       if (max_samples != 0 && written >= max_samples) return;
       WriteRow(*out, s);
       if (timing) {
@@ -154,11 +162,40 @@ int main(int argc, char** argv) {
       previous_time = s.sim_time_s;
       ++written;
     });
-    if (!taken.ok()) return Fail(taken.status());
+    return taken.status();
+  };
+  while (!g_stop && !lost && (max_samples == 0 || written < max_samples)) {
+    auto ready = reader->Wait(DDS_MSECS(100));
+    if (!ready.ok()) return Fail(ready.status());
+    if (*ready) {
+      const mpdrig::Status taken = take();
+      if (!taken.ok()) return Fail(taken);
+    }
+    if (lost) break;
+    const double idle_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
+    dds_subscription_matched_status_t matched{};
+    dds_get_subscription_matched_status(reader->handle(), &matched);
+    lost = watch.Check(idle_s, matched.current_count > 0);
+    if (lost) {
+      // What the departed writer sent before it went is in the reader already: keep it.
+      const std::optional<std::string> why = lost;
+      lost.reset();
+      const mpdrig::Status taken = take();
+      if (!taken.ok()) return Fail(taken);
+      if (!lost) lost = why;
+      break;
+    }
+    if (!watch.seen() && timeout_s > 0.0 && idle_s >= timeout_s) break;  // no rig: exit 1
   }
   out->flush();
   if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
   std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", written, rig_id.c_str());
+  if (lost) {
+    std::fprintf(stderr, "rig_echo: rig %s lost: %s; the recording ends there\n", rig_id.c_str(),
+                 lost->c_str());
+    return mpdrig::clients::kExitRigLost;
+  }
   if (timing) {
     PrintTiming("published (source timestamps)", source_s);
     PrintTiming("received (arrival at this reader)", arrival_s);

@@ -134,7 +134,8 @@ struct Diagnosis {
   Comparison baseline_comparison;           // fitted baseline over the whole log
   std::vector<CandidateResult> candidates;  // ranked best first
   // The choke's and FT2's levels as estimated at the fitted base model (EstimateInputLevels;
-  // none where the log came with levels applied or options.replay says not to).
+  // none where the log came with levels applied or options.replay says not to). The fits run on
+  // these; each candidate is scored with levels estimated at its own fit.
   InputLevelCorrection input_levels;
   std::optional<std::string> verdict;       // the missing effect, if one is significant
   // Other significant candidates that explain the log as well as the verdict: the verdict's lead

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "model/common/units.h"
+#include "model/effects/effect.h"
 #include "model/params/rig_config.pb.h"
 
 namespace mpdrig {
@@ -101,22 +102,42 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
           params.ValidateChokePoint(static_cast<std::size_t>(i)).Within(position));
     }
   }
+  const pb::FieldDescriptor* effect_field = descriptor->FindFieldByName("effect");
+  const pb::FieldDescriptor* param_field = config::Effect::descriptor()->FindFieldByName("param");
+  auto position_of = [&source_name](const pb::TextFormat::ParseLocation& where) {
+    return source_name + ":" + std::to_string(where.line + 1) + ":" +
+           std::to_string(where.column + 1);
+  };
   for (int i = 0; i < message.effect_size(); ++i) {
     const config::Effect& effect = message.effect(i);
-    const pb::TextFormat::ParseLocation where =
-        locations.GetLocation(descriptor->FindFieldByName("effect"), i);
-    const std::string position =
-        source_name + ":" + std::to_string(where.line + 1) + ":" + std::to_string(where.column + 1);
+    const std::string position = position_of(locations.GetLocation(effect_field, i));
     if (effect.name().empty()) return Status::Error(position + ": effect without a name");
     if (params.FindEffect(effect.name()) != nullptr) {
       return Status::Error(position + ": effect '" + effect.name() + "' is listed twice");
     }
+    // The registry checks names, keys and bounds; each error at the place it was written (the
+    // effect's name, or the parameter's line), not only once the whole file has been read.
+    const EffectInfo* info = FindEffectInfo(effect.name());
+    if (info == nullptr) {
+      return Status::Error(position + ": unknown effect '" + effect.name() +
+                           "'; valid effects: " + EffectNames());
+    }
+    const pb::TextFormat::ParseInfoTree* effect_tree = locations.GetTreeForNested(effect_field, i);
     EffectSetting setting{effect.name(), {}};
-    for (const config::EffectParam& param : effect.param()) {
+    for (int j = 0; j < effect.param_size(); ++j) {
+      const config::EffectParam& param = effect.param(j);
+      const std::string param_position =
+          effect_tree != nullptr ? position_of(effect_tree->GetLocation(param_field, j)) : position;
       if (!std::isfinite(param.value())) {
-        return Status::Error(position + ": effect " + effect.name() + ": " + param.key() +
+        return Status::Error(param_position + ": effect " + effect.name() + ": " + param.key() +
                              " is not a finite number");
       }
+      if (setting.Find(param.key()) != nullptr) {
+        return Status::Error(param_position + ": effect " + effect.name() + ": " + param.key() +
+                             " is given twice");
+      }
+      const EffectSetting alone{effect.name(), {{param.key(), param.value()}}};
+      MPDRIG_RETURN_IF_ERROR(ResolveEffectValues(*info, alone).status().Within(param_position));
       setting.values.emplace_back(param.key(), param.value());
     }
     params.effects.push_back(std::move(setting));

@@ -6,7 +6,9 @@
 
 #include <dds/dds.h>
 
+#include <algorithm>
 #include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -125,6 +127,41 @@ class Writer {
   Entity entity_;
 };
 
+// Sends one command (CommandQos, `strength`) from a writer of its own, the way a script or a
+// short-lived process should: it waits until the service's reader has matched (a sample written
+// before that reaches no one once the process is gone), writes, waits for the acknowledgement
+// (the process may exit right after), and deletes the writer, which unregisters the instance:
+// under exclusive ownership the next writer of the same strength then owns it at once, where a
+// writer that merely exits keeps it until its liveliness lease (1 s) runs out, and a later
+// writer's command in that second is dropped whenever the stale owner's GUID sorts first.
+template <typename T>
+Status SendOnce(dds_entity_t participant, dds_entity_t topic, const T& sample,
+                dds_duration_t timeout, int strength = 0) {
+  Entity writer(dds_create_writer(participant, topic, CommandQos(strength).get(), nullptr));
+  if (writer.handle() < 0) return Check(writer.handle(), "dds_create_writer");
+  MPDRIG_RETURN_IF_ERROR(Check(dds_set_status_mask(writer.handle(), DDS_PUBLICATION_MATCHED_STATUS),
+                               "dds_set_status_mask"));
+  Entity waitset(dds_create_waitset(participant));
+  if (waitset.handle() < 0) return Check(waitset.handle(), "dds_create_waitset");
+  MPDRIG_RETURN_IF_ERROR(
+      Check(dds_waitset_attach(waitset.handle(), writer.handle(), 0), "dds_waitset_attach"));
+  const dds_time_t deadline = dds_time() + timeout;
+  for (;;) {
+    dds_publication_matched_status_t matched{};
+    MPDRIG_RETURN_IF_ERROR(Check(dds_get_publication_matched_status(writer.handle(), &matched),
+                                 "dds_get_publication_matched_status"));
+    if (matched.current_count > 0) break;
+    const dds_return_t woke = dds_waitset_wait_until(waitset.handle(), nullptr, 0, deadline);
+    if (woke < 0) return Check(woke, "dds_waitset_wait_until");
+    if (woke == 0) return Status::Error("no reader of the topic (is the service running?)");
+  }
+  MPDRIG_RETURN_IF_ERROR(Check(dds_write(writer.handle(), &sample), "dds_write"));
+  const dds_duration_t left = std::max<dds_duration_t>(deadline - dds_time(), DDS_MSECS(1));
+  MPDRIG_RETURN_IF_ERROR(Check(dds_wait_for_acks(writer.handle(), left), "dds_wait_for_acks"));
+  writer.Reset();  // deleting the writer unregisters the instance
+  return Status::Ok();
+}
+
 // Typed reader with a waitset on "data available". `participant` may also be a subscriber.
 template <typename T>
 class Reader {
@@ -152,15 +189,17 @@ class Reader {
     return n > 0;
   }
 
-  // Takes every available sample and hands each valid one to `visit` while it is on loan (its
-  // strings belong to DDS and are gone after the call). When an instance has lost all its
-  // writers (deleted, or their liveliness lease ran out), `on_no_writers` gets the sample, whose
-  // key fields identify the instance. Returns how many valid samples were visited.
+  // Takes every available sample (at most `max_samples`, the rest stay for the next call) and
+  // hands each valid one to `visit` while it is on loan (its strings belong to DDS and are gone
+  // after the call). When an instance has lost all its writers (deleted, or their liveliness
+  // lease ran out), `on_no_writers` gets the sample, whose key fields identify the instance.
+  // Returns how many valid samples were visited.
   Result<int> TakeEach(const std::function<void(const T&, const dds_sample_info_t&)>& visit,
-                       const std::function<void(const T&)>& on_no_writers = {}) const {
+                       const std::function<void(const T&)>& on_no_writers = {},
+                       int max_samples = std::numeric_limits<int>::max()) const {
     constexpr int kBatch = 16;
     int visited = 0;
-    for (;;) {
+    for (int taken = 0; taken < max_samples;) {
       void* samples[kBatch] = {nullptr};
       dds_sample_info_t infos[kBatch];
       const dds_return_t n = dds_take(entity_.handle(), samples, infos, kBatch, kBatch);
@@ -178,7 +217,9 @@ class Reader {
             Check(dds_return_loan(entity_.handle(), samples, n), "dds_return_loan"));
       }
       if (n < kBatch) return visited;
+      taken += n;
     }
+    return visited;
   }
 
   dds_entity_t handle() const { return entity_.handle(); }

@@ -105,8 +105,8 @@ Status RigHost::RefuseRecorded(const char* what) {
                 playback_->path() + "); it takes no commands");
 }
 
-Status RigHost::Refuse(const std::string& reason) {
-  ++counters_.rejected_commands;
+Status RigHost::Refuse(const std::string& reason, std::uint64_t count) {
+  counters_.rejected_commands += count;
   counters_.last_rejection = reason;
   return Status::Error(reason);
 }

@@ -105,8 +105,9 @@ class RigHost {
   Status SetPumpLpm(double flow_lpm);
   Status SetOutletBarg(double pressure_barg);
   Status SetPiston(const PistonCommandIn& command);
-  // A refusal decided outside the rig (e.g. a command for another rig id): counted the same way.
-  Status Refuse(const std::string& reason);
+  // A refusal decided outside the rig (e.g. a command for another rig id): counted the same way;
+  // `count` such commands at once, the last of them for `reason`.
+  Status Refuse(const std::string& reason, std::uint64_t count = 1);
   // Notes an event the status should carry (e.g. a safe state taken), with the rig time.
   void NoteEvent(const std::string& what);
   // The first departure from the model's range, if any (the rig keeps running and reports it).

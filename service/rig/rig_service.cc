@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <deque>
 #include <map>
+#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string_view>
 #include <thread>
+#include <utility>
 
 #include "service/rig/wire.h"
 
@@ -28,6 +30,64 @@ std::string ReportedId(const char* rig_id) {
   while (end > 0 && (static_cast<unsigned char>(id[end]) & 0xC0) == 0x80) --end;
   return "'" + std::string(id.substr(0, end)) + "...' (" + std::to_string(id.size()) + " bytes)";
 }
+
+// Commands for rig ids this service does not run never reach a reader's cache: a topic filter
+// drops them before Cyclone makes an instance of their key, so a stranger who writes to many
+// distinct ids costs the service nothing per id (an instance held while its writer lives, and a
+// "no writers" sample for each when the writer goes, all taken in one tick, before). The filter
+// still counts each refusal and keeps the last id (bounded, ReportedId) for the status.
+// Cyclone calls the filter on its receive threads: the tally is under a mutex.
+class UnknownRigGate {
+ public:
+  UnknownRigGate(const char* topic, std::vector<std::string> known)
+      : topic_(topic), known_(std::move(known)) {}
+
+  const char* topic() const { return topic_; }
+  // A rig made while the service runs (a student's private rig).
+  void Allow(std::string rig_id) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    known_.push_back(std::move(rig_id));
+  }
+
+  // A dds_topic_filter_sample_arg_fn for the command type T (its key field is rig_id).
+  template <typename T>
+  static bool Accept(const void* sample, void* gate) {
+    return static_cast<UnknownRigGate*>(gate)->Admit(static_cast<const T*>(sample)->rig_id);
+  }
+
+  struct Refused {
+    std::uint64_t count = 0;
+    std::string reported_id;  // the last one, as ReportedId gives it
+  };
+  // The refusals since the last call.
+  Refused Drain() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return std::exchange(refused_, Refused{});
+  }
+
+ private:
+  bool Admit(const char* rig_id) {
+    const char* id = rig_id != nullptr ? rig_id : "";
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const std::string& known : known_) {
+      if (known == id) return true;
+    }
+    std::string reported = ReportedId(id);
+    ++refused_.count;
+    refused_.reported_id = std::move(reported);
+    return false;
+  }
+
+  const char* topic_;
+  std::vector<std::string> known_;  // under mutex_: Cyclone's receive threads read it
+  std::mutex mutex_;
+  Refused refused_;
+};
+
+// The most samples of one command topic a real-time tick takes; the rest wait for the next tick,
+// so no burst (e.g. many instances losing their writer together) stalls one tick. A rig has one
+// instance per command topic, so legitimate traffic is far below it.
+constexpr int kMaxCommandsPerTick = 256;
 
 // Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
 constexpr std::uint64_t kLockstepSliceSteps = 100;
@@ -60,6 +120,10 @@ struct RigService::Impl {
     return text;
   }
   Clock::time_point started;
+
+  // One per command topic (and step requests); declared before the DDS entities, so they
+  // outlive the readers whose topic filters point at them.
+  std::vector<std::unique_ptr<UnknownRigGate>> gates;
 
   // Declared parent-first, so children are deleted before their participant and domain.
   std::optional<dds::Domain> domain;
@@ -178,6 +242,7 @@ struct RigService::Impl {
           break;
         }
         rigs.push_back(std::move(rig).value());
+        for (const auto& gate : gates) gate->Allow(rigs.back().rig_id());
         observers.emplace_back();
         observer_failed.push_back(false);
         last_step_request.push_back(0);
@@ -255,16 +320,30 @@ struct RigService::Impl {
 
   // A command for a rig this service does not run: every rig's status reports it, with at most
   // kMaxReportedIdBytes of the id (a stranger's 10 MB id would otherwise go out in every status).
-  void RefuseUnknown(const char* topic, const char* rig_id) {
+  // `count` such commands, the last for the id `reported_id` (ReportedId's form).
+  void RefuseUnknown(const char* topic, const std::string& reported_id, std::uint64_t count = 1) {
     std::string serving;
     for (const RigHost& rig : rigs) serving += (serving.empty() ? "" : ", ") + rig.rig_id();
-    const std::string reason = std::string(topic) + " for unknown rig " + ReportedId(rig_id) +
+    const std::string reason = std::string(topic) + " for unknown rig " + reported_id +
                                " refused (this service runs: " + serving + ")";
-    for (RigHost& rig : rigs) (void)rig.Refuse(reason);
+    for (RigHost& rig : rigs) (void)rig.Refuse(reason, count);
+  }
+
+  // Reports what the topic filters refused since the last call; true if there was any.
+  bool RefuseFiltered() {
+    bool any = false;
+    for (const auto& gate : gates) {
+      const UnknownRigGate::Refused refused = gate->Drain();
+      if (refused.count == 0) continue;
+      RefuseUnknown(gate->topic(), refused.reported_id, refused.count);
+      any = true;
+    }
+    return any;
   }
 
   // Applies every pending command. Refusals are recorded by the rigs themselves.
   Status TakeCommands() {
+    RefuseFiltered();
     for (auto& set : endpoints) MPDRIG_RETURN_IF_ERROR(TakeCommands(*set));
     return Status::Ok();
   }
@@ -275,8 +354,8 @@ struct RigService::Impl {
     auto& piston = endpoints_set.piston;
     auto apply = [this](const char* topic, const char* rig_id, const auto& set) {
       RigHost* rig = Find(rig_id);
-      if (rig == nullptr) {
-        RefuseUnknown(topic, rig_id);
+      if (rig == nullptr) {  // the topic filter lets none through; kept for safety
+        RefuseUnknown(topic, ReportedId(rig_id));
         return;
       }
       (void)set(*rig);  // a refusal is counted and kept by the rig
@@ -303,24 +382,28 @@ struct RigService::Impl {
           apply(kChokeCommandTopic, c.rig_id,
                 [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
         },
-        choke_lost);
+        choke_lost, kMaxCommandsPerTick);
     if (!taken.ok()) return taken.status();
-    taken = pump->TakeEach([&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
-      if (!FromItsPartition(endpoints_set, kPumpCommandTopic, c.rig_id, pump->handle(),
-                            info.publication_handle))
-        return;
-      NoteOwner(c.rig_id, "pump", pump->handle(), info);
-      apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
-    });
+    taken = pump->TakeEach(
+        [&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
+          if (!FromItsPartition(endpoints_set, kPumpCommandTopic, c.rig_id, pump->handle(),
+                                info.publication_handle))
+            return;
+          NoteOwner(c.rig_id, "pump", pump->handle(), info);
+          apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
+        },
+        {}, kMaxCommandsPerTick);
     if (!taken.ok()) return taken.status();
-    taken = outlet->TakeEach([&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
-      if (!FromItsPartition(endpoints_set, kOutletCommandTopic, c.rig_id, outlet->handle(),
-                            info.publication_handle))
-        return;
-      NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
-      apply(kOutletCommandTopic, c.rig_id,
-            [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
-    });
+    taken = outlet->TakeEach(
+        [&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
+          if (!FromItsPartition(endpoints_set, kOutletCommandTopic, c.rig_id, outlet->handle(),
+                                info.publication_handle))
+            return;
+          NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
+          apply(kOutletCommandTopic, c.rig_id,
+                [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
+        },
+        {}, kMaxCommandsPerTick);
     if (!taken.ok()) return taken.status();
     // No piston controller left: the heave generator stops where it is.
     auto piston_lost = [this, &endpoints_set](const mpdrig_PistonCommand& c) {
@@ -340,7 +423,7 @@ struct RigService::Impl {
           apply(kPistonCommandTopic, c.rig_id,
                 [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
         },
-        piston_lost);
+        piston_lost, kMaxCommandsPerTick);
     return taken.ok() ? Status::Ok() : taken.status();
   }
 
@@ -543,6 +626,8 @@ struct RigService::Impl {
         const dds_return_t ready =
             dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
         if (ready < 0) return dds::Check(ready, "dds_waitset_wait");
+        // Refusals of the topic filters (unknown rig ids) are reported within this wait.
+        if (RefuseFiltered()) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
         if (ready == 0) continue;
       }
       MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
@@ -565,9 +650,9 @@ struct RigService::Impl {
       if (refused) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
       for (auto& [rig_id, request] : requests) {
         RigHost* rig = Find(rig_id.c_str());
-        if (rig == nullptr) {
+        if (rig == nullptr) {  // the topic filter lets none through; kept for safety
           MPDRIG_RETURN_IF_ERROR(TakeCommands());
-          RefuseUnknown(kStepRequestTopic, rig_id.c_str());
+          RefuseUnknown(kStepRequestTopic, ReportedId(rig_id.c_str()));
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
@@ -727,6 +812,26 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   MPDRIG_RETURN_IF_ERROR(
       topic(&mpdrig_OutletCommand_desc, kOutletCommandTopic, &impl->outlet_topic));
   MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_StepRequest_desc, kStepRequestTopic, &impl->step_topic));
+  // Filters on the command and step topics, set before their readers are created (Cyclone
+  // applies a topic's filter to the readers made from it afterwards).
+  std::vector<std::string> known;
+  for (const RigHost& rig : impl->rigs) known.push_back(rig.rig_id());
+  auto gate = [&impl, &known](const char* name, dds_topic_filter_sample_arg_fn accept,
+                              const dds::Entity& on) -> Status {
+    impl->gates.push_back(std::make_unique<UnknownRigGate>(name, known));
+    return dds::Check(dds_set_topic_filter_and_arg(on.handle(), accept, impl->gates.back().get()),
+                      "dds_set_topic_filter_and_arg");
+  };
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kChokeCommandTopic, &UnknownRigGate::Accept<mpdrig_ChokeCommand>, impl->choke_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kPistonCommandTopic, &UnknownRigGate::Accept<mpdrig_PistonCommand>, impl->piston_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kPumpCommandTopic, &UnknownRigGate::Accept<mpdrig_PumpCommand>, impl->pump_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kOutletCommandTopic, &UnknownRigGate::Accept<mpdrig_OutletCommand>, impl->outlet_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      gate(kStepRequestTopic, &UnknownRigGate::Accept<mpdrig_StepRequest>, impl->step_topic));
   MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigStatus_desc, kStatusTopic, &impl->status_topic));
   MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigEstimate_desc, kEstimateTopic, &impl->estimate_topic));
   MPDRIG_RETURN_IF_ERROR(

@@ -136,6 +136,39 @@ TEST(RigConfig, BadChokeTableIsAnError) {
                    .ok());
 }
 
+// An effect's bad parameter is an error at the line and column of that parameter (and an unknown
+// effect at the effect's), so a long config points at the line to fix.
+TEST(RigConfig, BadEffectParameterNamesItsLineAndColumn) {
+  const std::string bounds = ErrorOf(
+      "wave_speed_mps: 1000\n"
+      "effect {\n"
+      "  name: \"sensor_lag\"\n"
+      "  param { key: \"time_constant_s\" value: 5 }\n"
+      "}\n");
+  EXPECT_EQ(bounds.rfind(kSource + ":4:3: ", 0), 0u) << bounds;
+  EXPECT_NE(bounds.find("time_constant_s"), std::string::npos) << bounds;
+  const std::string key = ErrorOf(
+      "effect { name: \"sensor_lag\"\n"
+      "         param { key: \"time_constant_s\" value: 0.1 }\n"
+      "         param { key: \"tau\" value: 0.1 } }\n");
+  EXPECT_EQ(key.rfind(kSource + ":3:10: ", 0), 0u) << key;
+  EXPECT_NE(key.find("no parameter 'tau'"), std::string::npos) << key;
+  const std::string twice = ErrorOf(
+      "effect { name: \"sensor_lag\"\n"
+      "  param { key: \"time_constant_s\" value: 0.1 }\n"
+      "  param { key: \"time_constant_s\" value: 0.2 } }\n");
+  EXPECT_EQ(twice.rfind(kSource + ":3:3: ", 0), 0u) << twice;
+  const std::string name = ErrorOf("wave_speed_mps: 1000\n  effect { name: \"gremlins\" }\n");
+  EXPECT_EQ(name.rfind(kSource + ":2:3: ", 0), 0u) << name;
+  EXPECT_NE(name.find("unknown effect 'gremlins'"), std::string::npos) << name;
+  // A good one still parses, with its value.
+  auto good = ParseRigConfig(
+      "effect { name: \"sensor_lag\" param { key: \"time_constant_s\" value: 0.2 } }\n", kSource);
+  ASSERT_TRUE(good.ok()) << good.status().message();
+  ASSERT_EQ(good->effects.size(), 1u);
+  EXPECT_EQ(*good->effects[0].Find("time_constant_s"), 0.2);
+}
+
 TEST(RigConfig, FormattedDefaultsParseBackIdentically) {
   const RigParams defaults;
   const std::string text = FormatRigConfig(defaults);

@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# The whole test suite built with AddressSanitizer and UndefinedBehaviorSanitizer, in its own build
+# directory (${SANITIZE_BUILD_DIR:-<repo>/build-asan}): memory errors, leaks and undefined
+# behaviour in our code fail the test that hit them. RelWithDebInfo (-O2 -g) keeps it fast enough
+# for CI and gives reports with lines. Run by .ci/run after the Release suite (README, "Sanitizer
+# build"); on its own: deploy/test-sanitize.sh [ctest arguments, e.g. -R riglog].
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${SANITIZE_BUILD_DIR:-$root/build-asan}"
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DMPDRIG_SANITIZE=ON \
+  -DMPDRIG_BUILD_TESTS=ON -DMPDRIG_BUILD_BENCHMARKS=OFF >/dev/null
+cmake --build "$build" -j"$(nproc)"
+# Cyclone DDS and the other libraries are not instrumented; ASan still sees their memory through
+# malloc. halt_on_error: the first report ends the test (and fails it).
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:halt_on_error=1:abort_on_error=0}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+ctest --test-dir "$build" -j"$(nproc)" --output-on-failure --timeout 1800 "$@"

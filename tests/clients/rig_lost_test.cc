@@ -1,0 +1,177 @@
+// The clients' rule for a lost rig (clients/rig_watch.h): bhp_controller and rig_echo against a
+// real `mpdrig serve` that is killed, restarted or stopped under them. Each must say why and exit
+// with status 3 (kExitRigLost), never 0 with its normal summary and never carry on across a
+// restart. Processes over loopback DDS, a domain of the test's own.
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "model/riglog/rig_log.h"
+#include "tests/support/shell.h"
+#include "tests/support/test_domain.h"
+
+extern char** environ;
+
+namespace mpdrig {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// A child process with stdout and stderr in a file; SIGKILLed at the latest when this goes.
+class Child {
+ public:
+  Child(std::vector<std::string> args, const std::string& output) {
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+  bool started() const { return pid_ > 0; }
+  void Signal(int signal) const { ::kill(pid_, signal); }
+  // Its exit code once it exits within `timeout_s`; -1 if it does not (or died of a signal).
+  int Wait(double timeout_s) {
+    const auto until = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (pid_ > 0) {
+      int status = 0;
+      const pid_t done = ::waitpid(pid_, &status, WNOHANG);
+      if (done == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+      }
+      if (Clock::now() > until) return -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    }
+    return -1;
+  }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+class RigLost : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const int claimed = testing::ClaimTestDomain();
+    ASSERT_GT(claimed, 0);
+    domain_ = std::to_string(claimed);
+    dir_ = testing::TestTempDir("rig_lost_");
+  }
+  std::vector<std::string> Serve() const {
+    return {MPDRIG_EXE, "serve", "--clock", "realtime",   "--rate-hz", "100",         "--domain",
+            domain_,    "--rig", "rig-1",   "--pump-lpm", "5",         "--choke-deg", "31"};
+  }
+  std::vector<std::string> Controller(const std::string& timeout_s) const {
+    return {BHP_CONTROLLER_EXE, "--rig", "rig-1", "--domain", domain_, "--timeout", timeout_s};
+  }
+  std::vector<std::string> Echo(const std::string& timeout_s) const {
+    return {RIG_ECHO_EXE, "--rig", "rig-1",
+            "--domain",   domain_, "--timeout",
+            timeout_s,    "--out", (dir_ / "echo.csv").string()};
+  }
+  std::string Output(const char* name) const { return testing::ReadFile(dir_ / name); }
+  // The recording up to the loss is a rig log the model reads, ending on a whole row.
+  void ExpectReadableRecording() const {
+    auto read = riglog::ReadRigLog((dir_ / "echo.csv").string());
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_GT(read->num_rows(), 50u) << "about 3 s at 100 Hz were recorded";
+  }
+
+  std::string domain_;
+  std::filesystem::path dir_;
+};
+
+// kill -9 of the service: both clients notice within their --timeout (1 s) plus the 100 ms of
+// their wait, and exit 3. Before: bhp_controller waited its timeout and exited 0 with its summary.
+TEST_F(RigLost, KilledServiceMakesTheClientsExitWithRigLost) {
+  Child serve(Serve(), (dir_ / "serve.txt").string());
+  ASSERT_TRUE(serve.started());
+  Child controller(Controller("1"), (dir_ / "controller.txt").string());
+  Child echo(Echo("1"), (dir_ / "echo.txt").string());
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  serve.Signal(SIGKILL);
+  const auto killed = Clock::now();
+  const int controller_code = controller.Wait(10.0);
+  const double controller_s = std::chrono::duration<double>(Clock::now() - killed).count();
+  EXPECT_EQ(controller_code, 3) << Output("controller.txt");
+  EXPECT_NE(Output("controller.txt").find("rig rig-1 lost: no sample for"), std::string::npos)
+      << Output("controller.txt");
+  EXPECT_EQ(Output("controller.txt").find("rig=rig-1 "), std::string::npos)
+      << "no summary line as if the run had ended well";
+  std::printf("bhp_controller noticed the killed service after %.2f s\n", controller_s);
+  // The timeout (1 s) plus slack for a loaded machine; far below the 10 s lease.
+  EXPECT_GE(controller_s, 0.9);
+  EXPECT_LT(controller_s, 5.0);
+  EXPECT_EQ(echo.Wait(10.0), 3) << Output("echo.txt");
+  EXPECT_NE(Output("echo.txt").find("rig rig-1 lost"), std::string::npos) << Output("echo.txt");
+  ExpectReadableRecording();
+}
+
+// The service restarts within the clients' timeout: the rig's time goes back to 0. Both clients
+// say so and exit 3 instead of going on with the old run's state. Before: the controller went on
+// without noticing.
+TEST_F(RigLost, RestartedServiceIsNoticedByTheRigTimeGoingBack) {
+  auto serve = std::make_unique<Child>(Serve(), (dir_ / "serve.txt").string());
+  ASSERT_TRUE(serve->started());
+  Child controller(Controller("8"), (dir_ / "controller.txt").string());
+  Child echo(Echo("8"), (dir_ / "echo.txt").string());
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  serve->Signal(SIGKILL);
+  serve.reset();
+  Child again(Serve(), (dir_ / "serve2.txt").string());
+  ASSERT_TRUE(again.started());
+  EXPECT_EQ(controller.Wait(15.0), 3) << Output("controller.txt");
+  EXPECT_NE(Output("controller.txt").find("rig time went back from"), std::string::npos)
+      << Output("controller.txt");
+  EXPECT_EQ(echo.Wait(15.0), 3) << Output("echo.txt");
+  EXPECT_NE(Output("echo.txt").find("rig time went back from"), std::string::npos)
+      << Output("echo.txt");
+  ExpectReadableRecording();
+}
+
+// A service that stops cleanly (SIGTERM) takes its sensor writer with it: the clients notice at
+// once, long before their --timeout of 30 s.
+TEST_F(RigLost, StoppedServiceIsNoticedByItsWriterLeaving) {
+  Child serve(Serve(), (dir_ / "serve.txt").string());
+  ASSERT_TRUE(serve.started());
+  Child controller(Controller("30"), (dir_ / "controller.txt").string());
+  Child echo(Echo("30"), (dir_ / "echo.txt").string());
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  serve.Signal(SIGTERM);
+  const auto stopped = Clock::now();
+  EXPECT_EQ(controller.Wait(10.0), 3) << Output("controller.txt");
+  const double noticed_s = std::chrono::duration<double>(Clock::now() - stopped).count();
+  std::printf("bhp_controller noticed the stopped service after %.2f s\n", noticed_s);
+  // Measured well under a second; 5 s leaves room for a loaded machine and is far from 30 s.
+  EXPECT_LT(noticed_s, 5.0);
+  EXPECT_NE(Output("controller.txt").find("the rig's service left"), std::string::npos)
+      << Output("controller.txt");
+  EXPECT_EQ(echo.Wait(10.0), 3) << Output("echo.txt");
+  EXPECT_NE(Output("echo.txt").find("the rig's service left"), std::string::npos)
+      << Output("echo.txt");
+  ExpectReadableRecording();
+}
+
+}  // namespace
+}  // namespace mpdrig
