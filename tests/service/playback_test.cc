@@ -110,7 +110,9 @@ TEST(LogPlayback, LoopKeepsTheClockRising) {
   for (int i = 0; i < 2 * kRows + 5; ++i) {
     auto sample = (*playback)->Next(0);
     ASSERT_TRUE(sample.ok()) << sample.status().message();
-    if (i > 0) EXPECT_NEAR(sample->time_s - previous, 0.01, 1e-9) << "row " << i;
+    if (i > 0) {
+      EXPECT_NEAR(sample->time_s - previous, 0.01, 1e-9) << "row " << i;
+    }
     previous = sample->time_s;
   }
   EXPECT_EQ((*playback)->passes(), 2u);

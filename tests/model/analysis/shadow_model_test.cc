@@ -59,20 +59,15 @@ ShadowOptions Options() {
   return options;
 }
 
-double ShadowError(const std::vector<RigSample>& rig, const RigParams& shadow_params) {
-  auto shadow = ShadowModel::Create(shadow_params, Options());
-  EXPECT_TRUE(shadow.ok());
-  for (const RigSample& s : rig) EXPECT_TRUE((*shadow)->Push(s).ok());
-  return (*shadow)->error();
-}
-
 TEST(ShadowModel, NoErrorUntilWarmedUpThenSmallForTheRigsOwnModel) {
   const std::vector<RigSample> rig = RigRun(RigParams(), 40.0);
   auto shadow = ShadowModel::Create(RigParams(), Options());
   ASSERT_TRUE(shadow.ok());
   for (std::size_t i = 0; i < rig.size(); ++i) {
     ASSERT_TRUE((*shadow)->Push(rig[i]).ok());
-    if (rig[i].time_s < 19.0) EXPECT_TRUE(std::isnan((*shadow)->error())) << rig[i].time_s;
+    if (rig[i].time_s < 19.0) {
+      EXPECT_TRUE(std::isnan((*shadow)->error())) << rig[i].time_s;
+    }
   }
   // The same model, fed the rig's own inputs: only the piston velocity differs (a smoothed
   // difference of the sampled position instead of the sine's derivative) and the choke (the
