@@ -51,7 +51,7 @@ if [[ $dev == 1 ]]; then
   cp "$root/idl/mpdrig.idl" "$sdk/idl/"
   cp "$root"/service/dds/*.h "$root"/service/dds/*.cc "$sdk/service/dds/"
   cp "$root/model/common/status.h" "$sdk/model/common/"
-  cp "$root"/clients/*.cc "$sdk/clients/"
+  cp "$root"/clients/*.cc "$root"/clients/*.h "$sdk/clients/"
   old_dev="$(podman image inspect --format '{{.Id}}' "$MPDRIG_DEV_IMAGE" 2>/dev/null || true)"
   podman_build_replacing "$MPDRIG_DEV_IMAGE" --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
     -f "$here/Containerfile.dev" "$context/dev"
