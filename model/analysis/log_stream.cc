@@ -256,8 +256,13 @@ void ReconstructingRowSource::ReconstructHeld(bool last_block) {
 
 // ---- Pipeline ---------------------------------------------------------------------------------
 
-RowPipeline::RowPipeline(double smoothing_s, std::optional<ReplaySetup> replay, Sink sink)
-    : smoothing_s_(smoothing_s), replay_(std::move(replay)), sink_(std::move(sink)) {
+RowPipeline::RowPipeline(double smoothing_s, std::optional<ReplaySetup> replay, Sink sink,
+                         long smoothing_block_rows)
+    : smoothing_s_(smoothing_s),
+      replay_(std::move(replay)),
+      sink_(std::move(sink)),
+      smoothing_block_rows_(std::max(1L, smoothing_block_rows)),
+      next_smoothing_(smoothing_block_rows_) {
   if (replay_) replay_->options.choke_input = ChokeInput::kMeasured;
 }
 
@@ -270,7 +275,7 @@ Status RowPipeline::Push(const LogRow& row) {
   if (pushed_ >= next_smoothing_) {
     // Not again before another block has come in (a window longer than a block would otherwise
     // be smoothed again at every row).
-    next_smoothing_ = pushed_ + static_cast<long>(kSmoothingBlock);
+    next_smoothing_ = pushed_ + smoothing_block_rows_;
     Smooth(false);
     return Emit();
   }

@@ -171,8 +171,15 @@ class RowPipeline {
  public:
   using Sink = std::function<void(const PipelineSample&)>;
   // smoothing_s: the piston smoothing window (ReplayOptions::piston_smoothing_s). Without
-  // `replay` the rows pass with their smoothed piston only.
-  RowPipeline(double smoothing_s, std::optional<ReplaySetup> replay, Sink sink);
+  // `replay` the rows pass with their smoothed piston only. The smoothing runs on blocks of
+  // `smoothing_block_rows` rows: the default suits a file (few calls, the same doubles); a live
+  // replay (the shadow model beside a running rig) wants a few rows, so its model stays within
+  // the smoothing window and a block of the newest row. The smoothed values are the same either
+  // way; the initial steady state averages the rows of the first kInitialInputWindowS held at
+  // the first emission, which a short block may cut shorter.
+  RowPipeline(double smoothing_s, std::optional<ReplaySetup> replay, Sink sink,
+              long smoothing_block_rows = kDefaultSmoothingBlockRows);
+  static constexpr long kDefaultSmoothingBlockRows = 4096;
   RowPipeline(const RowPipeline&) = delete;
   RowPipeline& operator=(const RowPipeline&) = delete;
 
@@ -205,7 +212,8 @@ class RowPipeline {
   long pushed_ = 0;
   long smoothed_ = 0;  // rows 0 .. smoothed_ - 1 have smoothed_m
   long emitted_ = 0;
-  long next_smoothing_ = 4096;  // rows pushed at the next block
+  long smoothing_block_rows_;
+  long next_smoothing_;  // rows pushed at the next block
   bool finished_ = false;
   std::vector<double> window_time_s_, window_position_m_;  // raw piston, from window_start_
   long window_start_ = 0;

@@ -17,5 +17,7 @@ void AddGainsCommand(CLI::App* app, int* exit_code);
 void AddEffectsCommand(CLI::App* app, int* exit_code);   // issue 4
 void AddDiagnoseCommand(CLI::App* app, int* exit_code);  // issue 4 (and synth)
 void AddFitCommand(CLI::App* app, int* exit_code);       // issue 4
+void AddRevealCommand(CLI::App* app, int* exit_code);
+void AddShadowCommand(CLI::App* app, int* exit_code);
 
 }  // namespace mpdrig::cli

@@ -13,7 +13,9 @@
 #include "model/common/units.h"
 #include "model/sim/sensor_noise.h"
 #include "service/cli/commands.h"
+#include "service/cli/hidden_effect.h"
 #include "service/cli/model_options.h"
+#include "service/rig/log_playback.h"
 #include "service/rig/rig_service.h"
 
 namespace mpdrig::cli {
@@ -51,12 +53,24 @@ struct ServeArgs {
   bool observer_linear_friction = false;
   std::string sensor_noise = "lab";
   std::uint64_t noise_seed = 1;
+  std::string playback;       // a rig log to publish instead of simulating
+  bool loop = false;          // with playback: start again after the last row
+  std::string hidden_effect;  // NAME[:k=v] or random: an effect the status does not name
+  std::uint64_t seed = 1;     // of --hidden-effect random
 };
 
 int RunServe(const ServeArgs& args) {
   const std::string name = "serve";
   auto params = args.model.LoadParams();
   if (!params.ok()) return Fail(name, params.status());
+  if (!args.hidden_effect.empty()) {
+    const Status hidden =
+        ApplyEffectSpec(&*params, ResolveHiddenEffect(args.hidden_effect, args.seed));
+    if (!hidden.ok()) return Fail(name, hidden.Within("--hidden-effect"));
+  }
+  if (args.loop && args.playback.empty()) {
+    return Fail(name, Status::Error("--loop needs --playback LOG"));
+  }
   auto options = args.model.LoadSimulationOptions();
   if (!options.ok()) return Fail(name, options.status());
   for (int i = 0; i < args.profile_points; ++i) {
@@ -73,7 +87,19 @@ int RunServe(const ServeArgs& args) {
   }
 
   std::vector<service::RigHost> rigs;
+  if (!args.playback.empty()) {
+    if (args.rigs.size() != 1) {
+      return Fail(name, Status::Error("--playback plays one log as one rig: give one --rig"));
+    }
+    auto playback = service::LogPlayback::Open(args.playback, args.loop);
+    if (!playback.ok()) return Fail(name, playback.status().Within("--playback"));
+    auto rig = service::RigHost::CreatePlayback(args.rigs.front(), *params, *options,
+                                                std::move(playback).value());
+    if (!rig.ok()) return Fail(name, rig.status());
+    rigs.push_back(std::move(rig).value());
+  }
   for (const std::string& id : args.rigs) {
+    if (!args.playback.empty()) break;  // the playback is the one rig
     auto rig =
         service::RigHost::Create(id, *params, *options, args.rate_hz,
                                  {args.choke_deg, args.pump_lpm, args.outlet_barg}, {}, sensors);
@@ -91,6 +117,8 @@ int RunServe(const ServeArgs& args) {
   serve.domain = static_cast<dds_domainid_t>(args.domain);
   serve.duration_s = args.duration_s;
   serve.safe_choke_deg = args.safe_choke_deg;
+  serve.hide_effects = !args.hidden_effect.empty();
+  serve.catch_up = !args.playback.empty();
   serve.observer = !args.no_observer;
   serve.estimate_hz = args.estimate_hz;
   serve.profile_hz = args.profile_hz;
@@ -101,7 +129,7 @@ int RunServe(const ServeArgs& args) {
   }
   serve.observer_options.observer.noise.outlet_pressure_pa = units::BarToPa(args.observer_noise[0]);
   serve.observer_options.observer.noise.outlet_flow_m3ps = units::LpmToM3ps(args.observer_noise[1]);
-  serve.observer_options.observer.noise.sample_period_s = 1.0 / args.rate_hz;
+  serve.observer_options.observer.noise.sample_period_s = rigs.front().sensor_period_s();
   serve.observer_options.noise_window_s = args.observer_noise_window_s;
   serve.observer_options.observer.quadratic_friction = !args.observer_linear_friction;
   if (!args.dds_config.empty()) {
@@ -165,6 +193,15 @@ int RunServe(const ServeArgs& args) {
                             : ("DDS Security with " + serve.security->dir +
                                "; each rig's topics in partition rig.<rig id>")
                                   .c_str());
+  if (!args.playback.empty()) {
+    std::fprintf(stderr, "  playback: %s at %g Hz; commands are refused (a recording)\n",
+                 (*service)->rigs().front().playback()->Describe().c_str(),
+                 1.0 / (*service)->rigs().front().sensor_period_s());
+  }
+  if (!args.hidden_effect.empty()) {
+    std::fprintf(stderr, "  a hidden effect is active%s\n",
+                 args.hidden_effect == "random" ? " (mpdrig reveal --seed S tells which)" : "");
+  }
   const auto started = std::chrono::steady_clock::now();
   const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
@@ -317,6 +354,20 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
   command
       ->add_option("--noise-seed", args->noise_seed,
                    "seed of the sensor noise (each rig mixes in its id)")
+      ->capture_default_str();
+  command->add_option("--playback", args->playback,
+                      "publish this rig log (rig-log-format.md) as the rig's sensors, one row per "
+                      "period of the log's own sampling (median interval), paced by --clock; "
+                      "channels the log lacks go out as NaN (not measured); the observer runs on "
+                      "its topside channels; every command is refused (a recording). One --rig; "
+                      "--rate-hz, the initial commands and --sensor-noise do not apply");
+  command->add_flag("--loop", args->loop,
+                    "with --playback: start again after the last row, the clock running on");
+  command->add_option("--hidden-effect", args->hidden_effect,
+                      "a mystery rig: run with this effect (NAME[:k=v], or random: one from the "
+                      "catalogue at its defaults, chosen by --seed) and let the status say only "
+                      "\"a hidden effect is active\" (mpdrig reveal --seed S tells which)");
+  command->add_option("--seed", args->seed, "seed of --hidden-effect random")
       ->capture_default_str();
   command->callback([args, exit_code]() { *exit_code = RunServe(*args); });
 }

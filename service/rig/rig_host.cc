@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "model/common/units.h"
+#include "service/rig/log_playback.h"
 
 namespace mpdrig::service {
 namespace {
@@ -61,6 +62,19 @@ Result<RigHost> RigHost::Create(std::string rig_id, const RigParams& params,
                  limits, inputs, options.pressure_positions_m, sensors);
 }
 
+Result<RigHost> RigHost::CreatePlayback(std::string rig_id, RigParams params,
+                                        SimulationOptions options,
+                                        std::shared_ptr<LogPlayback> playback) {
+  if (playback == nullptr) return Status::Error("playback without a log");
+  params.atmospheric_pressure_pa = playback->atmospheric_pressure_pa();
+  auto rig = Create(std::move(rig_id), params, std::move(options), 1.0 / playback->period_s());
+  if (!rig.ok()) return rig.status();
+  rig->playback_ = std::move(playback);
+  return rig;
+}
+
+bool RigHost::finished() const { return playback_ != nullptr && playback_->finished(); }
+
 RigHost::RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
                  RigInputs inputs, std::vector<double> positions_m, SensorOptions sensors)
     : rig_id_(std::move(rig_id)),
@@ -73,6 +87,7 @@ RigHost::RigHost(std::string rig_id, RigSampler sampler, double period_s, Comman
       sensors_(sensors.noise, MixSeed(sensors.seed, rig_id_)) {}
 
 std::string RigHost::DescribeSensorNoise() const {
+  if (playback_) return "as recorded: playback of " + playback_->Describe();
   if (sensor_options_.noise.IsNone()) return "none";
   return sensor_options_.noise.ToSpec() + ", seed " + std::to_string(sensor_options_.seed);
 }
@@ -83,6 +98,11 @@ std::optional<double> RigHost::piston_sine_hz() const {
     return piston_.frequency_hz;
   }
   return std::nullopt;
+}
+
+Status RigHost::RefuseRecorded(const char* what) {
+  return Refuse(std::string(what) + " refused: rig " + rig_id_ + " plays back a recording (" +
+                playback_->path() + "); it takes no commands");
 }
 
 Status RigHost::Refuse(const std::string& reason, std::uint64_t count) {
@@ -106,6 +126,7 @@ double RigHost::outlet_command_barg() const {
 }
 
 Status RigHost::SetChokeDeg(double opening_deg) {
+  if (playback_) return RefuseRecorded("choke command");
   if (!Within(opening_deg, limits_.choke_min_deg, limits_.choke_max_deg)) {
     return Refuse(OutOfRange("choke opening", opening_deg, limits_.choke_min_deg,
                              limits_.choke_max_deg, "deg"));
@@ -115,6 +136,7 @@ Status RigHost::SetChokeDeg(double opening_deg) {
 }
 
 Status RigHost::SetPumpLpm(double flow_lpm) {
+  if (playback_) return RefuseRecorded("pump command");
   if (!Within(flow_lpm, limits_.pump_min_lpm, limits_.pump_max_lpm)) {
     return Refuse(
         OutOfRange("pump flow", flow_lpm, limits_.pump_min_lpm, limits_.pump_max_lpm, "L/min"));
@@ -124,6 +146,7 @@ Status RigHost::SetPumpLpm(double flow_lpm) {
 }
 
 Status RigHost::SetOutletBarg(double pressure_barg) {
+  if (playback_) return RefuseRecorded("outlet command");
   if (!Within(pressure_barg, limits_.outlet_min_barg, limits_.outlet_max_barg)) {
     return Refuse(OutOfRange("outlet pressure", pressure_barg, limits_.outlet_min_barg,
                              limits_.outlet_max_barg, "barg"));
@@ -133,6 +156,7 @@ Status RigHost::SetOutletBarg(double pressure_barg) {
 }
 
 Status RigHost::SetPiston(const PistonCommandIn& command) {
+  if (playback_) return RefuseRecorded("piston command");
   using Mode = PistonCommandIn::Mode;
   const double x_max = limits_.piston_max_abs_m;
   const double f_max = limits_.piston_max_frequency_hz;
@@ -202,6 +226,13 @@ double RigHost::PistonPositionAt(double t) const {
 }
 
 Result<RigSample> RigHost::Tick() {
+  if (playback_) {
+    auto row = playback_->Next(positions_m_.size());
+    if (!row.ok()) return row.status();
+    time_s_ = row->time_s;
+    ++counters_.samples;
+    return row;
+  }
   const double target = time_s_ + period_s_;
   auto sample = sampler_.SampleAt(target, [this](double t_b, double dt) {
     StepInputs step;

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@
 #include "model/sim/sensor_noise.h"
 
 namespace mpdrig::service {
+
+class LogPlayback;  // log_playback.h
 
 // What the service accepts: physical limits of the lab rig, not tuning ranges.
 struct CommandLimits {
@@ -76,6 +79,17 @@ class RigHost {
                                 InitialCommands initial = {}, CommandLimits limits = {},
                                 SensorOptions sensors = {});
 
+  // A rig that plays a recorded log (log_playback.h) instead of simulating: each Tick is the
+  // log's next row, as recorded (no sensor noise added); every command is refused with the
+  // reason (it is a recording); `params` give the atmospheric pressure of the lab units (the
+  // log's) and the observer's model.
+  static Result<RigHost> CreatePlayback(std::string rig_id, RigParams params,
+                                        SimulationOptions options,
+                                        std::shared_ptr<LogPlayback> playback);
+  const LogPlayback* playback() const { return playback_.get(); }
+  // A playback whose last row has gone out (a simulated rig never finishes).
+  bool finished() const;
+
   const std::string& rig_id() const { return rig_id_; }
   double sensor_period_s() const { return period_s_; }
   double time_s() const { return time_s_; }
@@ -123,6 +137,7 @@ class RigHost {
   RigHost(std::string rig_id, RigSampler sampler, double period_s, CommandLimits limits,
           RigInputs inputs, std::vector<double> positions_m, SensorOptions sensors);
   double PistonPositionAt(double time_s) const;
+  Status RefuseRecorded(const char* what);
 
   std::string rig_id_;
   RigSampler sampler_;
@@ -137,6 +152,7 @@ class RigHost {
   std::vector<double> positions_m_;
   SensorOptions sensor_options_;
   SensorNoiseApplier sensors_;
+  std::shared_ptr<LogPlayback> playback_;  // null: a simulated rig
 };
 
 }  // namespace mpdrig::service

@@ -464,7 +464,13 @@ struct RigService::Impl {
     RigHost& rig = rigs[index];
     std::optional<RigObserver>& observer = observers[index];
     Status status = Status::Ok();
-    if (!observer) {
+    // A playback may lack a topside channel (not measured: NaN); the observer cannot run on a
+    // gap, and would otherwise publish NaN as if it were an estimate.
+    if (!std::isfinite(sample[Channel::kC2]) || !std::isfinite(sample[Channel::kFT1])) {
+      status = Status::Error("C2 or FT1 not measured at t = " + std::to_string(sample.time_s) +
+                             " s: the observer needs both topside channels");
+    }
+    if (status.ok() && !observer) {
       auto created = RigObserver::Create(rig.params(), options.observer_options, sample);
       if (created.ok()) {
         observer.emplace(std::move(created).value());
@@ -514,7 +520,11 @@ struct RigService::Impl {
     wire.warnings._release = false;
     // The physical effects this rig runs with (`serve --effect`, the config file).
     std::vector<std::string> effects;
+    if (options.hide_effects && !rig.params().effects.empty()) {
+      effects.push_back("a hidden effect is active");
+    }
     for (const EffectSetting& effect : rig.params().effects) {
+      if (options.hide_effects) break;
       std::string text = effect.name;
       for (const auto& [key, value] : effect.values) {
         text += " " + key + "=" + std::to_string(value);
@@ -564,19 +574,29 @@ struct RigService::Impl {
       if (rigs.front().time_s() >= next_status_s) {
         MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
         next_status_s += options.status_period_s;
+        // A playback's clock starts at its log's first time, which need not be 0.
+        next_status_s = std::max(next_status_s, rigs.front().time_s());
       }
+      // Playbacks that have played their last row: the service has nothing more to publish.
+      if (std::all_of(rigs.begin(), rigs.end(), [](const RigHost& r) { return r.finished(); }))
+        break;
       if (options.clock == ClockMode::kRealtime) {
         const Clock::time_point now = Clock::now();
         if (now > next + period_wall) {  // more than a whole period late: a missed deadline
           // The periods between the deadline and now are skipped: the rig runs on that far behind
-          // the wall clock. Count them; the status says when it happened (StallWarning).
+          // the wall clock. Count them; the status says when it happened (StallWarning). With
+          // catch_up (a playback) they are run at once instead, and none is lost.
           const double late_s = std::chrono::duration<double>(now - next).count();
           ++deadline_misses;
-          lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
           longest_stall_s = std::max(longest_stall_s, late_s);
           last_stall_s = late_s;
           last_stall_sim_time_s = rigs.front().time_s();
-          next = now + period_wall;
+          if (options.catch_up) {
+            next += period_wall;  // the schedule stands: the next ticks run at once until on it
+          } else {
+            lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
+            next = now + period_wall;
+          }
         } else {
           std::this_thread::sleep_until(next);
           next += period_wall;

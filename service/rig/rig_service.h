@@ -77,6 +77,14 @@ struct ServeOptions {
   std::uint32_t private_rigs = 0;
   std::size_t max_rigs = 0;
   std::function<Result<RigHost>(const std::string& rig_id)> make_rig;
+  // A mystery rig for teaching (`mpdrig serve --hidden-effect`): the status names no effect, it
+  // says only "a hidden effect is active" (`mpdrig reveal` tells which).
+  bool hide_effects = false;
+  // Realtime: a late tick is caught up (the ticks after it run at once until the rig is back
+  // on the wall clock's schedule) instead of skipped. A playback keeps to its recording's clock
+  // this way: an hour of log plays in an hour of wall time, whatever stalls the process met.
+  // deadline_misses and the longest stall still count; no periods are lost.
+  bool catch_up = false;
 
   Status Validate(double sensor_rate_hz) const;
 };

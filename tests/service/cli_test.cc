@@ -11,6 +11,7 @@
 #include <fstream>
 #include <random>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -843,6 +844,41 @@ TEST_F(CliTest, ServeRefusesBadObserverProfileAndHeaveOptions) {
       {"--heave-amp-m 0.1 --heave-hz 3", "--heave-hz"},
       {"--heave-amp-m 0.7", "--heave-amp-m"},
       {"--profile-points 1", "--profile-points"},
+  };
+  for (const auto& [options, reason] : cases) {
+    const RunResult run = Run(serve + options);
+    EXPECT_NE(run.exit_code, 0) << options;
+    EXPECT_TRUE(Contains(run.err, reason)) << options << ": " << run.err;
+  }
+}
+
+// The mystery rig: reveal names the effect `serve --hidden-effect random --seed S` runs, the same
+// one for the same seed, and different seeds draw different effects; bad options are refused.
+TEST_F(CliTest, RevealIsDeterministicPerSeedAndServeRefusesBadMysteryAndPlaybackOptions) {
+  const RunResult a = Run("reveal --seed 7");
+  const RunResult b = Run("reveal --seed 7");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  EXPECT_EQ(a.out, b.out);
+  EXPECT_TRUE(Contains(a.out, "seed 7: ")) << a.out;
+  std::set<std::string> drawn;
+  for (int seed = 1; seed <= 20; ++seed) {
+    const std::string out = Run("reveal --seed " + std::to_string(seed)).out;
+    const std::size_t name = out.find(": ") + 2;  // "seed S: NAME:key=value,...  (summary)"
+    drawn.insert(out.substr(name, out.find(':', name) - name));
+  }
+  EXPECT_GE(drawn.size(), 3u) << "20 seeds should draw several of the catalogue's effects";
+
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  const std::string serve = "serve --clock fast --duration 0.2 --domain " + std::to_string(domain);
+  const RunResult mystery = Run(serve + " --hidden-effect random --seed 7");
+  EXPECT_EQ(mystery.exit_code, 0) << mystery.err;
+  EXPECT_TRUE(Contains(mystery.err, "a hidden effect is active")) << mystery.err;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" --hidden-effect no_such_effect", "no_such_effect"},
+      {" --loop", "--loop needs --playback"},
+      {" --playback missing.csv", "missing.csv"},
+      {" --playback missing.csv --rig a --rig b", "one --rig"},
   };
   for (const auto& [options, reason] : cases) {
     const RunResult run = Run(serve + options);

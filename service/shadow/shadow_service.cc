@@ -1,0 +1,290 @@
+#include "service/shadow/shadow_service.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <vector>
+
+#include "model/effects/effect.h"
+#include "mpdrig.h"
+#include "service/rig/wire.h"
+
+namespace mpdrig::service {
+namespace {
+
+std::string DescribeEffect(const EffectSetting& effect) {
+  std::string text = effect.name;
+  for (const auto& [key, value] : effect.values) {
+    std::ostringstream v;
+    v << value;
+    text += " " + key + "=" + v.str();
+  }
+  return text;
+}
+
+// A string sequence of the wire that points into `texts` (which must outlive it).
+dds_sequence_string StringSequence(std::vector<std::string>* texts, std::vector<char*>* ptrs) {
+  ptrs->clear();
+  for (std::string& text : *texts) ptrs->push_back(text.data());
+  dds_sequence_string seq{};
+  seq._length = seq._maximum = static_cast<std::uint32_t>(ptrs->size());
+  seq._buffer = ptrs->empty() ? nullptr : ptrs->data();
+  seq._release = false;
+  return seq;
+}
+
+}  // namespace
+
+struct ShadowService::Impl {
+  ShadowServeOptions options;
+  RigParams initial_params;
+  std::unique_ptr<ShadowModel> model;
+  std::vector<std::string> parameters;  // "key=value", as set
+  std::optional<dds::Domain> domain;
+  dds::Entity participant, sensors_topic, shadow_sensors_topic, status_topic, command_topic;
+  std::optional<dds::Reader<mpdrig_RigSensors>> sensors;
+  std::optional<dds::Writer<mpdrig_RigSensors>> shadow_sensors;
+  std::optional<dds::Writer<mpdrig_ShadowStatus>> status;
+  std::optional<dds::Reader<mpdrig_ShadowCommand>> commands;
+  std::ofstream log;
+  std::uint64_t samples = 0, published = 0;
+  std::uint64_t rejected = 0;
+  std::uint64_t last_command_id = 0;
+  std::string last_rejection;
+  std::string last_change;
+  double last_change_s = -1.0;
+  double error_at_change = std::numeric_limits<double>::quiet_NaN();
+  double first_time_s = std::numeric_limits<double>::quiet_NaN();
+  double next_status_s = -std::numeric_limits<double>::infinity();
+
+  void Refuse(const std::string& reason) {
+    ++rejected;
+    last_rejection = reason;
+    next_status_s = -std::numeric_limits<double>::infinity();  // say so at once
+  }
+
+  void Apply(const mpdrig_ShadowCommand& command) {
+    const std::string argument = command.argument != nullptr ? command.argument : "";
+    if (options.rig_id != command.rig_id) {
+      // Another shadow's command: on a shared domain several shadows may listen.
+      return;
+    }
+    last_command_id = command.command_id;
+    const double before = model->error();
+    RigParams params = model->params();
+    std::string change;
+    Status status = Status::Ok();
+    switch (command.action) {
+      case mpdrig_SHADOW_EFFECT_ON:
+        status = ApplyEffectSpec(&params, argument);
+        change = "effect on: " + argument;
+        break;
+      case mpdrig_SHADOW_EFFECT_OFF: {
+        const auto before_size = params.effects.size();
+        std::erase_if(params.effects, [&](const EffectSetting& e) { return e.name == argument; });
+        if (params.effects.size() == before_size) {
+          status = Status::Error("effect '" + argument + "' is not on (on: " +
+                                 std::to_string(params.effects.size()) + " effects)");
+        }
+        change = "effect off: " + argument;
+        break;
+      }
+      case mpdrig_SHADOW_SET:
+        status = ApplyOverride(&params, argument);
+        change = "set " + argument;
+        break;
+      case mpdrig_SHADOW_RESET:
+        params = initial_params;
+        change = "reset";
+        break;
+      default:
+        status =
+            Status::Error("unknown action " + std::to_string(static_cast<int>(command.action)));
+    }
+    if (status.ok()) status = model->SetParams(params);
+    if (!status.ok()) {
+      Refuse(std::string(kShadowCommandTopic) + " refused: " + status.message());
+      return;
+    }
+    if (command.action == mpdrig_SHADOW_RESET) {
+      parameters.clear();
+    } else if (command.action == mpdrig_SHADOW_SET) {
+      parameters.push_back(argument);
+    }
+    last_change = change;
+    last_change_s = model->last_time_s();
+    error_at_change = before;
+    next_status_s = -std::numeric_limits<double>::infinity();  // say so at once
+  }
+
+  Status PublishStatus(double time_s) {
+    mpdrig_ShadowStatus wire{};
+    wire.rig_id = const_cast<char*>(options.rig_id.c_str());
+    wire.sim_time_s = time_s;
+    wire.window_s = model->options().window_s;
+    wire.error = model->error();
+    const auto nrmse = model->ChannelNrmse();
+    std::vector<std::string> names;
+    std::vector<double> values;
+    for (const auto& [channel, value] : nrmse) {
+      names.emplace_back(riglog::ChannelName(channel));
+      values.push_back(value);
+    }
+    std::vector<char*> name_ptrs, effect_ptrs, param_ptrs;
+    wire.channels = StringSequence(&names, &name_ptrs);
+    wire.nrmse._length = wire.nrmse._maximum = static_cast<std::uint32_t>(values.size());
+    wire.nrmse._buffer = values.data();
+    wire.nrmse._release = false;
+    std::vector<std::string> effects;
+    for (const EffectSetting& e : model->params().effects) effects.push_back(DescribeEffect(e));
+    wire.active_effects = StringSequence(&effects, &effect_ptrs);
+    std::vector<std::string> params = parameters;
+    wire.parameters = StringSequence(&params, &param_ptrs);
+    wire.last_change = const_cast<char*>(last_change.c_str());
+    wire.last_change_sim_time_s = last_change_s;
+    wire.error_at_last_change = error_at_change;
+    wire.rejected_commands = rejected;
+    wire.last_rejection = const_cast<char*>(last_rejection.c_str());
+    wire.last_command_id = last_command_id;
+    MPDRIG_RETURN_IF_ERROR(status->Write(wire));
+    if (log.is_open()) {
+      char number[64];
+      auto field = [&](double v) {
+        if (std::isnan(v)) return std::string();  // not defined: empty, as a rig log's gap
+        std::snprintf(number, sizeof number, "%.6g", v);
+        return std::string(number);
+      };
+      log << field(time_s) << "," << field(wire.error);
+      for (double v : values) log << "," << field(v);
+      log << "\n";
+      log.flush();
+      if (!log) return Status::Error(options.log_path + ": cannot write");
+    }
+    return Status::Ok();
+  }
+
+  Status TakeSamples(bool* done) {
+    const double atm = model->params().atmospheric_pressure_pa;
+    Status failed = Status::Ok();
+    auto taken = sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
+      if (!failed.ok() || *done || options.rig_id != s.rig_id) return;
+      const RigSample sample = FromWire(s, atm);
+      if (std::isnan(first_time_s)) first_time_s = sample.time_s;
+      ++samples;
+      failed = model->Push(sample);
+      // A batch of samples (a rig stepped ahead, a burst after a stall) still gives a status
+      // every period of rig time: the error over time is what the log is for.
+      if (failed.ok()) failed = StatusIfDue();
+      if (options.duration_s > 0.0 && sample.time_s - first_time_s >= options.duration_s)
+        *done = true;
+    });
+    if (!taken.ok()) return taken.status();
+    MPDRIG_RETURN_IF_ERROR(failed);
+    return StatusIfDue();  // a command's answer while the rig is still
+  }
+
+  Status StatusIfDue() {
+    for (const ShadowPoint& point : model->TakeOutput()) {
+      MPDRIG_RETURN_IF_ERROR(shadow_sensors->Write(ToWire(
+          options.rig_id, published++, point.model, model->params().atmospheric_pressure_pa)));
+    }
+    if (samples > 0 && model->last_time_s() >= next_status_s) {
+      MPDRIG_RETURN_IF_ERROR(PublishStatus(model->last_time_s()));
+      next_status_s = std::max(next_status_s, model->last_time_s()) + options.status_period_s;
+    }
+    return Status::Ok();
+  }
+};
+
+ShadowService::ShadowService(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ShadowService::~ShadowService() = default;
+const ShadowModel& ShadowService::model() const { return *impl_->model; }
+std::uint64_t ShadowService::samples() const { return impl_->samples; }
+
+Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
+                                                             ShadowOptions model_options,
+                                                             const ShadowServeOptions& options) {
+  if (options.rig_id.empty()) return Status::Error("shadow: rig id must not be empty");
+  if (!(options.duration_s >= 0.0) || !(options.status_period_s > 0.0)) {
+    return Status::Error("shadow: duration must be >= 0 and the status period > 0");
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->options = options;
+  impl->initial_params = params;
+  auto model = ShadowModel::Create(std::move(params), std::move(model_options));
+  if (!model.ok()) return model.status();
+  impl->model = std::move(model).value();
+  if (!options.log_path.empty()) {
+    impl->log.open(options.log_path);
+    if (!impl->log) return Status::Error(options.log_path + ": cannot write");
+    impl->log << "time_s,error";
+    for (Channel channel : ComparedChannels()) {
+      impl->log << "," << riglog::ChannelName(channel) << "_nrmse";
+    }
+    impl->log << "\n";
+  }
+  if (!options.dds_config.empty()) {
+    auto domain = dds::Domain::Create(options.domain, options.dds_config);
+    if (!domain.ok()) {
+      return domain.status().Within("DDS domain " + std::to_string(options.domain));
+    }
+    impl->domain.emplace(std::move(domain).value());
+  }
+  auto participant = dds::CreateParticipant(options.domain);
+  if (!participant.ok()) return participant.status();
+  impl->participant = std::move(participant).value();
+  const dds_entity_t p = impl->participant.handle();
+  auto topic = [p](const dds_topic_descriptor_t* d, const char* name, dds::Entity* out) {
+    auto created = dds::CreateTopic(p, d, name);
+    if (!created.ok()) return created.status();
+    *out = std::move(created).value();
+    return Status::Ok();
+  };
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigSensors_desc, kSensorsTopic, &impl->sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      topic(&mpdrig_RigSensors_desc, kShadowSensorsTopic, &impl->shadow_sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_ShadowStatus_desc, kShadowStatusTopic, &impl->status_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      topic(&mpdrig_ShadowCommand_desc, kShadowCommandTopic, &impl->command_topic));
+  // Keep all: the model needs every sample in order (a gap is a hold of the inputs).
+  auto sensors =
+      dds::Reader<mpdrig_RigSensors>::Create(p, impl->sensors_topic.handle(), dds::SensorQos(true));
+  if (!sensors.ok()) return sensors.status();
+  impl->sensors.emplace(std::move(sensors).value());
+  auto shadow_sensors = dds::Writer<mpdrig_RigSensors>::Create(
+      p, impl->shadow_sensors_topic.handle(), dds::SensorQos(false));
+  if (!shadow_sensors.ok()) return shadow_sensors.status();
+  impl->shadow_sensors.emplace(std::move(shadow_sensors).value());
+  auto status =
+      dds::Writer<mpdrig_ShadowStatus>::Create(p, impl->status_topic.handle(), dds::StatusQos());
+  if (!status.ok()) return status.status();
+  impl->status.emplace(std::move(status).value());
+  dds::Qos command_qos;  // a command is not state: reliable, keep all, volatile
+  dds_qset_reliability(command_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(command_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto commands =
+      dds::Reader<mpdrig_ShadowCommand>::Create(p, impl->command_topic.handle(), command_qos);
+  if (!commands.ok()) return commands.status();
+  impl->commands.emplace(std::move(commands).value());
+  return std::unique_ptr<ShadowService>(new ShadowService(std::move(impl)));
+}
+
+Status ShadowService::Run(const std::atomic<bool>& stop) {
+  Impl& s = *impl_;
+  bool done = false;
+  while (!stop.load() && !done) {
+    auto ready = s.sensors->Wait(DDS_MSECS(50));
+    if (!ready.ok()) return ready.status();
+    auto taken = s.commands->TakeEach(
+        [&](const mpdrig_ShadowCommand& c, const dds_sample_info_t&) { s.Apply(c); });
+    if (!taken.ok()) return taken.status();
+    MPDRIG_RETURN_IF_ERROR(s.TakeSamples(&done));
+  }
+  if (s.samples > 0) MPDRIG_RETURN_IF_ERROR(s.PublishStatus(s.model->last_time_s()));
+  return Status::Ok();
+}
+
+}  // namespace mpdrig::service

@@ -1,0 +1,56 @@
+// The shadow model as a DDS client of a rig (`mpdrig shadow`): it subscribes to one rig's
+// mpdrig_sensors (a virtual rig, a playback, the lab through a bridge), feeds every sample to a
+// ShadowModel (model/analysis/shadow_model.h) and publishes
+//   mpdrig_shadow_sensors - the model's channels at the rig's sample times (RigSensors, lab
+//                           units, the rig's id; sensor QoS);
+//   mpdrig_shadow_status  - its error over the sliding window, per channel and overall, its
+//                           effects and parameters, the last change (status QoS);
+// and takes mpdrig_shadow_command (effect on/off, set a parameter, reset; reliable, keep all:
+// a command is not state). A bad command is refused and counted on the shadow's status; the
+// shadow runs on. Optionally writes the error over time as CSV: time_s, error, <channel>_nrmse.
+#pragma once
+
+#include <atomic>
+#include <memory>
+#include <string>
+
+#include "model/analysis/shadow_model.h"
+#include "model/common/status.h"
+#include "service/dds/dds.h"
+
+namespace mpdrig::service {
+
+inline constexpr const char* kShadowSensorsTopic = "mpdrig_shadow_sensors";
+inline constexpr const char* kShadowStatusTopic = "mpdrig_shadow_status";
+inline constexpr const char* kShadowCommandTopic = "mpdrig_shadow_command";
+
+struct ShadowServeOptions {
+  std::string rig_id = "rig-1";
+  dds_domainid_t domain = 0;
+  // Cyclone's configuration of the domain; empty: the domain as this process already has it
+  // (a test that runs a rig service beside the shadow).
+  std::string dds_config = dds::LoopbackConfig();
+  // Stop after this much of the rig's time has been shadowed (0: until stopped).
+  double duration_s = 0.0;
+  // Status (and a CSV row) every this much rig time.
+  double status_period_s = 0.5;
+  std::string log_path;  // the CSV ("" : none)
+};
+
+class ShadowService {
+ public:
+  static Result<std::unique_ptr<ShadowService>> Create(RigParams params, ShadowOptions model,
+                                                       const ShadowServeOptions& options);
+  ~ShadowService();
+  // Runs until `stop` or the duration. Fails only when the transport or the log file fails.
+  Status Run(const std::atomic<bool>& stop);
+  const ShadowModel& model() const;
+  std::uint64_t samples() const;
+
+ private:
+  struct Impl;
+  explicit ShadowService(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace mpdrig::service

@@ -1,0 +1,229 @@
+// The shadow beside a mystery rig over loopback DDS: a rig with a hidden effect (lockstep, so the
+// test sets the pace), the shadow subscribed to its sensors; the shadow's error, read from its
+// status topic, falls by half when the model command switches the right effect on, and a bad
+// command is refused and counted.
+#include "service/shadow/shadow_service.h"
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "model/effects/effect.h"
+#include "mpdrig.h"
+#include "service/rig/rig_service.h"
+#include "service/rig/wire.h"
+#include "tests/support/test_domain.h"
+
+namespace mpdrig::service {
+namespace {
+
+constexpr int kCells = 50;  // rig and shadow on the same grid; a finer one only costs time
+
+struct StatusSeen {
+  double sim_time_s = -1.0;
+  double error = std::nan("");
+  std::string last_change;
+  std::uint64_t rejected = 0;
+  std::string last_rejection;
+  std::vector<std::string> effects;
+};
+
+class ShadowServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    domain_ = static_cast<dds_domainid_t>(testing::ClaimTestDomain());
+    ASSERT_GT(domain_, 0);
+    SimulationOptions grid;
+    grid.cells = kCells;
+    ShadowOptions model;
+    model.simulation = grid;
+    model.window_s = 10.0;
+    model.warmup_s = 20.0;
+    ShadowServeOptions shadow_options;
+    shadow_options.rig_id = "mystery";
+    shadow_options.domain = domain_;
+    shadow_options.status_period_s = 0.5;
+    log_path_ = ::testing::TempDir() + "mpdrig-shadow-error.csv";
+    shadow_options.log_path = log_path_;
+
+    RigParams truth;
+    ASSERT_TRUE(ApplyEffectSpec(&truth, "unsteady_friction").ok());
+    auto rig = RigHost::Create("mystery", truth, grid, 100.0, {31.0, 10.0, 0.0});
+    ASSERT_TRUE(rig.ok()) << rig.status().message();
+    PistonCommandIn heave;
+    heave.mode = PistonCommandIn::Mode::kSine;
+    heave.amplitude_m = 0.1;
+    heave.frequency_hz = 0.25;
+    ASSERT_TRUE(rig->SetPiston(heave).ok());
+    std::vector<RigHost> rigs;
+    rigs.push_back(std::move(rig).value());
+    ServeOptions options;
+    options.clock = ClockMode::kLockstep;
+    options.domain = domain_;
+    options.hide_effects = true;
+    options.observer = false;  // not what this test is about; it costs time
+    auto service = RigService::Create(std::move(rigs), options);
+    ASSERT_TRUE(service.ok()) << service.status().message();
+    service_ = std::move(service).value();
+    // The rig service configures the domain (loopback only); the shadow joins it.
+    shadow_options.dds_config.clear();
+    auto shadow = ShadowService::Create(RigParams(), model, shadow_options);
+    ASSERT_TRUE(shadow.ok()) << shadow.status().message();
+    shadow_ = std::move(shadow).value();
+    rig_thread_ = std::thread([this] { rig_status_ = service_->Run(stop_); });
+    shadow_thread_ = std::thread([this] { shadow_status_ = shadow_->Run(stop_); });
+
+    auto participant = dds::CreateParticipant(domain_);
+    ASSERT_TRUE(participant.ok());
+    participant_ = std::move(participant).value();
+    const dds_entity_t p = participant_.handle();
+    rig_status_topic_ = *dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
+    step_topic_ = *dds::CreateTopic(p, &mpdrig_StepRequest_desc, kStepRequestTopic);
+    shadow_status_topic_ = *dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, kShadowStatusTopic);
+    command_topic_ = *dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, kShadowCommandTopic);
+    rig_status_reader_.emplace(
+        *dds::Reader<mpdrig_RigStatus>::Create(p, rig_status_topic_.handle(), dds::StatusQos()));
+    shadow_reader_.emplace(*dds::Reader<mpdrig_ShadowStatus>::Create(
+        p, shadow_status_topic_.handle(), dds::StatusQos()));
+    dds::Qos keep_all;
+    dds_qset_reliability(keep_all.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+    dds_qset_history(keep_all.get(), DDS_HISTORY_KEEP_ALL, 0);
+    step_.emplace(*dds::Writer<mpdrig_StepRequest>::Create(p, step_topic_.handle(), keep_all));
+    command_.emplace(
+        *dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic_.handle(), keep_all));
+    // Discovery: the rig takes step requests, the shadow commands and (through the rig's
+    // writer) samples only once matched.
+    for (int i = 0; i < 100; ++i) {
+      dds_publication_matched_status_t steps{}, commands{};
+      dds_get_publication_matched_status(step_->handle(), &steps);
+      dds_get_publication_matched_status(command_->handle(), &commands);
+      if (steps.current_count > 0 && commands.current_count > 0) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));  // rig sensors -> shadow
+  }
+  void TearDown() override {
+    stop_ = true;
+    if (rig_thread_.joinable()) rig_thread_.join();
+    if (shadow_thread_.joinable()) shadow_thread_.join();
+    EXPECT_TRUE(rig_status_.ok()) << rig_status_.message();
+    EXPECT_TRUE(shadow_status_.ok()) << shadow_status_.message();
+  }
+
+  // Runs the rig `seconds` further and waits until it has stepped.
+  void RunRig(double seconds) {
+    const auto steps = static_cast<std::uint32_t>(std::lround(seconds * 100.0));
+    const std::uint64_t id = ++request_;
+    char rig_id[] = "mystery";
+    ASSERT_TRUE(step_->Write(mpdrig_StepRequest{rig_id, id, steps}).ok());
+    bool done = false;
+    for (int i = 0; i < 1200 && !done; ++i) {
+      auto ready = rig_status_reader_->Wait(DDS_MSECS(100));
+      if (!ready.ok() || !*ready) continue;
+      (void)rig_status_reader_->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+        if (s.last_completed_step_request == id) done = true;
+      });
+    }
+    ASSERT_TRUE(done) << "the rig did not complete " << steps << " steps";
+    rig_time_s_ += seconds;
+  }
+
+  // The shadow's status once it has caught up with the rig (and, if given, made `change`).
+  StatusSeen WaitShadow(const std::string& change = "", std::uint64_t rejected = 0) {
+    StatusSeen seen;
+    for (int i = 0; i < 600; ++i) {
+      (void)shadow_reader_->Wait(DDS_MSECS(100));
+      (void)shadow_reader_->TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
+        seen.sim_time_s = s.sim_time_s;
+        seen.error = s.error;
+        seen.last_change = s.last_change;
+        seen.rejected = s.rejected_commands;
+        seen.last_rejection = s.last_rejection;
+        seen.effects.clear();
+        for (std::uint32_t k = 0; k < s.active_effects._length; ++k)
+          seen.effects.push_back(s.active_effects._buffer[k]);
+      });
+      // The rig's last sample is 0.01 s before its clock; the status period is 0.5 s.
+      if (seen.sim_time_s >= rig_time_s_ - 0.6 && (change.empty() || seen.last_change == change) &&
+          seen.rejected >= rejected)
+        return seen;
+    }
+    ADD_FAILURE() << "the shadow did not catch up: status at " << seen.sim_time_s << " s, rig at "
+                  << rig_time_s_ << " s, last change '" << seen.last_change << "'";
+    return seen;
+  }
+
+  void Command(mpdrig_ShadowAction action, const std::string& argument) {
+    char rig_id[] = "mystery";
+    std::string text = argument;
+    mpdrig_ShadowCommand command{rig_id, ++command_id_, action, text.data()};
+    ASSERT_TRUE(command_->Write(command).ok());
+  }
+
+  dds_domainid_t domain_ = 0;
+  std::string log_path_;
+  std::unique_ptr<ShadowService> shadow_;
+  std::unique_ptr<RigService> service_;
+  std::thread rig_thread_, shadow_thread_;
+  std::atomic<bool> stop_{false};
+  Status rig_status_ = Status::Ok(), shadow_status_ = Status::Ok();
+  dds::Entity participant_, rig_status_topic_, step_topic_, shadow_status_topic_, command_topic_;
+  std::optional<dds::Reader<mpdrig_RigStatus>> rig_status_reader_;
+  std::optional<dds::Reader<mpdrig_ShadowStatus>> shadow_reader_;
+  std::optional<dds::Writer<mpdrig_StepRequest>> step_;
+  std::optional<dds::Writer<mpdrig_ShadowCommand>> command_;
+  std::uint64_t request_ = 0, command_id_ = 0;
+  double rig_time_s_ = 0.0;
+};
+
+TEST_F(ShadowServiceTest, ErrorHalvesWithTheHiddenEffectAndNotWithAWrongOne) {
+  for (int i = 0; i < 8; ++i) RunRig(5.0);  // the warm-up and a window
+  const StatusSeen without = WaitShadow();
+  ASSERT_TRUE(std::isfinite(without.error));
+
+  // A bad command changes nothing and is counted.
+  Command(mpdrig_SHADOW_EFFECT_ON, "no_such_effect");
+  const StatusSeen refused = WaitShadow("", 1);
+  EXPECT_EQ(refused.rejected, 1u);
+  EXPECT_NE(refused.last_rejection.find("no_such_effect"), std::string::npos);
+
+  Command(mpdrig_SHADOW_EFFECT_ON, "unsteady_friction");
+  const StatusSeen right = WaitShadow("effect on: unsteady_friction", 1);
+  EXPECT_LE(right.error, 0.5 * without.error) << "without " << without.error;
+  ASSERT_EQ(right.effects.size(), 1u);
+  RunRig(10.0);  // a window later, still halved (the live model, not only the replay)
+  const StatusSeen later = WaitShadow();
+  EXPECT_LE(later.error, 0.5 * without.error) << "without " << without.error;
+
+  Command(mpdrig_SHADOW_RESET, "");
+  const StatusSeen reset = WaitShadow("reset", 1);
+  EXPECT_TRUE(reset.effects.empty());
+  EXPECT_NEAR(reset.error, without.error, 0.2 * without.error);  // back to the model it had
+
+  // A wrong effect (the helical coil's extra friction) does not explain the rig's.
+  Command(mpdrig_SHADOW_EFFECT_ON, "helical_friction");
+  const StatusSeen wrong = WaitShadow("effect on: helical_friction", 1);
+  EXPECT_GT(wrong.error, 0.5 * without.error);
+  std::printf("  shadow error: without %.4f, right effect %.4f (a window later %.4f), wrong %.4f\n",
+              without.error, right.error, later.error, wrong.error);
+
+  // The CSV: the header, then a row per status with the time and the overall error.
+  std::ifstream log(log_path_);
+  std::string header, row;
+  std::getline(log, header);
+  EXPECT_EQ(header.rfind("time_s,error,P1_nrmse,", 0), 0u) << header;
+  int rows = 0;
+  while (std::getline(log, row)) ++rows;
+  EXPECT_GE(rows, 80);  // 50 s of rig time at one row per 0.5 s, less the first
+}
+
+}  // namespace
+}  // namespace mpdrig::service
