@@ -380,8 +380,8 @@ Result<InputLevelCorrection> EstimateInputLevels(const MeasuredLog& log, const R
   const double s_pump =
       plan.pump_noise_m3ps > 0.0 ? sensitivity(&RigInputs::pump_flow_m3ps, pump_step) : 0.0;
   // The carrier: the input whose prior moves the pressure more.
-  const bool pump_carries = std::abs(s_pump) * levels.pump_sigma_m3ps >=
-                            std::abs(s_choke) * levels.choke_sigma_frac;
+  const bool pump_carries =
+      std::abs(s_pump) * levels.pump_sigma_m3ps >= std::abs(s_choke) * levels.choke_sigma_frac;
   const double s_carrier = pump_carries ? s_pump : s_choke;
   if (s_carrier == 0.0) return none;
   const double step = pump_carries ? pump_step : choke_step;

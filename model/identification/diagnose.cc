@@ -633,8 +633,8 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
           }
         }
         EstimateDetectability(log, base_fit->params, *base_traces, baseline.error, simulation,
-                              replay, strength, default_value, score_begin, t_end,
-                              &candidate, &replays[i]);
+                              replay, strength, default_value, score_begin, t_end, &candidate,
+                              &replays[i]);
       }
       RigParams params = base_fit->params;
       params.effects.push_back({candidate.effect, {}});

@@ -137,7 +137,7 @@ struct Diagnosis {
   // none where the log came with levels applied or options.replay says not to). The fits run on
   // these; each candidate is scored with levels estimated at its own fit.
   InputLevelCorrection input_levels;
-  std::optional<std::string> verdict;       // the missing effect, if one is significant
+  std::optional<std::string> verdict;  // the missing effect, if one is significant
   // Other significant candidates that explain the log as well as the verdict: the verdict's lead
   // over them is below kMinRelativeImprovement of the baseline error (e.g. the two inlet
   // compliances, hose_compliance and piston_compressibility, where the log does not excite

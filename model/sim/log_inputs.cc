@@ -179,15 +179,16 @@ std::string InputLevelCorrection::Describe() const {
   out.precision(3);
   const double k = kMaxLevelOffsetSigmas;
   out << "input levels from the measured pressures: choke " << std::showpos
-      << units::ChokeFracToDeg(choke_offset_frac) << " deg" << " (trend "
-      << units::ChokeFracToDeg(choke_trend_frac) << "), FT2 " << units::M3psToLpm(pump_offset_m3ps)
-      << " L/min (trend " << units::M3psToLpm(pump_trend_m3ps) << ")" << std::noshowpos
-      << "; the noise allows +-" << units::ChokeFracToDeg(k * choke_sigma_frac) << " ("
+      << units::ChokeFracToDeg(choke_offset_frac) << " deg"
+      << " (trend " << units::ChokeFracToDeg(choke_trend_frac) << "), FT2 "
+      << units::M3psToLpm(pump_offset_m3ps) << " L/min (trend " << units::M3psToLpm(pump_trend_m3ps)
+      << ")" << std::noshowpos << "; the noise allows +-"
+      << units::ChokeFracToDeg(k * choke_sigma_frac) << " ("
       << units::ChokeFracToDeg(k * choke_trend_sigma_frac) << ") deg, +-"
-      << units::M3psToLpm(k * pump_sigma_m3ps) << " (" << units::M3psToLpm(k * pump_trend_sigma_m3ps)
-      << ") L/min; pressure residual " << residual_before_pa * 1e-5 << " -> "
-      << residual_after_pa * 1e-5 << " bar, trend " << residual_trend_before_pa * 1e-5 << " -> "
-      << residual_trend_after_pa * 1e-5 << " bar";
+      << units::M3psToLpm(k * pump_sigma_m3ps) << " ("
+      << units::M3psToLpm(k * pump_trend_sigma_m3ps) << ") L/min; pressure residual "
+      << residual_before_pa * 1e-5 << " -> " << residual_after_pa * 1e-5 << " bar, trend "
+      << residual_trend_before_pa * 1e-5 << " -> " << residual_trend_after_pa * 1e-5 << " bar";
   if (at_bound) out << " (at the bound: the rest is the model's)";
   return out.str();
 }

@@ -54,9 +54,8 @@ int RunDiagnose(DiagnoseArgs args) {
   options.fit_fraction = args.fit_fraction;
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
-  const Status prepared =
-      PrepareReplay(&*log, *params, options.simulation, &options.replay, args.quiet,
-                    InputLevels::kAfterTheFit);
+  const Status prepared = PrepareReplay(&*log, *params, options.simulation, &options.replay,
+                                        args.quiet, InputLevels::kAfterTheFit);
   if (!prepared.ok()) return Fail(name, prepared);
   if (!args.quiet) {
     options.progress = [](std::string_view stage, double fraction) {

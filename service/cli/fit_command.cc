@@ -245,9 +245,8 @@ int RunFit(const FitArgs& args) {
     std::fprintf(stderr, "mpdrig fit: %zu samples, %zu compared channels; %s\n",
                  log->time_s().size(), log->channels.size(), args.model.Describe(*start).c_str());
   }
-  const Status prepared =
-      PrepareReplay(&*log, *start, options.simulation, &options.replay, args.quiet,
-                    InputLevels::kAfterTheFit);
+  const Status prepared = PrepareReplay(&*log, *start, options.simulation, &options.replay,
+                                        args.quiet, InputLevels::kAfterTheFit);
   if (!prepared.ok()) return Fail(name, prepared);
   auto fit = FitParametersAndInputLevels(&*log, *start, parameters, options);
   if (!fit.ok()) return Fail(name, fit.status().Within(args.log_path));

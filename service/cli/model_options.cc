@@ -138,9 +138,8 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
       ->capture_default_str();
 }
 
-Status PrepareReplay(MeasuredLog* log, const RigParams& params,
-                     const SimulationOptions& simulation, InputReplayOptions* options, bool quiet,
-                     InputLevels levels) {
+Status PrepareReplay(MeasuredLog* log, const RigParams& params, const SimulationOptions& simulation,
+                     InputReplayOptions* options, bool quiet, InputLevels levels) {
   MPDRIG_RETURN_IF_ERROR(PrepareLogReplay(log, params, simulation, options, levels));
   if (quiet) return Status::Ok();
   if (options->reconstruct_inputs) {

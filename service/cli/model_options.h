@@ -48,8 +48,8 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options);
 // --steady-start), corrects the log's reconstructed choke and FT2 levels from its pressures
 // (unless --levels-as-measured; EstimateInputLevels; fit and diagnose do it at the parameters
 // they fit: kAfterTheFit) and tells stderr how the inputs are fed (unless `quiet`).
-Status PrepareReplay(MeasuredLog* log, const RigParams& params,
-                     const SimulationOptions& simulation, InputReplayOptions* options, bool quiet,
+Status PrepareReplay(MeasuredLog* log, const RigParams& params, const SimulationOptions& simulation,
+                     InputReplayOptions* options, bool quiet,
                      InputLevels levels = InputLevels::kWithTheseParams);
 
 // Registers --max-gap-s: the longest gap in time a command accepts in a log it reads

@@ -171,15 +171,16 @@ std::string InputsSection(const Comparison& comparison) {
         FormatValue(units::M3psToLpm(plan->pump_noise_m3ps), 3) + " L/min, C1 " +
         FormatValue(plan->outlet_noise_pa * 1e-5, 3) + " bar (standard deviations).";
     if (plan->levels.applied()) {
-      html += " The choke's and FT2's levels were corrected from the measured pressures, within "
-              "what their noise allows: choke " +
-              FormatValue(units::ChokeFracToDeg(plan->levels.choke_offset_frac), 3) +
-              " deg (trend " + FormatValue(units::ChokeFracToDeg(plan->levels.choke_trend_frac), 3) +
-              "), FT2 " + FormatValue(units::M3psToLpm(plan->levels.pump_offset_m3ps), 3) +
-              " L/min (trend " + FormatValue(units::M3psToLpm(plan->levels.pump_trend_m3ps), 3) +
-              ") (mean pressure residual " +
-              FormatValue(plan->levels.residual_before_pa * 1e-5, 3) + " bar before" +
-              (plan->levels.at_bound ? ", at the bound: the rest is the model's)." : ").");
+      html +=
+          " The choke's and FT2's levels were corrected from the measured pressures, within "
+          "what their noise allows: choke " +
+          FormatValue(units::ChokeFracToDeg(plan->levels.choke_offset_frac), 3) + " deg (trend " +
+          FormatValue(units::ChokeFracToDeg(plan->levels.choke_trend_frac), 3) + "), FT2 " +
+          FormatValue(units::M3psToLpm(plan->levels.pump_offset_m3ps), 3) + " L/min (trend " +
+          FormatValue(units::M3psToLpm(plan->levels.pump_trend_m3ps), 3) +
+          ") (mean pressure residual " + FormatValue(plan->levels.residual_before_pa * 1e-5, 3) +
+          " bar before" +
+          (plan->levels.at_bound ? ", at the bound: the rest is the model's)." : ").");
     }
   } else {
     html += "The model was fed the inputs as measured (--raw-inputs).";

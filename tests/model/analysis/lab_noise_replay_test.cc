@@ -17,8 +17,8 @@
 #include <gtest/gtest.h>
 
 #include "model/analysis/compare.h"
-#include "model/identification/fit.h"
 #include "model/common/units.h"
+#include "model/identification/fit.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
 #include "model/sim/sensor_noise.h"
@@ -329,9 +329,10 @@ TEST(InputLevels, CorrectedLevelsMeetTheTruth) {
       }
       error[estimate ? 1 : 0] = std::sqrt(sum / count);
     }
-    std::printf("seed %d: pressure RMS against the truth %.4f bar as reconstructed, %.4f bar "
-                "with the levels estimated\n",
-                static_cast<int>(seed), error[0] * 1e-5, error[1] * 1e-5);
+    std::printf(
+        "seed %d: pressure RMS against the truth %.4f bar as reconstructed, %.4f bar "
+        "with the levels estimated\n",
+        static_cast<int>(seed), error[0] * 1e-5, error[1] * 1e-5);
     EXPECT_LT(error[1], error[0]);
     total[0] += error[0];
     total[1] += error[1];
@@ -343,8 +344,8 @@ TEST(InputLevels, CorrectedLevelsMeetTheTruth) {
 // The choke's leak (the floor of G, 9.4) shows only where the choke is closed and flow must pass
 // through it: a closed choke, 2 L/min from the pump, a heave, lab noise, a rig whose leak,
 // wave speed and friction differ from the defaults. `mpdrig fit`'s path (the levels estimated at
-// the first fit's parameters) finds the leak within 2 % (measured 0.2 %), c within 1 % and f1 within
-// 20 %. (f2, the quadratic friction, needs faster flow than this heave gives: not asserted.)
+// the first fit's parameters) finds the leak within 2 % (measured 0.2 %), c within 1 % and f1
+// within 20 %. (f2, the quadratic friction, needs faster flow than this heave gives: not asserted.)
 TEST(FitAtLabNoise, LeakThroughAClosedChoke) {
   RigParams rig;
   rig.choke_leak_m2 = 8.0e-7;
@@ -352,9 +353,12 @@ TEST(FitAtLabNoise, LeakThroughAClosedChoke) {
   rig.friction_f1_per_s = 0.2;
   // Two tones, as the thesis identified c from more than one frequency (a lone 0.2 Hz sine far
   // below the first resonance leaves c's valley flat: seed 1 stopped at 959 m/s with f1 = 0).
-  const Scenario closed{"closed_pumping", 60.0, 0.0,
+  const Scenario closed{"closed_pumping",
+                        60.0,
+                        0.0,
                         [](double t) { return Sine(t, 0.04, 0.2) + Sine(t, 0.01, 0.45); },
-                        [](double) { return 0.0; }, [](double) { return 2.0; }};
+                        [](double) { return 0.0; },
+                        [](double) { return 2.0; }};
   const riglog::RigLog truth = TruthLog(closed, rig);
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));

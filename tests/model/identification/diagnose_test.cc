@@ -118,8 +118,9 @@ TEST_P(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Noise, DiagnoseWithoutHiddenEffect,
-                         ::testing::Values(Noise::kQuiet, Noise::kLab),
-                         [](const auto& info) { return info.param == Noise::kLab ? "lab" : "quiet"; });
+                         ::testing::Values(Noise::kQuiet, Noise::kLab), [](const auto& info) {
+                           return info.param == Noise::kLab ? "lab" : "quiet";
+                         });
 
 class DiagnoseHiddenEffect : public ::testing::TestWithParam<std::tuple<std::string, Noise>> {};
 
@@ -144,9 +145,8 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     const Diagnosis& d = c.diagnosis;
     // The same log without the effect: same seed, same excitation and noise (column_separation's
     // logs are the low-pressure runs).
-    const double without =
-        RunCase(std::nullopt, seed, true, effect == "column_separation", noise)
-            .diagnosis.baseline.error;
+    const double without = RunCase(std::nullopt, seed, true, effect == "column_separation", noise)
+                               .diagnosis.baseline.error;
     const bool is_detectable = d.baseline.error > (1.0 + kDetectableMargin) * without;
     std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n", effect.c_str(),
                 seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * without,
