@@ -54,6 +54,7 @@ struct ShadowService::Impl {
   std::uint64_t rejected = 0;
   std::uint64_t last_command_id = 0;
   std::string last_rejection;
+  std::string fit_state;  // ShadowStatus.fit_state
   std::string last_change;
   double last_change_s = -1.0;
   double error_at_change = std::numeric_limits<double>::quiet_NaN();
@@ -99,6 +100,9 @@ struct ShadowService::Impl {
       case mpdrig_SHADOW_RESET:
         params = initial_params;
         change = "reset";
+        break;
+      case mpdrig_SHADOW_FIT_NOW:
+        status = Status::Error("fit now is not built yet");
         break;
       default:
         status =
@@ -149,6 +153,11 @@ struct ShadowService::Impl {
     wire.rejected_commands = rejected;
     wire.last_rejection = const_cast<char*>(last_rejection.c_str());
     wire.last_command_id = last_command_id;
+    std::vector<std::string> available;
+    for (const EffectInfo* info : EffectCatalogue()) available.emplace_back(info->name);
+    std::vector<char*> available_ptrs;
+    wire.available_effects = StringSequence(&available, &available_ptrs);
+    wire.fit_state = const_cast<char*>(fit_state.c_str());
     MPDRIG_RETURN_IF_ERROR(status->Write(wire));
     if (log.is_open()) {
       char number[64];
