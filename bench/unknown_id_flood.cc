@@ -17,12 +17,16 @@ int main(int argc, char** argv) {
   long count = 100000;
   double hold_s = 3.0;
   std::string prefix = "stranger-";
+  bool dispose = false;
   app.add_option("--domain", domain, "DDS domain id")->capture_default_str();
   app.add_option("--count", count, "distinct unknown rig ids")->capture_default_str();
   app.add_option("--hold", hold_s, "seconds to keep the writer after the last write")
       ->capture_default_str();
   app.add_option("--prefix", prefix, "rig id prefix (ids are prefix + number)")
       ->capture_default_str();
+  app.add_flag("--dispose", dispose,
+               "dispose each id (a key-only message, which topic filters do not see) instead of "
+               "writing a command for it");
   CLI11_PARSE(app, argc, argv);
   using namespace mpdrig;
   auto fail = [](const Status& s) {
@@ -51,11 +55,14 @@ int main(int argc, char** argv) {
   for (long i = 0; i < count; ++i) {
     id = prefix + std::to_string(i);
     mpdrig_PumpCommand command{id.data(), 5.0};
-    const Status written = writer->Write(command);
+    const Status written =
+        dispose ? dds::Check(dds_dispose(writer->handle(), &command), "dds_dispose")
+                : writer->Write(command);
     if (!written.ok()) return fail(written);
   }
   const dds_return_t acked = dds_wait_for_acks(writer->handle(), DDS_SECS(60));
-  std::fprintf(stderr, "mpdrig_unknown_id_flood: %ld ids written%s\n", count,
+  std::fprintf(stderr, "mpdrig_unknown_id_flood: %ld ids %s%s\n", count,
+               dispose ? "disposed" : "written",
                acked == DDS_RETCODE_OK ? " and acknowledged" : ", not all acknowledged");
   std::fflush(stderr);
   dds_sleepfor(static_cast<dds_duration_t>(hold_s * 1e9));

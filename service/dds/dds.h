@@ -192,11 +192,13 @@ class Reader {
   // Takes every available sample (at most `max_samples`, the rest stay for the next call) and
   // hands each valid one to `visit` while it is on loan (its strings belong to DDS and are gone
   // after the call). When an instance has lost all its writers (deleted, or their liveliness
-  // lease ran out), `on_no_writers` gets the sample, whose key fields identify the instance.
+  // lease ran out), `on_no_writers` gets the sample, whose key fields identify the instance;
+  // when a writer disposed an instance, `on_disposed` does.
   // Returns how many valid samples were visited.
   Result<int> TakeEach(const std::function<void(const T&, const dds_sample_info_t&)>& visit,
                        const std::function<void(const T&)>& on_no_writers = {},
-                       int max_samples = std::numeric_limits<int>::max()) const {
+                       int max_samples = std::numeric_limits<int>::max(),
+                       const std::function<void(const T&)>& on_disposed = {}) const {
     constexpr int kBatch = 16;
     int visited = 0;
     for (int taken = 0; taken < max_samples;) {
@@ -210,6 +212,8 @@ class Reader {
           ++visited;
         } else if (on_no_writers && infos[i].instance_state == DDS_IST_NOT_ALIVE_NO_WRITERS) {
           on_no_writers(*static_cast<const T*>(samples[i]));
+        } else if (on_disposed && infos[i].instance_state == DDS_IST_NOT_ALIVE_DISPOSED) {
+          on_disposed(*static_cast<const T*>(samples[i]));
         }
       }
       if (n > 0) {

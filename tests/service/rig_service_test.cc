@@ -654,12 +654,17 @@ std::uint64_t ResidentBytes(pid_t pid) {
   return 0;
 }
 
-// A stranger writes commands for many distinct rig ids the service does not run. Each used to
-// cost the service an instance (about 560 B, measured: 100 000 ids took its RSS from 16 to
-// 72 MB) for as long as the writer lived, and all of them lost their writer in one tick when it
-// went (a 325 ms stall at 1 kHz). Now a topic filter drops them before they become instances:
-// every one is still refused and counted, and the service's memory does not grow with them.
-TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMemory) {
+// A stranger sends commands for many distinct rig ids the service does not run, while rig-1's
+// own controller is connected. Each id used to cost the service an instance (about 560 B,
+// measured: 100 000 ids took its RSS from 16 to 72 MB) for as long as the stranger's writer
+// lived, and all of them lost their writer in one tick when it went (a 325 ms stall at 1 kHz).
+// Written commands: a topic filter drops them before they become instances, so the service's
+// memory does not grow with them. Disposes (key-only messages, which filters do not see) still
+// make instances (rig_service.cc says why they are not bounded), but each is refused and
+// reported. Either way rig-1's controller still commands its rig.
+enum class Stranger { kWrites, kDisposes };
+
+void ExpectAFloodOfUnknownRigIdsHoldsNoMemory(Stranger stranger) {
   if (testing::kUnderAddressSanitizer) {
     GTEST_SKIP()
         << "RSS under AddressSanitizer measures its quarantine (tests/support/sanitizer.h)";
@@ -692,11 +697,16 @@ TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMem
   ASSERT_TRUE(participant.ok());
   const dds_entity_t p = participant->handle();
   auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
+  auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, kSensorsTopic);
   auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, kPumpCommandTopic);
-  ASSERT_TRUE(status_topic.ok() && pump_topic.ok());
+  ASSERT_TRUE(status_topic.ok() && sensors_topic.ok() && pump_topic.ok());
   auto status = dds::Reader<mpdrig_RigStatus>::Create(p, status_topic->handle(), dds::StatusQos());
-  auto pump = dds::Writer<mpdrig_PumpCommand>::Create(p, pump_topic->handle(), dds::CommandQos());
-  ASSERT_TRUE(status.ok() && pump.ok());
+  auto sensors =
+      dds::Reader<mpdrig_RigSensors>::Create(p, sensors_topic->handle(), dds::SensorQos(false));
+  auto controller =
+      dds::Writer<mpdrig_PumpCommand>::Create(p, pump_topic->handle(), dds::CommandQos());
+  auto flood = dds::Writer<mpdrig_PumpCommand>::Create(p, pump_topic->handle(), dds::CommandQos());
+  ASSERT_TRUE(status.ok() && sensors.ok() && controller.ok() && flood.ok());
   std::uint64_t rejected = 0;
   std::string last_rejection;
   auto wait_for_rejected = [&](std::uint64_t at_least) {
@@ -711,13 +721,28 @@ TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMem
     }
     return rejected >= at_least;
   };
+  // The pump flow rig-1 delivers, as its FT2 reads it (lab noise: 2 % of reading) [L/min].
+  auto measured_pump_lpm = [&](double expected) {
+    double ft2 = std::numeric_limits<double>::quiet_NaN();
+    const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+    while (std::chrono::steady_clock::now() < until &&
+           !(std::abs(ft2 - expected) < 0.05 * expected)) {
+      (void)sensors->Wait(DDS_MSECS(100));
+      (void)sensors->TakeEach(
+          [&](const mpdrig_RigSensors& s, const dds_sample_info_t&) { ft2 = s.FT2_lpm; });
+    }
+    return ft2;
+  };
   for (int waited_ms = 0;; waited_ms += 10) {  // the service's pump reader is there
     dds_publication_matched_status_t matched{};
-    dds_get_publication_matched_status(pump->handle(), &matched);
+    dds_get_publication_matched_status(flood->handle(), &matched);
     if (matched.current_count > 0) break;
     ASSERT_LT(waited_ms, 20000) << "the service never matched the pump writer";
     dds_sleepfor(DDS_MSECS(10));
   }
+  mpdrig_PumpCommand own{const_cast<char*>("rig-1"), 3.0};
+  ASSERT_TRUE(controller->Write(own).ok());
+  EXPECT_NEAR(measured_pump_lpm(3.0), 3.0, 0.15) << "rig-1's controller commands its pump";
   dds_sleepfor(DDS_SECS(1));  // the service settles (its buffers, the first statuses)
   const std::uint64_t rss_before = ResidentBytes(pid);
   ASSERT_GT(rss_before, 0u);
@@ -727,19 +752,37 @@ TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMem
   for (int i = 0; i < kIds; ++i) {
     id = "stranger-" + std::to_string(i);
     mpdrig_PumpCommand command{id.data(), 5.0};
-    ASSERT_TRUE(pump->Write(command).ok());
+    if (stranger == Stranger::kWrites) {
+      ASSERT_TRUE(flood->Write(command).ok());
+    } else {
+      ASSERT_EQ(dds_dispose(flood->handle(), &command), DDS_RETCODE_OK);
+    }
   }
-  ASSERT_EQ(dds_wait_for_acks(pump->handle(), DDS_SECS(60)), DDS_RETCODE_OK);
+  ASSERT_EQ(dds_wait_for_acks(flood->handle(), DDS_SECS(60)), DDS_RETCODE_OK);
   ASSERT_TRUE(wait_for_rejected(kIds)) << "refused so far: " << rejected;
-  EXPECT_EQ(rejected, static_cast<std::uint64_t>(kIds)) << "each unknown command counted once";
+  EXPECT_EQ(rejected, static_cast<std::uint64_t>(kIds)) << "each unknown id counted once";
   EXPECT_NE(last_rejection.find("unknown rig 'stranger-"), std::string::npos) << last_rejection;
   const std::uint64_t rss_held = ResidentBytes(pid);
   const double grown_mb = (static_cast<double>(rss_held) - static_cast<double>(rss_before)) / 1e6;
-  std::printf("service RSS %.1f MB before, %.1f MB with %d unknown ids written (+%.1f MB)\n",
-              rss_before / 1e6, rss_held / 1e6, kIds, grown_mb);
-  // Before the filter: about 560 B per id, 22 MB for 40 000. Allow 4 MB of the service's own
-  // growth (DDS receive buffers, the allocator's arenas), far below what the ids would cost.
-  EXPECT_LT(grown_mb, 4.0);
+  std::printf("service RSS %.1f MB before, %.1f MB with %d unknown ids %s (+%.1f MB)\n",
+              rss_before / 1e6, rss_held / 1e6, kIds,
+              stranger == Stranger::kWrites ? "written" : "disposed", grown_mb);
+  if (stranger == Stranger::kWrites) {
+    // Without the filter: about 560 B per id, 22 MB for 40 000. Allow 4 MB of the service's own
+    // growth (DDS receive buffers, the allocator's arenas), far below what the ids would cost.
+    EXPECT_LT(grown_mb, 4.0);
+  }
+  own.flow_lpm = 7.0;
+  ASSERT_TRUE(controller->Write(own).ok());
+  EXPECT_NEAR(measured_pump_lpm(7.0), 7.0, 0.35) << "rig-1's controller still commands its pump";
+}
+
+TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMemory) {
+  ExpectAFloodOfUnknownRigIdsHoldsNoMemory(Stranger::kWrites);
+}
+
+TEST(ServiceProcessTest, DisposesOfManyUnknownRigIdsAreRefusedAndReported) {
+  ExpectAFloodOfUnknownRigIdsHoldsNoMemory(Stranger::kDisposes);
 }
 
 }  // namespace
