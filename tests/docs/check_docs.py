@@ -26,10 +26,12 @@ REFERENCE_DEFINITION = re.compile(r"^\s{0,3}\[[^\]]+\]:\s*<?(\S+?)>?(\s+.*)?$")
 SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.-]*:")
 
 
-def prose_lines(text):
-    """(line number, line) of the lines outside fenced code blocks, inline code blanked."""
+def prose(text):
+    """The text with fenced code blocks and inline code blanked, line breaks kept, so a link
+    that wraps over lines is still found and its line number stays right."""
+    out = []
     in_fence = None
-    for number, line in enumerate(text.split("\n"), start=1):
+    for line in text.split("\n"):
         fence = FENCE.match(line)
         if fence:
             marker = fence.group(1)
@@ -37,9 +39,12 @@ def prose_lines(text):
                 in_fence = marker
             elif marker == in_fence:
                 in_fence = None
-            continue
-        if in_fence is None:
-            yield number, INLINE_CODE.sub(lambda m: " " * len(m.group(0)), line)
+            out.append("")
+        elif in_fence is not None:
+            out.append("")
+        else:
+            out.append(INLINE_CODE.sub(lambda m: " " * len(m.group(0)), line))
+    return "\n".join(out)
 
 
 def slug(heading):
@@ -74,9 +79,11 @@ def anchors(path, cache={}):
 
 
 def links(text):
-    for number, line in prose_lines(text):
-        for match in LINK.finditer(line):
-            yield number, match.group(1)
+    """(line number, target) of every inline link and reference definition outside code."""
+    plain = prose(text)
+    for match in LINK.finditer(plain):
+        yield plain.count("\n", 0, match.start()) + 1, match.group(1)
+    for number, line in enumerate(plain.split("\n"), start=1):
         definition = REFERENCE_DEFINITION.match(line)
         if definition:
             yield number, definition.group(1)
