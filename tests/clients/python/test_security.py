@@ -52,19 +52,23 @@ def test_student_commands_own_rig_and_only_watches_what_the_class_grants(serve, 
         assert alice.sensors().choke_position_deg == pytest.approx(31.0, abs=0.01)
         alice.choke(50.0)
         assert choke_reaches(alice, 50.0, 20.0), "alice's own command did not move her choke"
+        # alice may not read bob's rig at all: refused when the readers are made, saying why.
+        with pytest.raises(mpdrig.RigError, match="do not allow reading rig 'bob'"):
+            mpdrig.Rig("bob", domain=service.domain, timeout=TIMEOUT_S,
+                       security=school / "alice")
 
-        # bob may watch alice's rig (bob:alice): he reads it, and his command is refused by
-        # DDS Security before it is sent.
-        with mpdrig.Rig("alice", domain=service.domain, timeout=TIMEOUT_S,
-                        security=school / "bob") as watcher:
-            assert watcher.sensors(fresh=True).choke_position_deg == pytest.approx(50.0, abs=0.01)
-            with pytest.raises(mpdrig.RigError, match="do not allow commanding rig 'alice'"):
-                watcher.choke(80.0)
-        assert not choke_reaches(alice, 80.0, 1.0)
-
-    # alice may not read bob's rig at all: refused when the readers are made, saying why.
-    with pytest.raises(mpdrig.RigError, match="do not allow reading rig 'bob'"):
-        mpdrig.Rig("bob", domain=service.domain, timeout=TIMEOUT_S, security=school / "alice")
+    # bob may watch alice's rig (bob:alice): he reads it, and his command is refused by DDS
+    # Security before it is sent. (After alice's Rig has gone: Cyclone shares one domain
+    # instance per domain id in a process, and two identities in one instance do not both
+    # complete discovery, so a second identity belongs in a process of its own, as on a second
+    # student's machine.)
+    with mpdrig.Rig("alice", domain=service.domain, timeout=TIMEOUT_S,
+                    security=school / "bob") as watcher:
+        assert watcher.sensors(fresh=True).choke_position_deg == pytest.approx(50.0, abs=0.01)
+        with pytest.raises(mpdrig.RigError, match="do not allow commanding rig 'alice'"):
+            watcher.choke(80.0)
+        assert not choke_reaches(watcher, 80.0, 1.0)
+        assert watcher.sensors(fresh=True).choke_position_deg == pytest.approx(50.0, abs=0.01)
 
 
 def test_invalid_identity_directory_is_refused_saying_why(serve, school):
