@@ -191,7 +191,10 @@ class Rig(_Rig):
         self.close()
 
     def __repr__(self) -> str:
-        state = "closed" if self.closed else ("lost" if self.lost else "connected")
+        try:
+            state = "closed" if self.closed else ("lost" if self.lost else "connected")
+        except Exception:  # a Rig whose __init__ failed (tracebacks print its repr)
+            return "<mpdrig.Rig (not connected)>"
         clock = "lockstep" if self.lockstep else "real time"
         return (f"<mpdrig.Rig {self.rig_id!r} domain={self.domain} {clock} "
                 f"strength={self.strength} {state}>")
