@@ -272,7 +272,9 @@ PYBIND11_MODULE(_mpdrig, m) {
       .def_property_readonly("lockstep", &Rig::lockstep)
       .def_property_readonly("lost", [](const Rig& r) { return r.lost(); })
       .def_property_readonly("closed", &Rig::closed)
-      .def("close", &Rig::Close)
+      .def("close", &Rig::Close, py::call_guard<py::gil_scoped_release>(),
+           "Leave the rig: commands written are acknowledged first (up to the timeout, 10 s at "
+           "most), then the writers are deleted, so another controller takes over at once.")
       .def(
           "sensors",
           [](Rig& r, bool fresh) {

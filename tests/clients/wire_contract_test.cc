@@ -146,7 +146,7 @@ TEST(WireContract, TypesAreRegisteredAsTheReadmeSays) {
   }
 }
 
-class WireContract : public ::testing::TestWithParam<const char*> {
+class WireContract : public ::testing::TestWithParam<int> {  // 0: the document, 1: the fragment
  protected:
   void SetUp() override {
     domain_ = mpdrig::testing::ClaimTestDomain();
@@ -156,7 +156,8 @@ class WireContract : public ::testing::TestWithParam<const char*> {
                                  "--pump-lpm", "5", "--choke-deg", "31", "--sensor-noise", "none",
                                  "--rig", kRig, "--domain", std::to_string(domain_)});
     ASSERT_GT(service_->pid, 0);
-    domain_entity_ = dds_create_domain(static_cast<dds_domainid_t>(domain_), GetParam());
+    domain_entity_ = dds_create_domain(static_cast<dds_domainid_t>(domain_),
+                                       GetParam() == 0 ? kDocumentConfig : kFragmentConfig);
     ASSERT_GT(domain_entity_, 0) << dds_strretcode(domain_entity_);
     participant_ = dds_create_participant(static_cast<dds_domainid_t>(domain_), nullptr, nullptr);
     ASSERT_GT(participant_, 0) << dds_strretcode(participant_);
@@ -296,10 +297,9 @@ TEST_P(WireContract, CommandWriterWithoutTheTablesQosDoesNotMatch) {
 }
 
 // The whole document of the README, and the fragment it says is enough for a Cyclone client.
-INSTANTIATE_TEST_SUITE_P(ReadmeLoopbackSettings, WireContract,
-                         ::testing::Values(kDocumentConfig, kFragmentConfig),
-                         [](const ::testing::TestParamInfo<const char*>& info) {
-                           return std::string(info.index == 0 ? "Document" : "Fragment");
+INSTANTIATE_TEST_SUITE_P(ReadmeLoopbackSettings, WireContract, ::testing::Values(0, 1),
+                         [](const ::testing::TestParamInfo<int>& info) {
+                           return std::string(info.param == 0 ? "Document" : "Fragment");
                          });
 
 }  // namespace
