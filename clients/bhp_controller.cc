@@ -1,12 +1,17 @@
 // bhp_controller: an example controller that holds the bottom-hole pressure of a rig at a set
 // point against heave, with the choke. A client: it speaks only the DDS topics (mpdrig_sensors,
-// mpdrig_estimate, mpdrig_choke_command, mpdrig_step_request) and never links model/, so it runs
-// unchanged against the virtual rig or the lab's rig behind a bridge.
+// mpdrig_estimate, mpdrig_choke_command, mpdrig_step_request) through the client library
+// (clients/client/rig_client.h: QoS, ownership, lockstep acknowledgements, the lost-rig rule)
+// and never links model/, so it runs unchanged against the virtual rig or the lab's rig behind
+// a bridge.
 //
 // Control law, choke reference u [deg] (opening the choke lowers the pressure):
-//   e = BHP - set point                                  [bar]   (PT1, or BHP_est with
-//   --use-estimate) u = u_I + Kp e + Re{theta z}                         [deg] u_I' = Ki e (frozen
-//   while u is clamped and e pushes further: anti-windup)
+// clang-format off
+//   e    = BHP - set point           [bar]  (PT1, or BHP_est with --use-estimate)
+//   u    = u_I + Kp e + Re{theta z}  [deg]
+//   u_I' = Ki e                      [deg/s] (frozen while u is clamped and e pushes further:
+//                                             anti-windup)
+// clang-format on
 // PI feedback alone cannot reject a 0.1-0.2 Hz heave: the choke acts on the bottom through the
 // 900 m pipe, l/c = 1.06 s of transport delay plus the 0.1 s actuator lag, which is 40-90 degrees
 // of phase at the heave frequency, before the pipe's own resonance at c/4l = 0.24 Hz (thesis 9.3).
@@ -29,24 +34,21 @@
 //   bhp_controller --lockstep --duration 120 --measure-last 40 --open-loop   # baseline
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <complex>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <optional>
 #include <string>
-#include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "clients/client/rig_client.h"
 #include "clients/rig_watch.h"
-#include "mpdrig.h"
-#include "service/dds/dds.h"
-#include "service/dds/security.h"
 
 namespace {
 
@@ -146,6 +148,24 @@ struct Reading {
   double frequency_hz = 0.0;
 };
 
+Reading FromSample(const mpdrig::client::Sensors& s,
+                   const std::optional<mpdrig::client::Estimate>& e) {
+  Reading r;
+  r.counter = s.sample_counter;
+  r.time_s = s.time_s;
+  r.pt1_barg = s.PT_barg[0];
+  r.choke_deg = s.choke_position_deg;
+  if (e) {
+    // The heave phasor z = v_d + j omega x_d (top of this file).
+    r.has_estimate = true;
+    r.bhp_est_barg = e->BHP_est_barg;
+    r.z = Complex(e->piston_velocity_est_mps,
+                  2.0 * std::numbers::pi * e->disturbance_frequency_hz * e->piston_position_est_m);
+    r.frequency_hz = e->disturbance_frequency_hz;
+  }
+  return r;
+}
+
 int Fail(const std::string& what) {
   std::fprintf(stderr, "bhp_controller: %s\n", what.c_str());
   return 1;
@@ -166,252 +186,175 @@ struct Swing {
   }
 };
 
-int Run(const Args& args) {
-  using namespace mpdrig;
-  // In lockstep every step waits for the choke command's acknowledgement: fast heartbeats (added
-  // to an inline fragment, or layered over a configuration file as Cyclone's comma-separated
-  // list "file:///lab.xml,<Internal>..."; a complete inline <CycloneDDS> document should set
-  // them itself).
-  std::string config = args.dds_config.empty() ? dds::LoopbackConfig() : args.dds_config;
-  if (args.lockstep && config.rfind("<", 0) != 0) {
-    config += "," + dds::FastAckConfig();
-  } else if (args.lockstep && config.find("CycloneDDS") == std::string::npos) {
-    config += dds::FastAckConfig();
+// The rig through the client library, as this controller's options ask.
+mpdrig::Result<std::unique_ptr<mpdrig::client::Rig>> ConnectRig(const Args& args) {
+  mpdrig::client::RigOptions options;
+  options.rig_id = args.rig_id;
+  options.domain = args.domain;
+  options.dds_config = args.dds_config;
+  options.strength = args.strength;
+  options.timeout_s = args.timeout_s;
+  options.security_dir = args.security;
+  options.read_profiles = false;
+  auto rig = mpdrig::client::Rig::Connect(options, [] { return g_stop.load(); });
+  if (!rig.ok()) return rig.status();
+  if ((*rig)->lockstep() != args.lockstep) {
+    return mpdrig::Status::Error(
+        "rig " + args.rig_id +
+        ((*rig)->lockstep() ? " runs a lockstep clock: add --lockstep, and this controller "
+                              "steps it"
+                            : " runs in real time: --lockstep is for `mpdrig serve --clock "
+                              "lockstep`"));
   }
-  auto domain = dds::Domain::Create(args.domain, config);
-  if (!domain.ok()) return Fail(domain.status().message());
-  // With --security the rig's topics are in its partition (make-class's permissions name it).
-  auto scope = dds::CreateClientScope(args.domain, args.security, args.rig_id);
-  if (!scope.ok()) return Fail(scope.status().message());
-  const dds_entity_t p = scope->participant.handle();
-  auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors");
-  auto estimate_topic = dds::CreateTopic(p, &mpdrig_RigEstimate_desc, "mpdrig_estimate");
-  auto choke_topic = dds::CreateTopic(p, &mpdrig_ChokeCommand_desc, "mpdrig_choke_command");
-  auto step_topic = dds::CreateTopic(p, &mpdrig_StepRequest_desc, "mpdrig_step_request");
-  for (const auto* t : {&sensors_topic, &estimate_topic, &choke_topic, &step_topic}) {
-    if (!t->ok()) return Fail(t->status().message());
-  }
-  // In lockstep the controller sets the pace and must see every sample (keep all, like the
-  // service); in real time only the newest matters.
-  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), sensors_topic->handle(),
-                                                        dds::SensorQos(args.lockstep));
-  auto estimates = dds::Reader<mpdrig_RigEstimate>::Create(scope->sub(), estimate_topic->handle(),
-                                                           dds::SensorQos(args.lockstep));
-  auto choke = dds::Writer<mpdrig_ChokeCommand>::Create(scope->pub(), choke_topic->handle(),
-                                                        dds::CommandQos(args.strength));
-  dds::Qos step_qos;
-  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto steps =
-      dds::Writer<mpdrig_StepRequest>::Create(scope->pub(), step_topic->handle(), step_qos);
-  if (!sensors.ok()) return Fail(sensors.status().message());
-  if (!estimates.ok()) return Fail(estimates.status().message());
-  if (!choke.ok()) return Fail(choke.status().message());
-  if (!steps.ok()) return Fail(steps.status().message());
+  return rig;
+}
 
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  std::ofstream log;
-  if (!args.log_path.empty()) {
-    log.open(args.log_path);
-    if (!log) return Fail(args.log_path + ": cannot write");
-    log << "# rig-log: 1\n# source: bhp_controller, rig " << args.rig_id
-        << "\ntime_s,PT1_barg,BHP_est_barg,choke_position_deg,choke_reference_deg,"
-           "BHP_setpoint_barg\n";
-  }
-  const bool wants_estimate = args.use_estimate || args.control.feedforward;
+// The controller's loop: read a sample (stepping a lockstep rig), control, command, measure.
+class Session {
+ public:
+  Session(const Args& args, mpdrig::client::Rig& rig) : args_(args), rig_(rig) {}
 
-  if (args.lockstep) {
-    // The service must see the step requests (and our commands) before we ask for steps.
-    for (int waited = 0;; waited += 10) {
-      dds_publication_matched_status_t step_match{}, choke_match{};
-      dds_get_publication_matched_status(steps->handle(), &step_match);
-      dds_get_publication_matched_status(choke->handle(), &choke_match);
-      if (step_match.current_count > 0 && choke_match.current_count > 0) break;
-      if (g_stop || waited > 1000 * args.timeout_s) {
-        return Fail("no lockstep rig service found on domain " + std::to_string(args.domain));
-      }
-      dds_sleepfor(DDS_MSECS(10));
-    }
-  }
-
-  std::optional<BhpController> controller;
-  Swing swing;
-  std::vector<Reading> pending;  // sensor samples waiting for their estimate
-  std::vector<mpdrig_RigEstimate> unused;
-  std::optional<Reading> last_estimate;  // realtime: the newest estimate seen
-  std::uint64_t request_id = 0;
-  std::uint64_t next_counter = 0;  // lockstep: the sample we wait for
-  bool finished = false;
-  std::string rig_id = args.rig_id;
-  long commands = 0;
-
-  auto ask_step = [&]() -> mpdrig::Status {
-    mpdrig_StepRequest request{rig_id.data(), ++request_id, 1};
-    return steps->Write(request);
-  };
-  // Handles one complete reading: control, command, measurement.
-  auto act = [&](const Reading& r) -> mpdrig::Status {
-    if (!controller) controller.emplace(args.control, r.choke_deg);
-    const double bhp = args.use_estimate ? r.bhp_est_barg : r.pt1_barg;
-    const double command = controller->Update(r.time_s, bhp, r.has_estimate ? r.z : Complex{},
-                                              r.has_estimate ? r.frequency_hz : 0.0);
-    if (!args.open_loop) {
-      mpdrig_ChokeCommand c{rig_id.data(), command};
-      MPDRIG_RETURN_IF_ERROR(choke->Write(c));
-      ++commands;
-      if (args.lockstep) {
-        // The next step must see this command (rig_service.h, lockstep).
-        MPDRIG_RETURN_IF_ERROR(
-            dds::Check(dds_wait_for_acks(choke->handle(), DDS_SECS(5)), "dds_wait_for_acks"));
-      }
-    }
-    if (log.is_open()) {
-      log << r.time_s << ',' << r.pt1_barg << ','
-          << (r.has_estimate ? r.bhp_est_barg : std::nan("")) << ',' << r.choke_deg << ','
-          << (args.open_loop ? std::nan("") : command) << ',' << controller->setpoint_barg()
-          << '\n';
-    }
-    if (args.duration_s > 0.0 && r.time_s > args.duration_s - args.measure_last_s) {
-      swing.Add(r.pt1_barg, r.choke_deg);
-    }
-    if (args.duration_s > 0.0 && r.time_s >= args.duration_s - 1e-9) finished = true;
+  mpdrig::Status OpenLog() {
+    if (args_.log_path.empty()) return mpdrig::Status::Ok();
+    log_.open(args_.log_path);
+    if (!log_) return mpdrig::Status::Error(args_.log_path + ": cannot write");
+    log_ << "# rig-log: 1\n# source: bhp_controller, rig " << args_.rig_id
+         << "\ntime_s,PT1_barg,BHP_est_barg,choke_position_deg,choke_reference_deg,"
+            "BHP_setpoint_barg\n";
     return mpdrig::Status::Ok();
-  };
-
-  if (args.lockstep) {
-    const mpdrig::Status asked = ask_step();
-    if (!asked.ok()) return Fail(asked.message());
-  }
-  // A lost rig (clients/rig_watch.h): say why and stop with kExitRigLost, carrying nothing over.
-  clients::RigWatch watch(args.timeout_s);
-  std::optional<std::string> lost;
-  auto rig_lost = [&](const std::string& why) {
-    std::fprintf(stderr, "bhp_controller: rig %s lost: %s; stopping after %ld choke commands\n",
-                 rig_id.c_str(), why.c_str(), commands);
-    return clients::kExitRigLost;
-  };
-  using WallClock = std::chrono::steady_clock;
-  WallClock::time_point last_sample = WallClock::now();
-  // Wall time since this rig's last sample, and whether the rig's sensor writer is still there;
-  // the rig is lost, or (before any sample) not found, when that lasts --timeout.
-  auto idle_check = [&]() -> std::optional<int> {
-    const double idle_s = std::chrono::duration<double>(WallClock::now() - last_sample).count();
-    dds_subscription_matched_status_t matched{};
-    dds_get_subscription_matched_status(sensors->handle(), &matched);
-    if (auto why = watch.Check(idle_s, matched.current_count > 0)) return rig_lost(*why);
-    if (!watch.seen() && idle_s > args.timeout_s) {
-      return Fail("no sensor samples from " + rig_id);
-    }
-    return std::nullopt;
-  };
-  while (!g_stop && !finished) {
-    auto ready = sensors->Wait(DDS_MSECS(100));
-    if (!ready.ok()) return Fail(ready.status().message());
-    auto took = sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
-      if (rig_id != s.rig_id || lost) return;
-      lost = watch.Sample(s.sample_counter, s.sim_time_s);
-      if (lost) return;
-      last_sample = WallClock::now();
-      Reading r;
-      r.counter = s.sample_counter;
-      r.time_s = s.sim_time_s;
-      r.pt1_barg = s.PT_barg[0];
-      r.choke_deg = s.choke_position_deg;
-      pending.push_back(r);
-    });
-    if (!took.ok()) return Fail(took.status().message());
-    if (lost) return rig_lost(*lost);
-    if (!wants_estimate || !args.lockstep) {
-      // Real time: pair each sample with the newest estimate (they come right after it).
-      auto e_took = estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
-        if (rig_id != e.rig_id) return;
-        Reading est;
-        est.has_estimate = true;
-        est.bhp_est_barg = e.BHP_est_barg;
-        est.z =
-            Complex(e.piston_velocity_est_mps,
-                    2.0 * std::numbers::pi * e.disturbance_frequency_hz * e.piston_position_est_m);
-        est.frequency_hz = e.disturbance_frequency_hz;
-        last_estimate = est;
-      });
-      if (!e_took.ok()) return Fail(e_took.status().message());
-      if (pending.empty()) {
-        if (auto code = idle_check()) return *code;
-        continue;
-      }
-      Reading r = pending.back();  // the newest: a real-time controller does not catch up
-      pending.clear();
-      if (last_estimate) {
-        r.has_estimate = true;
-        r.bhp_est_barg = last_estimate->bhp_est_barg;
-        r.z = last_estimate->z;
-        r.frequency_hz = last_estimate->frequency_hz;
-      }
-      if (args.use_estimate && !r.has_estimate) continue;  // no estimate yet
-      const mpdrig::Status acted = act(r);
-      if (!acted.ok()) return Fail(acted.message());
-      if (args.lockstep && !finished) {
-        const mpdrig::Status asked = ask_step();
-        if (!asked.ok()) return Fail(asked.message());
-      }
-      continue;
-    }
-    // Lockstep with the estimate: sample k and estimate k, then the next step.
-    if (pending.empty()) {
-      if (auto code = idle_check()) return *code;
-      continue;
-    }
-    Reading r = pending.back();
-    pending.clear();
-    if (!controller) next_counter = r.counter;  // the rig may have run before we came
-    if (r.counter != next_counter) {
-      return Fail("lockstep sample " + std::to_string(r.counter) + " instead of " +
-                  std::to_string(next_counter) + " (another client steps this rig?)");
-    }
-    for (int waited = 0; !r.has_estimate && !g_stop; ++waited) {
-      auto e_ready = estimates->Wait(DDS_MSECS(100));
-      if (!e_ready.ok()) return Fail(e_ready.status().message());
-      auto e_took = estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
-        if (rig_id != e.rig_id || e.sample_counter != r.counter) return;
-        r.has_estimate = true;
-        r.bhp_est_barg = e.BHP_est_barg;
-        r.z =
-            Complex(e.piston_velocity_est_mps,
-                    2.0 * std::numbers::pi * e.disturbance_frequency_hz * e.piston_position_est_m);
-        r.frequency_hz = e.disturbance_frequency_hz;
-      });
-      if (!e_took.ok()) return Fail(e_took.status().message());
-      if (waited > 10 * args.timeout_s) {
-        return Fail("no mpdrig_estimate for sample " + std::to_string(r.counter) +
-                    " (is the service's observer off?)");
-      }
-    }
-    const mpdrig::Status acted = act(r);
-    if (!acted.ok()) return Fail(acted.message());
-    ++next_counter;
-    if (!finished) {
-      const mpdrig::Status asked = ask_step();
-      if (!asked.ok()) return Fail(asked.message());
-    }
   }
 
-  std::fprintf(stderr, "bhp_controller: %s, %ld choke commands, set point %.4f barg\n",
-               rig_id.c_str(), commands, controller ? controller->setpoint_barg() : std::nan(""));
-  if (swing.n > 0) {
+  // Runs until --duration, Ctrl-C or a failure: the exit code.
+  int Loop() {
+    while (!g_stop && !finished_) {
+      auto reading = args_.lockstep ? ReadLockstep() : ReadRealTime();
+      if (!reading.ok()) return Stopped(reading.status());
+      if (!*reading) continue;  // real time, --use-estimate: no estimate yet
+      const mpdrig::Status acted = Act(**reading);
+      if (!acted.ok()) return Stopped(acted);
+    }
+    PrintSummary();
+    return 0;
+  }
+
+ private:
+  // Real time: the newest sample (a real-time controller does not catch up) and the newest
+  // estimate (published right after its sample). Nothing when the control needs an estimate
+  // and none has come yet.
+  mpdrig::Result<std::optional<Reading>> ReadRealTime() {
+    auto sample = rig_.Latest(/*fresh=*/true, Interrupt());
+    if (!sample.ok()) return sample.status();
+    const Reading r = FromSample(*sample, rig_.NewestEstimate());
+    if (args_.use_estimate && !r.has_estimate) return std::optional<Reading>();
+    return std::optional<Reading>(r);
+  }
+
+  // Lockstep: one step (the library sees the last choke command acknowledged first), its sample
+  // and, when the control uses it, the estimate for that very sample.
+  mpdrig::Result<std::optional<Reading>> ReadLockstep() {
+    auto sample = rig_.Step(1, Interrupt());
+    if (!sample.ok()) return sample.status();
+    (void)rig_.TakeArrived();  // the step's one sample is `sample`; keep no backlog
+    if (!next_counter_) next_counter_ = sample->sample_counter;  // the rig may have run before
+    if (sample->sample_counter != *next_counter_) {
+      return mpdrig::Status::Error("lockstep sample " + std::to_string(sample->sample_counter) +
+                                   " instead of " + std::to_string(*next_counter_) +
+                                   " (another client steps this rig?)");
+    }
+    ++*next_counter_;
+    const bool wants_estimate = args_.use_estimate || args_.control.feedforward;
+    std::optional<mpdrig::client::Estimate> estimate = rig_.NewestEstimate();
+    if (wants_estimate) {
+      auto paired = rig_.EstimateFor(sample->sample_counter, Interrupt());
+      if (!paired.ok()) return paired.status();
+      estimate = *paired;
+    }
+    return std::optional<Reading>(FromSample(*sample, estimate));
+  }
+
+  // Handles one complete reading: control, command, log, measurement.
+  mpdrig::Status Act(const Reading& r) {
+    if (!controller_) controller_.emplace(args_.control, r.choke_deg);
+    const double bhp = args_.use_estimate ? r.bhp_est_barg : r.pt1_barg;
+    const double command = controller_->Update(r.time_s, bhp, r.has_estimate ? r.z : Complex{},
+                                               r.has_estimate ? r.frequency_hz : 0.0);
+    if (!args_.open_loop) {
+      MPDRIG_RETURN_IF_ERROR(rig_.Choke(command, Interrupt()));
+      ++commands_;
+    }
+    if (log_.is_open()) {
+      log_ << r.time_s << ',' << r.pt1_barg << ','
+           << (r.has_estimate ? r.bhp_est_barg : std::nan("")) << ',' << r.choke_deg << ','
+           << (args_.open_loop ? std::nan("") : command) << ',' << controller_->setpoint_barg()
+           << '\n';
+    }
+    if (args_.duration_s > 0.0 && r.time_s > args_.duration_s - args_.measure_last_s) {
+      swing_.Add(r.pt1_barg, r.choke_deg);
+    }
+    if (args_.duration_s > 0.0 && r.time_s >= args_.duration_s - 1e-9) finished_ = true;
+    return mpdrig::Status::Ok();
+  }
+
+  // A failed call: a lost rig (clients/rig_watch.h) says why and exits with kExitRigLost,
+  // without the summary (the run did not end as asked); Ctrl-C ends the run normally.
+  int Stopped(const mpdrig::Status& why) {
+    using mpdrig::client::Failure;
+    if (rig_.last_failure() == Failure::kInterrupted) {
+      PrintSummary();
+      return 0;
+    }
+    if (rig_.lost()) {
+      std::fprintf(stderr, "bhp_controller: rig %s lost: %s; stopping after %ld choke commands\n",
+                   args_.rig_id.c_str(), rig_.lost()->c_str(), commands_);
+      return mpdrig::clients::kExitRigLost;
+    }
+    if (rig_.last_failure() == Failure::kTimeout && !controller_) {
+      return Fail("no sensor samples from " + args_.rig_id + ": " + why.message());
+    }
+    return Fail(why.message());
+  }
+
+  void PrintSummary() const {
+    std::fprintf(stderr, "bhp_controller: %s, %ld choke commands, set point %.4f barg\n",
+                 args_.rig_id.c_str(), commands_,
+                 controller_ ? controller_->setpoint_barg() : std::nan(""));
+    if (swing_.n == 0) return;
     // One line, key=value, for scripts (bench/bhp_attenuation.sh).
     std::printf(
         "rig=%s mode=%s window_s=%g samples=%ld PT1_amplitude_bar=%.5f PT1_mean_barg=%.5f "
         "choke_min_deg=%.3f choke_max_deg=%.3f\n",
-        rig_id.c_str(),
-        args.open_loop              ? "fixed-choke"
-        : !args.control.feedforward ? "pi"
-        : args.use_estimate         ? "pi+ff(estimate)"
-                                    : "pi+ff",
-        args.measure_last_s, swing.n, 0.5 * (swing.hi - swing.lo), swing.sum / swing.n,
-        swing.choke_lo, swing.choke_hi);
+        args_.rig_id.c_str(),
+        args_.open_loop              ? "fixed-choke"
+        : !args_.control.feedforward ? "pi"
+        : args_.use_estimate         ? "pi+ff(estimate)"
+                                     : "pi+ff",
+        args_.measure_last_s, swing_.n, 0.5 * (swing_.hi - swing_.lo), swing_.sum / swing_.n,
+        swing_.choke_lo, swing_.choke_hi);
   }
-  return 0;
+
+  static mpdrig::client::Rig::Interrupt Interrupt() {
+    return [] { return g_stop.load(); };
+  }
+
+  const Args& args_;
+  mpdrig::client::Rig& rig_;
+  std::ofstream log_;
+  std::optional<BhpController> controller_;
+  Swing swing_;
+  std::optional<std::uint64_t> next_counter_;  // lockstep: the sample the next step brings
+  bool finished_ = false;
+  long commands_ = 0;
+};
+
+int Run(const Args& args) {
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  auto rig = ConnectRig(args);
+  if (!rig.ok()) return Fail(rig.status().message());
+  Session session(args, **rig);
+  const mpdrig::Status opened = session.OpenLog();
+  if (!opened.ok()) return Fail(opened.message());
+  return session.Loop();
 }
 
 }  // namespace

@@ -1,29 +1,26 @@
 // rig_echo: prints or records what a rig publishes, as a rig log (rig-log-format.md), so any DDS
 // recording of a rig (virtual or physical) is a file the comparison tools read. A client: it
-// speaks only the DDS topics and never links model/.
+// speaks only the DDS topics, through the client library (clients/client/rig_client.h: QoS,
+// security, the lost-rig rule), and never links model/.
 //
 //   rig_echo --rig rig-1 --out run.csv            # until Ctrl-C
 //   rig_echo --rig rig-1 --samples 6000 --out -   # 6000 samples to stdout
 //   rig_echo --samples 10000 --timing --out /dev/null  # sensor period jitter as received
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
-#include <optional>
-#include <sstream>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <CLI/CLI.hpp>
 
+#include "clients/client/rig_client.h"
 #include "clients/rig_watch.h"
-#include "mpdrig.h"
-#include "service/dds/dds.h"
-#include "service/dds/security.h"
 
 namespace {
 
@@ -36,11 +33,11 @@ constexpr const char* kHeader =
     "PT2_barg,PT3_barg,PT4_barg,PT5_barg,PT6_barg,PT7_barg,PT8_barg,PT9_barg,PT10_barg,C2_barg,"
     "FT1_lpm,FT3_lpm,FT4_lpm";
 
-void WriteRow(std::ostream& out, const mpdrig_RigSensors& s) {
+void WriteRow(std::ostream& out, const mpdrig::client::Sensors& s) {
   char line[1024];
-  int n = std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g",
-                        s.sim_time_s, s.piston_position_m, s.choke_position_deg, s.FT2_lpm,
-                        s.C1_barg, s.P1_barg, s.P2_barg);
+  int n = std::snprintf(line, sizeof line, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", s.time_s,
+                        s.piston_position_m, s.choke_position_deg, s.FT2_lpm, s.C1_barg, s.P1_barg,
+                        s.P2_barg);
   for (double pt : s.PT_barg) n += std::snprintf(line + n, sizeof line - n, ",%.17g", pt);
   std::snprintf(line + n, sizeof line - n, ",%.17g,%.17g,%.17g,%.17g\n", s.C2_barg, s.FT1_lpm,
                 s.FT3_lpm, s.FT4_lpm);
@@ -75,6 +72,40 @@ int Fail(const mpdrig::Status& status) {
   return 1;
 }
 
+struct Recorded {
+  long written = 0;
+  std::vector<double> published_s, received_s;  // --timing
+  std::string error;  // why the recording stopped early, if not Ctrl-C or a lost rig
+};
+
+// Writes every sample in order until `max_samples` (0: no limit), Ctrl-C, the rig's loss (the
+// samples from before it included) or, before the first sample, the timeout.
+Recorded Record(mpdrig::client::Rig& rig, std::ostream& out, long max_samples, bool timing,
+                const mpdrig::client::Rig::Interrupt& interrupt) {
+  Recorded r;
+  double previous_time = -1e300;
+  while (!g_stop && (max_samples == 0 || r.written < max_samples)) {
+    auto s = rig.Next(interrupt);
+    if (!s.ok()) {
+      using mpdrig::client::Failure;
+      if (rig.last_failure() != Failure::kInterrupted && rig.last_failure() != Failure::kLost) {
+        r.error = s.status().message();
+      }
+      break;
+    }
+    // Only increasing times (a rig log's time is strictly increasing).
+    if (!(s->time_s > previous_time)) continue;
+    WriteRow(out, *s);
+    if (timing) {
+      r.published_s.push_back(s->published_s);
+      r.received_s.push_back(s->received_s);
+    }
+    previous_time = s->time_s;
+    ++r.written;
+  }
+  return r;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -107,20 +138,25 @@ int main(int argc, char** argv) {
                  "NAME: OUT/NAME) allowed to read the rig; the rig's topics are then in "
                  "partition rig.<rig id>. Refuses an invalid directory, saying why");
   CLI11_PARSE(app, argc, argv);
+  if (!(timeout_s >= 0.0 && timeout_s <= 86400.0)) {
+    std::fprintf(stderr, "rig_echo: --timeout must be 0..86400 s\n");
+    return 2;
+  }
 
-  auto created = mpdrig::dds::Domain::Create(
-      domain, dds_config.empty() ? mpdrig::dds::LoopbackConfig() : dds_config);
-  if (!created.ok()) return Fail(created.status());
-  // With --security the rig's topics are in its partition (make-class's permissions name it).
-  auto scope = mpdrig::dds::CreateClientScope(domain, security, rig_id);
-  if (!scope.ok()) return Fail(scope.status());
-  auto topic = mpdrig::dds::CreateTopic(scope->participant.handle(), &mpdrig_RigSensors_desc,
-                                        "mpdrig_sensors");
-  if (!topic.ok()) return Fail(topic.status());
-  // Keep all: a recording should not drop samples the rig sent.
-  auto reader = mpdrig::dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), topic->handle(),
-                                                               mpdrig::dds::SensorQos(true));
-  if (!reader.ok()) return Fail(reader.status());
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  const mpdrig::client::Rig::Interrupt interrupt = [] { return g_stop.load(); };
+  mpdrig::client::RigOptions options;
+  options.rig_id = rig_id;
+  options.domain = domain;
+  options.dds_config = dds_config;
+  options.timeout_s = timeout_s;  // 0: wait for ever, and silence never loses the rig
+  options.security_dir = security;
+  options.keep_every_sample = true;  // a recording should not drop samples the rig sent
+  options.read_estimates = false;
+  options.read_profiles = false;
+  auto rig = mpdrig::client::Rig::Connect(options, interrupt);
+  if (!rig.ok()) return Fail(rig.status());
 
   std::ofstream file;
   std::ostream* out = &std::cout;
@@ -132,73 +168,21 @@ int main(int argc, char** argv) {
   *out << "# rig-log: 1\n# source: rig_echo, rig " << rig_id << ", DDS domain " << domain
        << "\n# atmospheric_pressure_pa: 101325\n"
        << kHeader << "\n";
-
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
-  long written = 0;
-  std::vector<double> arrival_s, source_s;
-  const auto started = std::chrono::steady_clock::now();
-  double previous_time = -1e300;
-  // A lost rig (clients/rig_watch.h) ends the recording: the file keeps what came before, on
-  // whole rows, and the exit status says the recording did not end as asked.
-  mpdrig::clients::RigWatch watch(timeout_s);
-  std::optional<std::string> lost;
-  auto last_sample = std::chrono::steady_clock::now();
-  auto take = [&]() -> mpdrig::Status {
-    auto taken = reader->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
-      if (rig_id != s.rig_id || lost) return;
-      lost = watch.Sample(s.sample_counter, s.sim_time_s);
-      if (lost) return;
-      last_sample = std::chrono::steady_clock::now();
-      // Only increasing times (a rig log's time is strictly increasing).
-      if (!(s.sim_time_s > previous_time)) return;
-      if (max_samples != 0 && written >= max_samples) return;
-      WriteRow(*out, s);
-      if (timing) {
-        arrival_s.push_back(
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
-        source_s.push_back(1e-9 * static_cast<double>(info.source_timestamp));
-      }
-      previous_time = s.sim_time_s;
-      ++written;
-    });
-    return taken.status();
-  };
-  while (!g_stop && !lost && (max_samples == 0 || written < max_samples)) {
-    auto ready = reader->Wait(DDS_MSECS(100));
-    if (!ready.ok()) return Fail(ready.status());
-    if (*ready) {
-      const mpdrig::Status taken = take();
-      if (!taken.ok()) return Fail(taken);
-    }
-    if (lost) break;
-    const double idle_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - last_sample).count();
-    dds_subscription_matched_status_t matched{};
-    dds_get_subscription_matched_status(reader->handle(), &matched);
-    lost = watch.Check(idle_s, matched.current_count > 0);
-    if (lost) {
-      // What the departed writer sent before it went is in the reader already: keep it.
-      const std::optional<std::string> why = lost;
-      lost.reset();
-      const mpdrig::Status taken = take();
-      if (!taken.ok()) return Fail(taken);
-      if (!lost) lost = why;
-      break;
-    }
-    if (!watch.seen() && timeout_s > 0.0 && idle_s >= timeout_s) break;  // no rig: exit 1
-  }
+  const Recorded recorded = Record(**rig, *out, max_samples, timing, interrupt);
   out->flush();
   if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
-  std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", written, rig_id.c_str());
-  if (lost) {
+  std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", recorded.written, rig_id.c_str());
+  if (const auto& lost = (*rig)->lost()) {
+    // A lost rig (clients/rig_watch.h) ends the recording: the file keeps what came before, on
+    // whole rows, and the exit status says the recording did not end as asked.
     std::fprintf(stderr, "rig_echo: rig %s lost: %s; the recording ends there\n", rig_id.c_str(),
                  lost->c_str());
     return mpdrig::clients::kExitRigLost;
   }
+  if (!recorded.error.empty()) std::fprintf(stderr, "rig_echo: %s\n", recorded.error.c_str());
   if (timing) {
-    PrintTiming("published (source timestamps)", source_s);
-    PrintTiming("received (arrival at this reader)", arrival_s);
+    PrintTiming("published (source timestamps)", recorded.published_s);
+    PrintTiming("received (arrival at this reader)", recorded.received_s);
   }
-  return written > 0 ? 0 : 1;
+  return recorded.written > 0 && recorded.error.empty() ? 0 : 1;
 }

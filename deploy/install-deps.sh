@@ -31,6 +31,9 @@ packages=(
   openssl tshark
   # Python client module (clients/python): bindings, numpy arrays, its tests and the live plot
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
+  # another DDS vendor against the service, as ROS 2 and MATLAB's DDS Blockset use it
+  # (tests/clients/fastdds_interop_test): eProsima Fast DDS, test only
+  libfastrtps-dev
 )
 if [ "$containers" -eq 1 ]; then
   packages+=(

@@ -1,12 +1,15 @@
 #include "clients/client/rig_client.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <mutex>
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 
 namespace mpdrig::client {
 namespace {
@@ -72,17 +75,16 @@ std::vector<std::string> FromSequence(const dds_sequence_string& seq) {
 
 struct Rig::Dds {
   std::shared_ptr<dds::Domain> domain;
-  dds::Entity participant;
+  dds::ClientScope scope;  // the participant; with security, a publisher and subscriber too
   dds::Entity sensors_topic, estimate_topic, profile_topic, status_topic, step_topic;
   std::array<dds::Entity, 4> command_topics;
   std::optional<dds::Reader<mpdrig_RigSensors>> sensors;
   std::optional<dds::Reader<mpdrig_RigEstimate>> estimates;
   std::optional<dds::Reader<mpdrig_PressureProfile>> profiles;
   std::optional<dds::Reader<mpdrig_RigStatus>> status;
-  std::optional<dds::Writer<mpdrig_StepRequest>> steps;
-  std::array<dds::Entity, 4> command_writers;  // made on the first command of each kind
-  dds::Entity waitset;                         // every reader's data, for one wait
-  std::uint64_t status_received = 0;           // statuses taken so far
+  std::optional<dds::Writer<mpdrig_StepRequest>> steps;  // made on the first Step
+  std::array<dds::Entity, 4> command_writers;            // made on the first command of each kind
+  dds::Entity waitset;                                   // every reader's data, for one wait
   // Deleting the participant deletes its children; the writers go first so that their instances
   // are unregistered while the readers still exist.
   ~Dds() {
@@ -90,16 +92,132 @@ struct Rig::Dds {
   }
 };
 
+namespace {
+
+// The domain configuration: loopback by default; FastAckConfig added to a fragment (appended) or
+// to a list of files (one more element of Cyclone's comma-separated list).
+std::string ClientConfig(const std::string& given) {
+  const std::size_t first = given.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return dds::LoopbackConfig() + dds::FastAckConfig();
+  if (given[first] != '<') return given + "," + dds::FastAckConfig();
+  if (given.find("CycloneDDS") == std::string::npos) return given + dds::FastAckConfig();
+  return given;
+}
+
+// A DDS error, with what DDS Security's refusal means for this client.
+Status EndpointError(const Status& error, const RigOptions& o, const char* what) {
+  if (o.security_dir.empty() || error.message().find(dds_strretcode(
+                                    DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)) == std::string::npos) {
+    return error;
+  }
+  return Status::Error("DDS Security: the permissions of " + o.security_dir + " do not allow " +
+                       what + " rig '" + o.rig_id + "' (partition " + dds::RigPartition(o.rig_id) +
+                       "; make-class NAME:WATCH grants reading)");
+}
+
+template <typename T>
+Status MakeReader(dds_entity_t subscriber, const dds::Entity& topic, const dds::Qos& qos,
+                  const RigOptions& o, std::optional<dds::Reader<T>>* out) {
+  auto reader = dds::Reader<T>::Create(subscriber, topic.handle(), qos);
+  if (!reader.ok()) return EndpointError(reader.status(), o, "reading");
+  out->emplace(std::move(reader).value());
+  return Status::Ok();
+}
+
+Status MakeTopic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
+                 const char* name, dds::Entity* out) {
+  auto created = dds::CreateTopic(participant, descriptor, name);
+  if (!created.ok()) return created.status();
+  *out = std::move(created).value();
+  return Status::Ok();
+}
+
+std::string Seconds(double s) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g s", s);
+  return text;
+}
+
+}  // namespace
+
 Rig::Rig(const RigOptions& options)
     : options_(options), dds_(std::make_unique<Dds>()), watch_(options.timeout_s) {}
 
-Rig::~Rig() = default;
+Rig::~Rig() { Close(); }
 
-void Rig::Close() { dds_.reset(); }
+void Rig::Close() {
+  if (!dds_) return;
+  // A one-shot command's rule (dds::SendOnce): what was written is acknowledged before the
+  // writer goes, even by a script that exits right after. Not for a lost rig: its reader may
+  // stay matched until its lease runs out, and nothing it acknowledges matters any more.
+  const double limit_s = options_.timeout_s > 0.0 ? std::min(options_.timeout_s, 10.0) : 10.0;
+  if (!lost_) (void)AwaitCommandAcks(limit_s);
+  dds_.reset();
+}
 
 Status Rig::Fail(Failure kind, const std::string& message) {
   last_failure_ = kind;
   return Status::Error(message);
+}
+
+Status Rig::ClosedOrLost() {
+  if (!dds_) {
+    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
+  }
+  if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
+  return Status::Ok();
+}
+
+Status Rig::MakeEndpoints() {
+  Dds& d = *dds_;
+  const dds_entity_t p = d.scope.participant.handle();
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors", &d.sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      MakeTopic(p, &mpdrig_RigEstimate_desc, "mpdrig_estimate", &d.estimate_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      MakeTopic(p, &mpdrig_PressureProfile_desc, "mpdrig_pressure_profile", &d.profile_topic));
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, &mpdrig_RigStatus_desc, "mpdrig_status", &d.status_topic));
+  MPDRIG_RETURN_IF_ERROR(
+      MakeTopic(p, &mpdrig_StepRequest_desc, "mpdrig_step_request", &d.step_topic));
+  const dds_topic_descriptor_t* commands[] = {&mpdrig_ChokeCommand_desc, &mpdrig_PumpCommand_desc,
+                                              &mpdrig_OutletCommand_desc,
+                                              &mpdrig_PistonCommand_desc};
+  for (int i = 0; i < 4; ++i) {
+    MPDRIG_RETURN_IF_ERROR(MakeTopic(p, commands[i], kCommandTopicNames[i], &d.command_topics[i]));
+  }
+  // One waitset over every reader, so a wait wakes on whatever arrives first.
+  d.waitset = dds::Entity(dds_create_waitset(p));
+  if (d.waitset.handle() < 0) return dds::Check(d.waitset.handle(), "dds_create_waitset");
+  MPDRIG_RETURN_IF_ERROR(
+      MakeReader(d.scope.sub(), d.status_topic, dds::StatusQos(), options_, &d.status));
+  return Attach(d.status->handle());
+}
+
+Status Rig::Attach(dds_entity_t reader) {
+  const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
+  if (condition < 0) return dds::Check(condition, "dds_create_readcondition");
+  return dds::Check(dds_waitset_attach(dds_->waitset.handle(), condition, 0), "dds_waitset_attach");
+}
+
+// The stream readers: keep all in lockstep (the client sets the pace and sees every step) or for
+// a recorder, else the newest 8 (a slow reader must not hold back a real-time rig).
+Status Rig::MakeStreamReaders(bool keep_all) {
+  Dds& d = *dds_;
+  const dds_entity_t sub = d.scope.sub();
+  MPDRIG_RETURN_IF_ERROR(
+      MakeReader(sub, d.sensors_topic, dds::SensorQos(keep_all), options_, &d.sensors));
+  MPDRIG_RETURN_IF_ERROR(Attach(d.sensors->handle()));
+  if (options_.read_estimates) {
+    MPDRIG_RETURN_IF_ERROR(
+        MakeReader(sub, d.estimate_topic, dds::SensorQos(keep_all), options_, &d.estimates));
+    MPDRIG_RETURN_IF_ERROR(Attach(d.estimates->handle()));
+  }
+  if (options_.read_profiles) {
+    MPDRIG_RETURN_IF_ERROR(
+        MakeReader(sub, d.profile_topic, dds::SensorQos(false), options_, &d.profiles));
+    MPDRIG_RETURN_IF_ERROR(Attach(d.profiles->handle()));
+  }
+  return Status::Ok();
 }
 
 Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Interrupt& interrupt) {
@@ -108,55 +226,25 @@ Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Inter
     return Status::Error("DDS domain " + std::to_string(options.domain) + " is not in 0..232");
   }
   // At most a day: the timeout becomes DDS nanoseconds (int64) in places.
-  if (!(options.timeout_s > 0.0 && options.timeout_s <= 86400.0)) {
-    return Status::Error("the timeout must be a number of seconds in (0, 86400]");
+  if (!(options.timeout_s >= 0.0 && options.timeout_s <= 86400.0)) {
+    return Status::Error(
+        "the timeout must be a number of seconds in [0, 86400] (0: wait for ever)");
   }
   std::unique_ptr<Rig> rig(new Rig(options));
   Dds& d = *rig->dds_;
-  std::string config = options.dds_config.empty() ? dds::LoopbackConfig() : options.dds_config;
-  if (config.find("CycloneDDS") == std::string::npos) config += dds::FastAckConfig();
   Status error = Status::Ok();
-  d.domain = SharedDomain(options.domain, config, &error);
+  d.domain = SharedDomain(options.domain, ClientConfig(options.dds_config), &error);
   if (!d.domain) return error;
-  auto participant = dds::CreateParticipant(options.domain);
-  if (!participant.ok()) return participant.status();
-  d.participant = std::move(participant).value();
-  const dds_entity_t p = d.participant.handle();
-  auto topic = [p](dds::Entity* out, const dds_topic_descriptor_t* desc, const char* name) {
-    auto created = dds::CreateTopic(p, desc, name);
-    if (!created.ok()) return created.status();
-    *out = std::move(created).value();
-    return Status::Ok();
-  };
-  MPDRIG_RETURN_IF_ERROR(topic(&d.sensors_topic, &mpdrig_RigSensors_desc, "mpdrig_sensors"));
-  MPDRIG_RETURN_IF_ERROR(topic(&d.estimate_topic, &mpdrig_RigEstimate_desc, "mpdrig_estimate"));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&d.profile_topic, &mpdrig_PressureProfile_desc, "mpdrig_pressure_profile"));
-  MPDRIG_RETURN_IF_ERROR(topic(&d.status_topic, &mpdrig_RigStatus_desc, "mpdrig_status"));
-  MPDRIG_RETURN_IF_ERROR(topic(&d.step_topic, &mpdrig_StepRequest_desc, "mpdrig_step_request"));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&d.command_topics[kChoke], &mpdrig_ChokeCommand_desc, kCommandTopicNames[kChoke]));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&d.command_topics[kPump], &mpdrig_PumpCommand_desc, kCommandTopicNames[kPump]));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&d.command_topics[kOutlet], &mpdrig_OutletCommand_desc, kCommandTopicNames[kOutlet]));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&d.command_topics[kPiston], &mpdrig_PistonCommand_desc, kCommandTopicNames[kPiston]));
-
-  // One waitset over every reader, so a wait wakes on whatever arrives first.
-  d.waitset = dds::Entity(dds_create_waitset(p));
-  if (d.waitset.handle() < 0) return dds::Check(d.waitset.handle(), "dds_create_waitset");
-  auto attach = [&d](dds_entity_t reader) {
-    const dds_entity_t condition = dds_create_readcondition(reader, DDS_ANY_STATE);
-    if (condition < 0) return dds::Check(condition, "dds_create_readcondition");
-    return dds::Check(dds_waitset_attach(d.waitset.handle(), condition, 0), "dds_waitset_attach");
-  };
-  auto status = dds::Reader<mpdrig_RigStatus>::Create(p, d.status_topic.handle(), dds::StatusQos());
-  if (!status.ok()) return status.status();
-  d.status.emplace(std::move(status).value());
-  MPDRIG_RETURN_IF_ERROR(attach(d.status->handle()));
-  // The rig's status says it exists and which clock it runs: the sensor readers' history depends
-  // on that (keep all in lockstep, where the client sets the pace and must see every step).
+  // With security the rig's topics are in its partition (make-class's permissions name it).
+  auto scope = dds::CreateClientScope(options.domain, options.security_dir, options.rig_id);
+  if (!scope.ok()) return scope.status();
+  d.scope = std::move(scope).value();
+  MPDRIG_RETURN_IF_ERROR(rig->MakeEndpoints());
+  // A recorder's readers do not depend on the clock: made before the rig is found, they miss
+  // none of its first samples.
+  if (options.keep_every_sample) MPDRIG_RETURN_IF_ERROR(rig->MakeStreamReaders(true));
+  // The rig's status (transient-local: a running service has one for each of its rigs) says it
+  // exists and which clock it runs.
   rig->last_failure_ = Failure::kNone;
   const Status found = rig->WaitFor(
       [&] { return rig->rig_status_.has_value(); },
@@ -166,29 +254,7 @@ Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Inter
   if (!found.ok()) return found;
   rig->lockstep_ = rig->rig_status_->clock == "lockstep";
   rig->rejections_seen_ = rig->rig_status_->rejected_commands;
-
-  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(p, d.sensors_topic.handle(),
-                                                        dds::SensorQos(rig->lockstep_));
-  if (!sensors.ok()) return sensors.status();
-  d.sensors.emplace(std::move(sensors).value());
-  auto estimates = dds::Reader<mpdrig_RigEstimate>::Create(p, d.estimate_topic.handle(),
-                                                           dds::SensorQos(rig->lockstep_));
-  if (!estimates.ok()) return estimates.status();
-  d.estimates.emplace(std::move(estimates).value());
-  auto profiles = dds::Reader<mpdrig_PressureProfile>::Create(p, d.profile_topic.handle(),
-                                                              dds::SensorQos(false));
-  if (!profiles.ok()) return profiles.status();
-  d.profiles.emplace(std::move(profiles).value());
-  dds::Qos step_qos;  // README's QoS table: reliable, volatile, keep all
-  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto steps = dds::Writer<mpdrig_StepRequest>::Create(p, d.step_topic.handle(), step_qos);
-  if (!steps.ok()) return steps.status();
-  d.steps.emplace(std::move(steps).value());
-
-  for (dds_entity_t reader : {d.sensors->handle(), d.estimates->handle(), d.profiles->handle()}) {
-    MPDRIG_RETURN_IF_ERROR(attach(reader));
-  }
+  if (!options.keep_every_sample) MPDRIG_RETURN_IF_ERROR(rig->MakeStreamReaders(rig->lockstep_));
   // Request ids of this client start from the wall clock, so a status naming an earlier
   // client's request is not taken for ours.
   rig->request_id_ = static_cast<std::uint64_t>(dds_time());
@@ -196,58 +262,70 @@ Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Inter
   return rig;
 }
 
-Status Rig::Drain() {
+Status Rig::TakeSensors() {
   Dds& d = *dds_;
+  if (!d.sensors) return Status::Ok();
   const std::string& id = options_.rig_id;
-  if (d.sensors) {
-    auto took = d.sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t&) {
-      if (id != s.rig_id || lost_) return;
-      lost_ = watch_.Sample(s.sample_counter, s.sim_time_s);
-      if (lost_) return;
-      last_sample_wall_s_ = WallSeconds();
-      Sensors sample = FromWire(s);
-      queue_.push_back(sample);
-      if (queue_.size() > kQueueLimit) queue_.pop_front();
-      newest_ = sample;
-      newest_returned_ = false;
-    });
-    if (!took.ok()) return Fail(Failure::kError, took.status().message());
-  }
-  if (d.estimates) {
-    auto took = d.estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
-      if (id != e.rig_id) return;
-      Estimate out;
-      out.sample_counter = e.sample_counter;
-      out.time_s = e.sim_time_s;
-      out.observer_time_s = e.observer_time_s;
-      out.BHP_est_barg = e.BHP_est_barg;
-      out.piston_velocity_est_mps = e.piston_velocity_est_mps;
-      out.piston_position_est_m = e.piston_position_est_m;
-      out.FT4_est_lpm = e.FT4_est_lpm;
-      out.disturbance_frequency_hz = e.disturbance_frequency_hz;
-      out.frequency_source = e.frequency_source == mpdrig_FREQUENCY_PISTON_SINE ? "piston_sine"
-                             : e.frequency_source == mpdrig_FREQUENCY_TRACKED   ? "tracked"
-                                                                                : "unlocked";
-      estimates_.push_back(std::move(out));
-      if (estimates_.size() > kEstimateLimit) estimates_.pop_front();
-    });
-    if (!took.ok()) return Fail(Failure::kError, took.status().message());
-  }
-  if (d.profiles) {
-    auto took =
-        d.profiles->TakeEach([&](const mpdrig_PressureProfile& p, const dds_sample_info_t&) {
-          if (id != p.rig_id) return;
-          Profile out;
-          out.sample_counter = p.sample_counter;
-          out.time_s = p.sim_time_s;
-          out.position_m = FromSequence(p.position_m);
-          out.pressure_barg = FromSequence(p.pressure_barg);
-          out.pressure_est_barg = FromSequence(p.pressure_est_barg);
-          profile_ = std::move(out);
-        });
-    if (!took.ok()) return Fail(Failure::kError, took.status().message());
-  }
-  auto took = d.status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+  auto took = d.sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
+    if (id != s.rig_id || lost_) return;
+    lost_ = watch_.Sample(s.sample_counter, s.sim_time_s);
+    if (lost_) return;
+    last_sample_wall_s_ = WallSeconds();
+    Sensors sample = FromWire(s);
+    sample.published_s = 1e-9 * static_cast<double>(info.source_timestamp);
+    sample.received_s = last_sample_wall_s_;
+    queue_.push_back(sample);
+    if (queue_.size() > kQueueLimit) queue_.pop_front();
+    newest_ = sample;
+    newest_returned_ = false;
+  });
+  return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
+}
+
+Status Rig::TakeEstimates() {
+  Dds& d = *dds_;
+  if (!d.estimates) return Status::Ok();
+  const std::string& id = options_.rig_id;
+  auto took = d.estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
+    if (id != e.rig_id) return;
+    Estimate out;
+    out.sample_counter = e.sample_counter;
+    out.time_s = e.sim_time_s;
+    out.observer_time_s = e.observer_time_s;
+    out.BHP_est_barg = e.BHP_est_barg;
+    out.piston_velocity_est_mps = e.piston_velocity_est_mps;
+    out.piston_position_est_m = e.piston_position_est_m;
+    out.FT4_est_lpm = e.FT4_est_lpm;
+    out.disturbance_frequency_hz = e.disturbance_frequency_hz;
+    out.frequency_source = e.frequency_source == mpdrig_FREQUENCY_PISTON_SINE ? "piston_sine"
+                           : e.frequency_source == mpdrig_FREQUENCY_TRACKED   ? "tracked"
+                                                                              : "unlocked";
+    estimates_.push_back(std::move(out));
+    if (estimates_.size() > kEstimateLimit) estimates_.pop_front();
+  });
+  return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
+}
+
+Status Rig::TakeProfiles() {
+  Dds& d = *dds_;
+  if (!d.profiles) return Status::Ok();
+  const std::string& id = options_.rig_id;
+  auto took = d.profiles->TakeEach([&](const mpdrig_PressureProfile& p, const dds_sample_info_t&) {
+    if (id != p.rig_id) return;
+    Profile out;
+    out.sample_counter = p.sample_counter;
+    out.time_s = p.sim_time_s;
+    out.position_m = FromSequence(p.position_m);
+    out.pressure_barg = FromSequence(p.pressure_barg);
+    out.pressure_est_barg = FromSequence(p.pressure_est_barg);
+    profile_ = std::move(out);
+  });
+  return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
+}
+
+Status Rig::TakeStatus() {
+  const std::string& id = options_.rig_id;
+  auto took = dds_->status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
     if (id != s.rig_id) return;
     RigStatus out;
     out.clock = s.clock == mpdrig_CLOCK_REALTIME ? "realtime"
@@ -264,29 +342,37 @@ Status Rig::Drain() {
     out.actuator_owners = FromSequence(s.actuator_owners);
     out.sensor_noise = s.sensor_noise;
     rig_status_ = std::move(out);
-    ++d.status_received;
   });
-  if (!took.ok()) return Fail(Failure::kError, took.status().message());
-  if (lost_) return Fail(Failure::kLost, "rig " + id + " lost: " + *lost_);
-  if (d.sensors) {
-    dds_subscription_matched_status_t matched{};
-    dds_get_subscription_matched_status(d.sensors->handle(), &matched);
-    lost_ = watch_.Check(WallSeconds() - last_sample_wall_s_, matched.current_count > 0);
-    if (lost_) return Fail(Failure::kLost, "rig " + id + " lost: " + *lost_);
-  }
-  return Status::Ok();
+  return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
+}
+
+Status Rig::Drain() {
+  MPDRIG_RETURN_IF_ERROR(TakeSensors());
+  MPDRIG_RETURN_IF_ERROR(TakeEstimates());
+  MPDRIG_RETURN_IF_ERROR(TakeProfiles());
+  MPDRIG_RETURN_IF_ERROR(TakeStatus());
+  if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
+  if (!dds_->sensors) return Status::Ok();
+  dds_subscription_matched_status_t matched{};
+  dds_get_subscription_matched_status(dds_->sensors->handle(), &matched);
+  std::optional<std::string> why =
+      watch_.Check(WallSeconds() - last_sample_wall_s_, matched.current_count > 0);
+  if (!why) return Status::Ok();
+  // What the departed writer sent before it went is in the reader by now: keep it.
+  MPDRIG_RETURN_IF_ERROR(TakeSensors());
+  if (!lost_) lost_ = why;
+  return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
 }
 
 Status Rig::WaitFor(const std::function<bool()>& done, const std::string& what,
                     const Interrupt& interrupt) {
-  if (!dds_)
-    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
-  if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
+  MPDRIG_RETURN_IF_ERROR(ClosedOrLost());
+  const bool forever = options_.timeout_s == 0.0;
   const double deadline = WallSeconds() + options_.timeout_s;
   for (;;) {
     MPDRIG_RETURN_IF_ERROR(Drain());
     if (done()) return Status::Ok();
-    const double left_s = deadline - WallSeconds();
+    const double left_s = forever ? 1.0 : deadline - WallSeconds();
     if (left_s <= 0.0) return Fail(Failure::kTimeout, what);
     if (interrupt && interrupt()) return Fail(Failure::kInterrupted, "interrupted");
     const dds_duration_t wait =
@@ -297,23 +383,26 @@ Status Rig::WaitFor(const std::function<bool()>& done, const std::string& what,
 }
 
 Result<Sensors> Rig::Latest(bool fresh, const Interrupt& interrupt) {
-  MPDRIG_RETURN_IF_ERROR(
-      WaitFor([&] { return newest_.has_value() && !(fresh && newest_returned_); },
-              "no new sample from rig " + options_.rig_id + " within " +
-                  std::to_string(options_.timeout_s) + " s" +
-                  (lockstep_ ? " (a lockstep rig moves only when stepped: Step)" : ""),
-              interrupt));
+  MPDRIG_RETURN_IF_ERROR(WaitFor(
+      [&] { return newest_.has_value() && !(fresh && newest_returned_); },
+      "no new sample from rig " + options_.rig_id + " within " + Seconds(options_.timeout_s) +
+          (lockstep_ ? " (a lockstep rig moves only when stepped: Step)" : ""),
+      interrupt));
   queue_.clear();
   newest_returned_ = true;
   return *newest_;
 }
 
 Result<Sensors> Rig::Next(const Interrupt& interrupt) {
-  MPDRIG_RETURN_IF_ERROR(WaitFor([&] { return !queue_.empty(); },
-                                 "no sample from rig " + options_.rig_id + " within " +
-                                     std::to_string(options_.timeout_s) + " s" +
-                                     (lockstep_ ? " (a lockstep rig moves only when stepped)" : ""),
-                                 interrupt));
+  if (queue_.empty()) {
+    const Status waited =
+        WaitFor([&] { return !queue_.empty(); },
+                "no sample from rig " + options_.rig_id + " within " + Seconds(options_.timeout_s) +
+                    (lockstep_ ? " (a lockstep rig moves only when stepped)" : ""),
+                interrupt);
+    // A lost rig's samples from before the loss still come out, then the loss.
+    if (!waited.ok() && queue_.empty()) return waited;
+  }
   Sensors s = queue_.front();
   queue_.pop_front();
   if (queue_.empty()) newest_returned_ = true;
@@ -321,17 +410,27 @@ Result<Sensors> Rig::Next(const Interrupt& interrupt) {
 }
 
 Result<std::vector<Sensors>> Rig::TakeArrived() {
-  if (!dds_)
-    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
-  if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
-  MPDRIG_RETURN_IF_ERROR(Drain());
+  if (!dds_) return ClosedOrLost();
+  if (!lost_) {
+    const Status drained = Drain();
+    if (!drained.ok() && last_failure_ != Failure::kLost) return drained;
+  }
+  if (queue_.empty() && lost_) return ClosedOrLost();
   std::vector<Sensors> out(queue_.begin(), queue_.end());
   queue_.clear();
   return out;
 }
 
+std::optional<Estimate> Rig::NewestEstimate() const {
+  if (estimates_.empty()) return std::nullopt;
+  return estimates_.back();
+}
+
 Result<Estimate> Rig::EstimateFor(std::optional<std::uint64_t> counter,
                                   const Interrupt& interrupt) {
+  if (!options_.read_estimates) {
+    return Fail(Failure::kError, "this client does not read estimates (RigOptions)");
+  }
   const Estimate* found = nullptr;
   auto find = [&] {
     found = nullptr;
@@ -355,6 +454,9 @@ Result<Estimate> Rig::EstimateFor(std::optional<std::uint64_t> counter,
 }
 
 Result<Profile> Rig::LatestProfile(const Interrupt& interrupt) {
+  if (!options_.read_profiles) {
+    return Fail(Failure::kError, "this client does not read profiles (RigOptions)");
+  }
   MPDRIG_RETURN_IF_ERROR(WaitFor(
       [&] { return profile_.has_value(); },
       "no pressure profile from rig " + options_.rig_id + " (serve --profile-hz 0 turns it off)",
@@ -377,30 +479,34 @@ Result<std::pair<std::uint64_t, std::string>> Rig::NewRejections(const Interrupt
   return std::make_pair(grown, grown > 0 ? status->last_rejection : std::string());
 }
 
+// Waits until `writer` has matched a reader: a sample written before may reach no one.
+Status Rig::AwaitMatch(std::int32_t writer, const char* topic_name, const Interrupt& interrupt) {
+  return WaitFor(
+      [&] {
+        dds_publication_matched_status_t m{};
+        dds_get_publication_matched_status(writer, &m);
+        return m.current_count > 0;
+      },
+      std::string("no reader of ") + topic_name + " for rig " + options_.rig_id +
+          " (is the service running?)",
+      interrupt);
+}
+
 template <typename T>
 Status Rig::SendCommand(int topic_index, const T& sample, const Interrupt& interrupt) {
-  if (!dds_)
-    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
-  if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
+  MPDRIG_RETURN_IF_ERROR(ClosedOrLost());
   Dds& d = *dds_;
   dds::Entity& writer = d.command_writers[topic_index];
-  const char* topic_name = kCommandTopicNames[topic_index];
   if (writer.handle() <= 0) {
-    dds::Entity created(dds_create_writer(d.participant.handle(),
-                                          d.command_topics[topic_index].handle(),
+    dds::Entity created(dds_create_writer(d.scope.pub(), d.command_topics[topic_index].handle(),
                                           dds::CommandQos(options_.strength).get(), nullptr));
     if (created.handle() < 0) {
-      return Fail(Failure::kError, dds::Check(created.handle(), "dds_create_writer").message());
+      return Fail(Failure::kError, EndpointError(dds::Check(created.handle(), "dds_create_writer"),
+                                                 options_, "commanding")
+                                       .message());
     }
     writer = std::move(created);
-    // A sample written before the service's reader matched may reach no one.
-    const Status matched = WaitFor(
-        [&] {
-          dds_publication_matched_status_t m{};
-          dds_get_publication_matched_status(writer.handle(), &m);
-          return m.current_count > 0;
-        },
-        std::string("no reader of ") + topic_name + " (is the service running?)", interrupt);
+    const Status matched = AwaitMatch(writer.handle(), kCommandTopicNames[topic_index], interrupt);
     if (!matched.ok()) {
       writer.Reset();
       return matched;
@@ -453,6 +559,24 @@ Status Rig::Piston(const PistonCommand& command, const Interrupt& interrupt) {
   return SendCommand(kPiston, c, interrupt);
 }
 
+// The service takes the commands when it starts a request: each must be acknowledged (in the
+// service's reader) before the request is sent.
+Status Rig::AwaitCommandAcks(double timeout_s) {
+  for (int i = 0; i < 4; ++i) {
+    if (!unacknowledged_[i] || dds_->command_writers[i].handle() <= 0) continue;
+    const dds_duration_t timeout =
+        timeout_s > 0.0 ? static_cast<dds_duration_t>(timeout_s * 1e9) : DDS_INFINITY;
+    const dds_return_t acked = dds_wait_for_acks(dds_->command_writers[i].handle(), timeout);
+    if (acked == DDS_RETCODE_TIMEOUT) {
+      return Fail(Failure::kTimeout, std::string("no acknowledgement of the ") +
+                                         kCommandTopicNames[i] + " within " + Seconds(timeout_s));
+    }
+    if (acked < 0) return Fail(Failure::kError, dds::Check(acked, "dds_wait_for_acks").message());
+    unacknowledged_[i] = false;
+  }
+  return Status::Ok();
+}
+
 Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
   if (!lockstep_) {
     return Fail(Failure::kError, "rig " + options_.rig_id + " runs a " +
@@ -461,34 +585,12 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
                                      "lockstep`) is stepped");
   }
   if (steps == 0) return Fail(Failure::kError, "steps must be at least 1");
-  if (!dds_)
-    return Fail(Failure::kError, "the connection to rig " + options_.rig_id + " is closed");
-  if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
-  Dds& d = *dds_;
-  // The service takes the commands when it starts a request: each must be acknowledged (in the
-  // service's reader) before the request is sent.
-  for (int i = 0; i < 4; ++i) {
-    if (!unacknowledged_[i]) continue;
-    const dds_return_t acked = dds_wait_for_acks(
-        d.command_writers[i].handle(), static_cast<dds_duration_t>(options_.timeout_s * 1e9));
-    if (acked == DDS_RETCODE_TIMEOUT) {
-      return Fail(Failure::kTimeout, std::string("no acknowledgement of the ") +
-                                         kCommandTopicNames[i] + " within the timeout");
-    }
-    if (acked < 0) return Fail(Failure::kError, dds::Check(acked, "dds_wait_for_acks").message());
-    unacknowledged_[i] = false;
-  }
-  // The first request must reach the service's reader: wait for it to match.
-  MPDRIG_RETURN_IF_ERROR(WaitFor(
-      [&] {
-        dds_publication_matched_status_t m{};
-        dds_get_publication_matched_status(d.steps->handle(), &m);
-        return m.current_count > 0;
-      },
-      "no reader of mpdrig_step_request (is the service running?)", interrupt));
+  MPDRIG_RETURN_IF_ERROR(ClosedOrLost());
+  MPDRIG_RETURN_IF_ERROR(AwaitCommandAcks(options_.timeout_s));
+  MPDRIG_RETURN_IF_ERROR(MakeStepWriter(interrupt));
   const std::uint64_t id = ++request_id_;
   mpdrig_StepRequest request{options_.rig_id.data(), id, steps};
-  const Status written = d.steps->Write(request);
+  const Status written = dds_->steps->Write(request);
   if (!written.ok()) return Fail(Failure::kError, written.message());
   // Done when the status names the request; its sim_time_s is the last step's sample time, and
   // the sensors of the steps were published before it (another writer: wait for them too).
@@ -500,13 +602,32 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
         return true;
       },
       "step request of " + std::to_string(steps) + " steps not completed by rig " +
-          options_.rig_id + " within " + std::to_string(options_.timeout_s) + " s",
+          options_.rig_id + " within " + Seconds(options_.timeout_s),
       interrupt));
   MPDRIG_RETURN_IF_ERROR(
       WaitFor([&] { return newest_.has_value() && newest_->time_s >= done_time_s - 1e-9; },
               "the samples of a completed step did not arrive", interrupt));
   newest_returned_ = true;
   return *newest_;
+}
+
+// The step writer, made on the first Step: a client that only watches a rig needs none (and
+// with security may not have one in another student's partition). README's QoS table: reliable,
+// volatile, keep all. The first request must reach the service's reader: it waits for the match.
+Status Rig::MakeStepWriter(const Interrupt& interrupt) {
+  Dds& d = *dds_;
+  if (d.steps) return Status::Ok();
+  dds::Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto steps = dds::Writer<mpdrig_StepRequest>::Create(d.scope.pub(), d.step_topic.handle(), qos);
+  if (!steps.ok()) {
+    return Fail(Failure::kError, EndpointError(steps.status(), options_, "stepping").message());
+  }
+  d.steps.emplace(std::move(steps).value());
+  const Status matched = AwaitMatch(d.steps->handle(), "mpdrig_step_request", interrupt);
+  if (!matched.ok()) d.steps.reset();
+  return matched;
 }
 
 }  // namespace mpdrig::client

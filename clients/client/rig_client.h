@@ -20,8 +20,15 @@
 //     command could miss the step), then asks for the steps and returns when the service's
 //     status names the request as completed, with the last sample of those steps.
 //   - A lost rig (clients/rig_watch.h): time or sample counter going back, the sensor writer
-//     gone, or no sample for `timeout_s` after the first. Every call then fails with
+//     gone, or no sample for `timeout_s` after the first. Samples that arrived before still come
+//     out of Next and TakeArrived (a recording keeps them); every other call then fails with
 //     Failure::kLost and the reason; a Rig never carries its state over to another run.
+//   - Leaving (Close, or the destructor) is a one-shot command's rule (dds::SendOnce): each
+//     command writer first waits for the acknowledgement of what it wrote, then is deleted, so a
+//     script that sends one command and exits loses none, and leaves no stale owner behind.
+//   - With `security_dir` (DDS Security, make-class's OUT/NAME) the participant authenticates
+//     with those files and every endpoint is in the rig's partition rig.<rig id>; the permissions
+//     decide what the identity may read and command, and a refusal says so.
 //   - The service, not this library, decides what command is valid: a refused command shows in
 //     RigStatus (rejected_commands, last_rejection) and in NewRejections().
 #pragma once
@@ -43,11 +50,24 @@ namespace mpdrig::client {
 struct RigOptions {
   std::string rig_id = "rig-1";
   int domain = 0;
-  // Cyclone DDS configuration: an XML fragment or a whole <CycloneDDS> document (empty: loopback
-  // only). A fragment gets dds::FastAckConfig() appended, for lockstep acknowledgements.
+  // Cyclone DDS configuration: an XML fragment, a whole <CycloneDDS> document, or file URIs
+  // ("file:///lab.xml", Cyclone's comma-separated list) (empty: loopback only). A fragment or a
+  // file list gets dds::FastAckConfig() added, for lockstep acknowledgements; a whole document
+  // should set it itself.
   std::string dds_config;
-  int strength = 0;         // ownership strength of this client's commands
-  double timeout_s = 10.0;  // waiting for the rig, a sample, an acknowledgement or a step
+  int strength = 0;  // ownership strength of this client's commands
+  // Waiting for the rig, a sample, an acknowledgement or a step; after the first sample, this long
+  // without one means the rig is lost. 0: wait for ever, and silence alone never loses the rig.
+  double timeout_s = 10.0;
+  // DDS Security: an identity directory of a class (deploy/security/make-class OUT NAME:
+  // OUT/NAME); empty: no security. The rig's topics are then in partition rig.<rig id>.
+  std::string security_dir;
+  // Keep every sensor sample even on a real-time rig (a recorder), instead of the newest 8 that
+  // a real-time reader keeps (a slow client must not hold back the rig). Lockstep keeps all.
+  bool keep_every_sample = false;
+  // Which of the rig's other streams to read (a recorder of the sensors needs neither).
+  bool read_estimates = true;
+  bool read_profiles = true;
 };
 
 // One sample of every lab channel (mpdrig_sensors), in the wire's lab units.
@@ -60,6 +80,10 @@ struct Sensors {
   std::array<double, 10> PT_barg{};  // PT1..PT10 at x = 0, 100, ..., 900 m
   double C1_barg = 0.0, C2_barg = 0.0;
   double FT1_lpm = 0.0, FT2_lpm = 0.0, FT3_lpm = 0.0, FT4_lpm = 0.0;
+  // When the rig published it (its writer's clock, s since 1970) and when this client took it
+  // (steady clock, s): what a client sees of the rig's sensor clock (rig_echo --timing).
+  double published_s = 0.0;
+  double received_s = 0.0;
 };
 
 // The observer's estimate for one sample (mpdrig_estimate).
@@ -138,6 +162,9 @@ class Rig {
   // newest estimate (waiting only if none has arrived yet).
   Result<Estimate> EstimateFor(std::optional<std::uint64_t> counter,
                                const Interrupt& interrupt = {});
+  // The newest estimate that has arrived, without waiting (nullopt: none yet). What a real-time
+  // controller pairs with the sample it has just read.
+  std::optional<Estimate> NewestEstimate() const;
   // The newest pressure profile (waits up to the timeout if none has arrived yet).
   Result<Profile> LatestProfile(const Interrupt& interrupt = {});
   // The newest status (a running service always has one: see Connect).
@@ -155,8 +182,9 @@ class Rig {
   // from the first) and returns the last sample of them. Failure on a real-time rig.
   Result<Sensors> Step(std::uint32_t steps = 1, const Interrupt& interrupt = {});
 
-  // Leaves the rig: deletes the command writers (unregistering their instances, so another
-  // controller takes over at once) and the participant. Every later call fails.
+  // Leaves the rig: waits (up to the timeout, 10 s at most) for the acknowledgement of the
+  // commands written, then deletes the command writers (unregistering their instances, so
+  // another controller takes over at once) and the participant. Every later call fails.
   void Close();
   bool closed() const { return dds_ == nullptr; }
 
@@ -170,13 +198,27 @@ class Rig {
   explicit Rig(const RigOptions& options);
 
   mpdrig::Status Fail(Failure kind, const std::string& message);
+  // Connect's parts: topics, the status reader and the waitset; the stream readers.
+  mpdrig::Status MakeEndpoints();
+  mpdrig::Status MakeStreamReaders(bool keep_all);
+  mpdrig::Status Attach(std::int32_t reader);  // to the waitset
   // Takes what has arrived on every topic into the local buffers and applies the lost-rig rule.
   mpdrig::Status Drain();
+  mpdrig::Status TakeSensors();
+  mpdrig::Status TakeEstimates();
+  mpdrig::Status TakeProfiles();
+  mpdrig::Status TakeStatus();
   // Waits until `done` is true, draining every 100 ms at most, up to the timeout.
   mpdrig::Status WaitFor(const std::function<bool()>& done, const std::string& what,
                          const Interrupt& interrupt);
   template <typename T>
   mpdrig::Status SendCommand(int topic_index, const T& sample, const Interrupt& interrupt);
+  // The lockstep rule: every command written since the last step is acknowledged first.
+  mpdrig::Status AwaitCommandAcks(double timeout_s);
+  mpdrig::Status ClosedOrLost();
+  mpdrig::Status AwaitMatch(std::int32_t writer, const char* topic_name,
+                            const Interrupt& interrupt);
+  mpdrig::Status MakeStepWriter(const Interrupt& interrupt);
 
   RigOptions options_;
   std::unique_ptr<Dds> dds_;

@@ -239,13 +239,14 @@ PYBIND11_MODULE(_mpdrig, m) {
 
   py::class_<Rig>(m, "_Rig")
       .def(py::init([](const std::string& rig_id, int domain, int strength, double timeout,
-                       const std::string& dds_config) {
+                       const std::string& dds_config, const std::string& security) {
              mpdrig::client::RigOptions options;
              options.rig_id = rig_id;
              options.domain = domain;
              options.strength = strength;
              options.timeout_s = timeout;
              options.dds_config = dds_config;
+             options.security_dir = security;
              auto connected = [&] {
                py::gil_scoped_release release;
                return Rig::Connect(options, Interrupted);
@@ -261,15 +262,19 @@ PYBIND11_MODULE(_mpdrig, m) {
              return std::move(connected).value();
            }),
            py::arg("rig_id") = "rig-1", py::arg("domain") = 0, py::kw_only(),
-           py::arg("strength") = 0, py::arg("timeout") = 10.0, py::arg("dds_config") = "")
+           py::arg("strength") = 0, py::arg("timeout") = 10.0, py::arg("dds_config") = "",
+           py::arg("security") = "")
       .def_property_readonly("rig_id", [](const Rig& r) { return r.options().rig_id; })
       .def_property_readonly("domain", [](const Rig& r) { return r.options().domain; })
       .def_property_readonly("strength", [](const Rig& r) { return r.options().strength; })
       .def_property_readonly("timeout", [](const Rig& r) { return r.options().timeout_s; })
+      .def_property_readonly("security", [](const Rig& r) { return r.options().security_dir; })
       .def_property_readonly("lockstep", &Rig::lockstep)
       .def_property_readonly("lost", [](const Rig& r) { return r.lost(); })
       .def_property_readonly("closed", &Rig::closed)
-      .def("close", &Rig::Close)
+      .def("close", &Rig::Close, py::call_guard<py::gil_scoped_release>(),
+           "Leave the rig: commands written are acknowledged first (up to the timeout, 10 s at "
+           "most), then the writers are deleted, so another controller takes over at once.")
       .def(
           "sensors",
           [](Rig& r, bool fresh) {

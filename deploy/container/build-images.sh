@@ -46,12 +46,7 @@ echo "build-images.sh: $MPDRIG_RUNTIME_IMAGE $(awk -v s="$size" 'BEGIN { printf 
 if [[ $dev == 1 ]]; then
   # The client SDK: what clients/ build from in the repository, at the same relative paths.
   sdk="$context/dev/sdk"
-  mkdir -p "$sdk/idl" "$sdk/service/dds" "$sdk/model/common" "$sdk/clients"
-  cp "$here/sdk/CMakeLists.txt" "$here/sdk/mpdrig-build-controller" "$sdk/"
-  cp "$root/idl/mpdrig.idl" "$sdk/idl/"
-  cp "$root"/service/dds/*.h "$root"/service/dds/*.cc "$sdk/service/dds/"
-  cp "$root/model/common/status.h" "$sdk/model/common/"
-  cp "$root"/clients/*.cc "$root"/clients/*.h "$sdk/clients/"
+  "$here/sdk/assemble.sh" "$root" "$sdk"
   old_dev="$(podman image inspect --format '{{.Id}}' "$MPDRIG_DEV_IMAGE" 2>/dev/null || true)"
   podman_build_replacing "$MPDRIG_DEV_IMAGE" --network host --build-arg BASE="$MPDRIG_BASE_IMAGE" \
     -f "$here/Containerfile.dev" "$context/dev"

@@ -6,18 +6,21 @@
 //              writer was never deleted, so it keeps owning the instance until its lease ends;
 //   reliable - dds::SendOnce: wait for the match, write, wait for the acknowledgement, delete the
 //              writer (unregistering its instance) before exit.
-//   one_shot_command DOMAIN RIG_ID FLOW_LPM careless|acked|reliable
+//   library  - the client library (clients/client/rig_client.h), as a script would use it:
+//              connect, one Pump command, leave (Close keeps SendOnce's rule).
+//   one_shot_command DOMAIN RIG_ID FLOW_LPM careless|acked|reliable|library
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 
+#include "clients/client/rig_client.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 
 int main(int argc, char** argv) {
   if (argc != 5) {
-    std::fprintf(stderr,
-                 "usage: one_shot_command DOMAIN RIG_ID FLOW_LPM careless|acked|reliable\n");
+    std::fprintf(
+        stderr, "usage: one_shot_command DOMAIN RIG_ID FLOW_LPM careless|acked|reliable|library\n");
     return 2;
   }
   const int domain = std::atoi(argv[1]);
@@ -25,6 +28,15 @@ int main(int argc, char** argv) {
   const double flow_lpm = std::atof(argv[3]);
   const std::string mode = argv[4];
   using namespace mpdrig;
+  if (mode == "library") {
+    client::RigOptions options;
+    options.rig_id = rig_id;
+    options.domain = domain;
+    auto rig = client::Rig::Connect(options);
+    const Status sent = rig.ok() ? (*rig)->Pump(flow_lpm) : rig.status();
+    if (!sent.ok()) std::fprintf(stderr, "one_shot_command: %s\n", sent.message().c_str());
+    return sent.ok() ? 0 : 1;  // the Rig leaves here: acknowledged, then unregistered
+  }
   auto created = dds::Domain::Create(domain, dds::LoopbackConfig());
   auto participant = dds::CreateParticipant(domain);
   if (!created.ok() || !participant.ok()) return 1;

@@ -5,7 +5,8 @@
 // 20 lost), and one that exits without deleting its writer leaves a stale owner of the instance
 // until its lease ends, which wins over the next writer of equal strength whenever its GUID sorts
 // first (6-7 of 20 lost). dds::SendOnce waits for the match and the acknowledgement and deletes
-// its writer (unregister); this test holds it to every command applied. Processes over loopback.
+// its writer (unregister), and so does the client library when a Rig leaves; this test holds
+// both to every command applied. Processes over loopback.
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
@@ -41,7 +42,10 @@ pid_t Spawn(std::vector<std::string> args) {
   return pid;
 }
 
-TEST(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
+// `mode` of tests/clients/one_shot_command: "reliable" (dds::SendOnce) or "library".
+class OneShotCommands : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   const int claimed = testing::ClaimTestDomain();
   ASSERT_GT(claimed, 0);
   const std::string domain = std::to_string(claimed);
@@ -88,7 +92,7 @@ TEST(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   for (int i = 0; i < kCommands; ++i) {
     const double flow_lpm = 1.5 + i;  // each distinct from the one before
     const pid_t sender =
-        Spawn({ONE_SHOT_COMMAND_EXE, domain, "rig-1", std::to_string(flow_lpm), "reliable"});
+        Spawn({ONE_SHOT_COMMAND_EXE, domain, "rig-1", std::to_string(flow_lpm), GetParam()});
     ASSERT_GT(sender, 0);
     int status = 0;
     ASSERT_EQ(::waitpid(sender, &status, 0), sender);
@@ -104,6 +108,9 @@ TEST(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   }
   EXPECT_EQ(applied, kCommands) << "not applied:" << missed;
 }
+
+INSTANTIATE_TEST_SUITE_P(SendOnceAndClientLibrary, OneShotCommands,
+                         ::testing::Values("reliable", "library"));
 
 }  // namespace
 }  // namespace mpdrig

@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -118,6 +120,61 @@ TEST(RigClient, StepsReadsCommandsAndReportsRefusalsOfALockstepRig) {
   EXPECT_TRUE(r.lost().has_value());
   r.Close();
   EXPECT_FALSE(r.Choke(30.0).ok());
+}
+
+// A lab's configuration file (a file URI, as `--dds-config file:///lab.xml` passes it) works for
+// a lockstep client: the fast acknowledgements are layered over it as one more element of
+// Cyclone's list (appended to the URI they made an invalid configuration). And a recorder's
+// options: every sample kept, no estimate or profile reader, no timeout.
+TEST(RigClient, ConfigurationFileAndRecorderOptions) {
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  const pid_t serve =
+      Spawn({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--rig", "r1",
+             "--domain", std::to_string(domain), "--sensor-noise", "none"});
+  ASSERT_GT(serve, 0);
+  Reaper reaper{serve};
+  const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                     ("rig_client_test_" + std::to_string(::getpid()) + ".xml");
+  {
+    std::ofstream out(file);
+    out << "<CycloneDDS><Domain id=\"any\"><General><Interfaces>"
+           "<NetworkInterface address=\"127.0.0.1\"/></Interfaces>"
+           "<AllowMulticast>false</AllowMulticast></General><Discovery>"
+           "<ParticipantIndex>auto</ParticipantIndex><Peers><Peer address=\"127.0.0.1\"/>"
+           "</Peers></Discovery></Domain></CycloneDDS>\n";
+  }
+  client::RigOptions options;
+  options.rig_id = "r1";
+  options.domain = domain;
+  options.dds_config = "file://" + file.string();
+  options.timeout_s = 0.0;  // wait for ever: the rig is there
+  options.keep_every_sample = true;
+  options.read_estimates = false;
+  options.read_profiles = false;
+  auto rig = client::Rig::Connect(options);
+  std::filesystem::remove(file);
+  ASSERT_TRUE(rig.ok()) << rig.status().message();
+  client::Rig& r = **rig;
+  auto last = r.Step(50);
+  ASSERT_TRUE(last.ok()) << last.status().message();
+  auto arrived = r.TakeArrived();
+  ASSERT_TRUE(arrived.ok());
+  ASSERT_EQ(arrived->size(), 50u);
+  EXPECT_EQ(arrived->back().sample_counter, last->sample_counter);
+  // Publication and arrival times of each sample, in order (rig_echo --timing uses them).
+  for (std::size_t i = 1; i < arrived->size(); ++i) {
+    EXPECT_GE((*arrived)[i].published_s, (*arrived)[i - 1].published_s);
+    EXPECT_GE((*arrived)[i].received_s, (*arrived)[i - 1].received_s);
+  }
+  EXPECT_GT(arrived->front().published_s, 1.6e9) << "seconds since 1970";
+  EXPECT_FALSE(r.NewestEstimate().has_value());
+  auto estimate = r.EstimateFor(std::nullopt);
+  ASSERT_FALSE(estimate.ok());
+  EXPECT_NE(estimate.status().message().find("does not read estimates"), std::string::npos);
+  client::RigOptions negative = options;
+  negative.timeout_s = -1.0;
+  EXPECT_FALSE(client::Rig::Connect(negative).ok());
 }
 
 }  // namespace

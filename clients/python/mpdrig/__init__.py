@@ -22,7 +22,8 @@ keeps its last valid command): ``rig.rejections()`` and ``rig.status()`` report 
 
 from __future__ import annotations
 
-from typing import Iterator, Optional
+import os
+from typing import Iterator, Optional, Union
 
 from ._mpdrig import Estimate, Profile, RigError, RigLost, Sensors, Status
 from ._mpdrig import _Rig
@@ -35,7 +36,7 @@ _PISTON_HOLD, _PISTON_POSITION, _PISTON_SINE, _PISTON_SWEEP = 0, 1, 2, 3
 class Rig(_Rig):
     """One rig of an ``mpdrig serve`` (or the lab's bridge), reached over DDS.
 
-    Rig(rig_id="rig-1", domain=0, *, strength=0, timeout=10.0, dds_config="")
+    Rig(rig_id="rig-1", domain=0, *, strength=0, timeout=10.0, dds_config="", security=None)
 
     - ``rig_id``: the rig's id (``mpdrig serve --rig ID``; default service: "rig-1").
     - ``domain``: the DDS domain id (``mpdrig serve --domain N``), 0..232.
@@ -44,6 +45,11 @@ class Rig(_Rig):
     - ``timeout``: seconds to wait for the rig, a sample, a step; after the first sample, this
       long without one means the rig is lost (``RigLost``).
     - ``dds_config``: Cyclone DDS XML (default: loopback only, 127.0.0.1).
+    - ``security``: DDS Security for a class: your identity directory, made by
+      ``deploy/security/make-class OUT NAME`` (``OUT/NAME``), as ``bhp_controller --security``
+      takes it. The rig's topics are then in partition ``rig.<rig_id>``; your permissions say
+      which rigs you may read and command (a refusal raises ``RigError`` saying so). The
+      service runs ``mpdrig serve --security OUT/service``.
 
     Reading: ``sensors()`` (newest sample), ``next_sensors()`` (next in order), ``stream()``,
     ``estimate()`` (the observer's BHP estimate and heave), ``profile()`` (pressure along the
@@ -52,9 +58,18 @@ class Rig(_Rig):
     ``piston_position(m)``, ``piston_sine(amplitude_m, frequency_hz)``, ``piston_sweep(...)``.
     Lockstep: ``step(n)``. Leaving: ``close()``, or use ``with mpdrig.Rig(...) as rig:``.
 
+    ``timeout=0`` waits for ever (and silence alone never loses the rig).
+
     A Rig is for one thread at a time (its calls wait without holding the GIL); several Rigs,
     even of the same rig, may live in one process.
     """
+
+    def __init__(self, rig_id: str = "rig-1", domain: int = 0, *, strength: int = 0,
+                 timeout: float = 10.0, dds_config: str = "",
+                 security: Union[str, "os.PathLike[str]", None] = None) -> None:
+        super().__init__(rig_id, domain, strength=strength, timeout=timeout,
+                         dds_config=dds_config,
+                         security="" if security is None else os.fspath(security))
 
     def sensors(self, fresh: bool = False) -> Sensors:
         """The newest sample that has arrived (older unread ones are dropped).
@@ -176,7 +191,10 @@ class Rig(_Rig):
         self.close()
 
     def __repr__(self) -> str:
-        state = "closed" if self.closed else ("lost" if self.lost else "connected")
+        try:
+            state = "closed" if self.closed else ("lost" if self.lost else "connected")
+        except Exception:  # a Rig whose __init__ failed (tracebacks print its repr)
+            return "<mpdrig.Rig (not connected)>"
         clock = "lockstep" if self.lockstep else "real time"
         return (f"<mpdrig.Rig {self.rig_id!r} domain={self.domain} {clock} "
                 f"strength={self.strength} {state}>")

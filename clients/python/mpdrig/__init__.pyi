@@ -1,5 +1,6 @@
 # Type hints for the mpdrig package (clients/python). Lab units throughout: barg, lpm, deg, m, s.
-from typing import Iterator, Optional
+import os
+from typing import Iterator, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -67,7 +68,8 @@ class Status:
 
 class Rig:
     def __init__(self, rig_id: str = "rig-1", domain: int = 0, *, strength: int = 0,
-                 timeout: float = 10.0, dds_config: str = "") -> None: ...
+                 timeout: float = 10.0, dds_config: str = "",
+                 security: Union[str, os.PathLike[str], None] = None) -> None: ...
     @property
     def rig_id(self) -> str: ...
     @property
@@ -76,6 +78,8 @@ class Rig:
     def strength(self) -> int: ...
     @property
     def timeout(self) -> float: ...
+    @property
+    def security(self) -> str: ...  # the identity directory, "" without security
     @property
     def lockstep(self) -> bool: ...
     @property
