@@ -43,7 +43,8 @@ def get_json(url):
 
 
 def measure(pids, seconds, during=None):
-    """CPU of each pid over `seconds` of wall time, in % of one core; `during` runs meanwhile."""
+    """CPU of each pid (all its threads) over `seconds` of wall time, in % of one core; `during`
+    runs meanwhile."""
     start = {name: cpu_s(pid) for name, pid in pids.items()}
     t0 = time.monotonic()
     extra = during(seconds) if during else None
@@ -65,11 +66,16 @@ def watch(url, rigs, seconds):
             since[rig] = int(state.get("seq", 0))
             ages.append(state["sensors"]["age_ms"] + 1000.0 * trip)
             trips.append(1000.0 * trip)
-            now = (time.monotonic(), state["samples"])
+            status = state.get("status", {})
+            now = (time.monotonic(), state["samples"], state["sensors"]["counter"],
+                   status.get("lost_periods", 0))
             first.setdefault(rig, now)
             last[rig] = now
         time.sleep(max(0.0, 0.1 - (time.monotonic() - tick)))
-    rates = [(last[r][1] - first[r][1]) / (last[r][0] - first[r][0])
+    # Per rig: samples the dashboard took per second, samples the rig sent per second (its
+    # counter), periods the rig itself lost (a rig starved of CPU sends fewer).
+    rates = [((last[r][1] - first[r][1]) / (last[r][0] - first[r][0]),
+              (last[r][2] - first[r][2]) / (last[r][0] - first[r][0]), last[r][3] - first[r][3])
              for r in first if last[r][0] > first[r][0]]
     return ages, trips, rates
 
@@ -95,14 +101,15 @@ def main():
                   "--pump-lpm", "5"]
     for rig in rigs:
         serve_args += ["--rig", rig]
-    serve = subprocess.Popen(serve_args, stdout=subprocess.DEVNULL)
+    serve = subprocess.Popen(serve_args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     dash = None
     try:
         time.sleep(5.0)  # the rigs start
         print(f"{args.rigs} rigs at {args.rate_hz:g} Hz in one `mpdrig serve` (real time), "
-              f"{args.phase_s:g} s per phase, CPU in % of one core")
+              f"{args.phase_s:g} s per phase, CPU in % of one core; load average "
+              f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
         absent, _ = measure({"serve": serve.pid}, args.phase_s)
-        print(f"  absent : serve {absent['serve']:5.1f} %")
+        print(f"  absent : serve {absent['serve']:5.2f} %")
 
         dash = subprocess.Popen([dashboard, "--domain", str(args.domain), "--port", "0",
                                  "--idle-s", "5"], stdout=subprocess.PIPE, text=True)
@@ -111,24 +118,30 @@ def main():
         pids = {"serve": serve.pid, "dashboard": dash.pid}
         idle, _ = measure(pids, args.phase_s)
         health, _ = get_json(url + "api/health")
-        print(f"  idle   : serve {idle['serve']:5.1f} %, dashboard {idle['dashboard']:4.1f} % "
+        print(f"  idle   : serve {idle['serve']:5.2f} %, dashboard {idle['dashboard']:4.2f} % "
               f"(DDS {health['dds']})")
 
         get_json(url + "api/rigs")
         time.sleep(3.0)  # DDS opens and the rigs' statuses arrive
         watched, (ages, trips, rates) = measure(pids, args.phase_s,
                                                 lambda s: watch(url, rigs, s))
-        print(f"  watched: serve {watched['serve']:5.1f} %, dashboard {watched['dashboard']:4.1f} %"
+        print(f"  watched: serve {watched['serve']:5.2f} %, dashboard {watched['dashboard']:4.2f} %"
               f" ({len(trips)} answers, {len(trips) / args.phase_s:.0f}/s)")
         if ages:
             print(f"  newest sample's age when the answer arrives: median "
                   f"{statistics.median(ages):.0f} ms, p95 {pct(ages, 0.95):.0f} ms, max "
                   f"{max(ages):.0f} ms (answer round trip median {statistics.median(trips):.1f} ms)")
         if rates:
-            print(f"  sensor samples taken per rig: {min(rates):.1f} .. {max(rates):.1f} /s "
-                  f"(the rig sends {args.rate_hz:g}/s)")
-        print(f"  the service: idle - absent = {idle['serve'] - absent['serve']:+.1f} %, "
-              f"watched - absent = {watched['serve'] - absent['serve']:+.1f} %")
+            taken = [r[0] for r in rates]
+            sent = [r[1] for r in rates]
+            missed = sum(r[1] - r[0] for r in rates) / sum(sent)
+            print(f"  sensor samples per rig and second: the rigs sent {min(sent):.1f} .. "
+                  f"{max(sent):.1f}, the dashboard took {min(taken):.1f} .. {max(taken):.1f} "
+                  f"({100 * missed:.2f} % not taken); periods the rigs lost meanwhile: "
+                  f"{sum(r[2] for r in rates)}")
+        print(f"  the service: idle - absent = {idle['serve'] - absent['serve']:+.2f} %, "
+              f"watched - absent = {watched['serve'] - absent['serve']:+.2f} %")
+        print(f"  load average at the end: {os.getloadavg()[0]:.1f}")
         return 0
     finally:
         for proc in (dash, serve):

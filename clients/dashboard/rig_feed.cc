@@ -1,6 +1,7 @@
 #include "clients/dashboard/rig_feed.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -50,9 +51,26 @@ struct EstimateView {
 };
 
 struct ProfileView {
+  std::uint64_t counter = 0;
   double t = 0.0;
   std::vector<double> x, p, p_est;
 };
+
+// PT1..PT10 of one sample, kept for a few seconds so that the profile chart can show the rig,
+// the observer and the shadow at one instant: the shadow trails the rig by a few samples, and
+// under heave a tenth of a second moves PT1 by several hundredths of a bar.
+struct PtAt {
+  std::uint64_t counter;
+  std::array<double, 10> PT;
+};
+constexpr std::size_t kPtRing = 400;    // 4 s at 100 Hz
+constexpr std::size_t kProfileRing = 64;  // 6 s at the default 10 Hz
+
+template <typename T>
+void PushRing(std::deque<T>* ring, T item, std::size_t size) {
+  ring->push_back(std::move(item));
+  while (ring->size() > size) ring->pop_front();
+}
 
 struct StatusView {
   std::string clock;
@@ -191,9 +209,10 @@ struct RigFeed::Session {
 struct RigFeed::RigView {
   std::optional<SensorsView> sensors, shadow;
   std::optional<EstimateView> estimate;
-  std::optional<ProfileView> profile;
   std::optional<StatusView> status;
   std::optional<ShadowStatusView> shadow_status;
+  std::deque<ProfileView> profiles;       // the newest few, for the aligned snapshot
+  std::deque<PtAt> rig_pt, shadow_pt;     // the newest few seconds of PT1..PT10
   std::uint64_t samples = 0;  // sensor samples taken
   // Charts: rig {PT1, piston, choke, FT2}, estimate {BHP}, shadow {PT1}, error {error, nrmse...}.
   Series rig_series, estimate_series, shadow_series, error_series;
@@ -337,6 +356,7 @@ void RigFeed::Drain() {
     if (!Wanted(w.rig_id)) return;
     RigView& v = View(w.rig_id);
     v.sensors = FromWire(w, info);
+    PushRing(&v.rig_pt, PtAt{w.sample_counter, std::to_array(w.PT_barg)}, kPtRing);
     v.fresh_sensors = true;
     ++v.samples;
   }));
@@ -350,8 +370,10 @@ void RigFeed::Drain() {
   }));
   count(s.profile->TakeEach([&](const mpdrig_PressureProfile& w, const dds_sample_info_t&) {
     if (!Wanted(w.rig_id)) return;
-    View(w.rig_id).profile = ProfileView{w.sim_time_s, Doubles(w.position_m),
-                                         Doubles(w.pressure_barg), Doubles(w.pressure_est_barg)};
+    PushRing(&View(w.rig_id).profiles,
+             ProfileView{w.sample_counter, w.sim_time_s, Doubles(w.position_m),
+                         Doubles(w.pressure_barg), Doubles(w.pressure_est_barg)},
+             kProfileRing);
   }));
   count(s.status->TakeEach([&](const mpdrig_RigStatus& w, const dds_sample_info_t&) {
     if (!Wanted(w.rig_id)) return;
@@ -374,6 +396,7 @@ void RigFeed::Drain() {
     if (!Wanted(w.rig_id)) return;
     RigView& v = View(w.rig_id);
     v.shadow = FromWire(w, info);
+    PushRing(&v.shadow_pt, PtAt{w.sample_counter, std::to_array(w.PT_barg)}, kPtRing);
     v.fresh_shadow = true;
   }));
   count(s.shadow_status->TakeEach([&](const mpdrig_ShadowStatus& w, const dds_sample_info_t&) {
@@ -522,6 +545,41 @@ void AppendShadowStatus(std::string* out, const ShadowStatusView& st) {
 
 }  // namespace
 
+// The pressure along the pipe at one instant for the rig, the observer and the shadow: the newest
+// profile sample the shadow has reached (the newest one without a shadow), with the rig's and the
+// shadow's PT1..PT10 of that same sample.
+void RigFeed::AppendAlignedProfile(std::string* out, const RigView& v) {
+  if (v.profiles.empty()) return;
+  const ProfileView* chosen = &v.profiles.back();
+  if (!v.shadow_pt.empty()) {
+    const std::uint64_t reached = v.shadow_pt.back().counter;
+    for (auto it = v.profiles.rbegin(); it != v.profiles.rend(); ++it) {
+      chosen = &*it;
+      if (it->counter <= reached) break;
+    }
+  }
+  auto pt_at = [&](const std::deque<PtAt>& ring) -> std::vector<double> {
+    for (auto it = ring.rbegin(); it != ring.rend(); ++it) {
+      if (it->counter == chosen->counter) return {it->PT.begin(), it->PT.end()};
+      if (it->counter < chosen->counter) break;
+    }
+    return {};
+  };
+  *out += ",\"profile\":{\"t\":";
+  AppendNumber(out, chosen->t);
+  *out += ",\"x\":";
+  AppendNumbers(out, chosen->x);
+  *out += ",\"p\":";
+  AppendNumbers(out, chosen->p);
+  *out += ",\"p_est\":";
+  AppendNumbers(out, chosen->p_est);
+  *out += ",\"rig_PT\":";
+  AppendNumbers(out, pt_at(v.rig_pt));
+  *out += ",\"shadow_PT\":";
+  AppendNumbers(out, pt_at(v.shadow_pt));
+  *out += '}';
+}
+
 std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) const {
   std::lock_guard lock(mu_);
   std::string out = "{\"rig\":";
@@ -565,17 +623,7 @@ std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) c
     AppendString(&out, e.source);
     out += '}';
   }
-  if (v.profile) {
-    out += ",\"profile\":{\"t\":";
-    AppendNumber(&out, v.profile->t);
-    out += ",\"x\":";
-    AppendNumbers(&out, v.profile->x);
-    out += ",\"p\":";
-    AppendNumbers(&out, v.profile->p);
-    out += ",\"p_est\":";
-    AppendNumbers(&out, v.profile->p_est);
-    out += '}';
-  }
+  AppendAlignedProfile(&out, v);
   if (v.status) {
     out += ",\"status\":";
     AppendStatus(&out, *v.status);

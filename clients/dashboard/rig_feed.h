@@ -82,6 +82,7 @@ class RigFeed {
   void Run();
   void Drain();  // takes every topic into the views (mu_ held)
   bool Wanted(const char* rig_id) const;
+  static void AppendAlignedProfile(std::string* out, const RigView& view);
   RigView& View(const std::string& rig_id);
 
   FeedOptions options_;

@@ -112,7 +112,7 @@ def open_browser():
     options = webdriver.ChromeOptions()
     options.binary_location = chromium
     for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                "--disable-background-networking", "--window-size=1500,1250",
+                "--disable-background-networking", "--window-size=1500,1560",
                 "--force-device-scale-factor=1"):
         options.add_argument(arg)
     return webdriver.Chrome(service=Service(driver), options=options)
@@ -226,6 +226,8 @@ def main():
         print(f"fit now: {answer}", flush=True)
         time.sleep(3.0)  # a few more points on the error chart after the fall
         if screenshot:
+            js(browser, "window.scrollTo(0, 0);")  # the click scrolled the switch into view
+            time.sleep(0.3)
             browser.save_screenshot(screenshot)
             print(f"screenshot: {screenshot}", flush=True)
 
