@@ -18,8 +18,8 @@
 #include <string>
 #include <thread>
 
-#include <CLI/CLI.hpp>
 #include <httplib.h>
+#include <CLI/CLI.hpp>
 
 #include "clients/dashboard/json_out.h"
 #include "clients/dashboard/page.h"
@@ -65,7 +65,8 @@ void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed) {
   server->Get("/api/state", [feed](const httplib::Request& req, httplib::Response& res) {
     feed->Touch();
     std::uint64_t since = 0;
-    if (req.has_param("since")) since = std::strtoull(req.get_param_value("since").c_str(), nullptr, 10);
+    if (req.has_param("since"))
+      since = std::strtoull(req.get_param_value("since").c_str(), nullptr, 10);
     res.set_content(feed->StateJson(req.get_param_value("rig"), since), "application/json");
   });
   server->Post("/api/shadow", [feed](const httplib::Request& req, httplib::Response& res) {

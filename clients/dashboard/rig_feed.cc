@@ -63,7 +63,7 @@ struct PtAt {
   std::uint64_t counter;
   std::array<double, 10> PT;
 };
-constexpr std::size_t kPtRing = 400;    // 4 s at 100 Hz
+constexpr std::size_t kPtRing = 400;      // 4 s at 100 Hz
 constexpr std::size_t kProfileRing = 64;  // 6 s at the default 10 Hz
 
 template <typename T>
@@ -101,18 +101,24 @@ std::vector<double> Doubles(const dds_sequence_double& seq) {
 
 const char* ClockName(mpdrig_ClockMode clock) {
   switch (clock) {
-    case mpdrig_CLOCK_REALTIME: return "realtime";
-    case mpdrig_CLOCK_FAST: return "fast";
-    case mpdrig_CLOCK_LOCKSTEP: return "lockstep";
+    case mpdrig_CLOCK_REALTIME:
+      return "realtime";
+    case mpdrig_CLOCK_FAST:
+      return "fast";
+    case mpdrig_CLOCK_LOCKSTEP:
+      return "lockstep";
   }
   return "unknown";
 }
 
 const char* SourceName(mpdrig_FrequencySource source) {
   switch (source) {
-    case mpdrig_FREQUENCY_PISTON_SINE: return "piston sine";
-    case mpdrig_FREQUENCY_TRACKED: return "tracked";
-    case mpdrig_FREQUENCY_UNLOCKED: return "unlocked";
+    case mpdrig_FREQUENCY_PISTON_SINE:
+      return "piston sine";
+    case mpdrig_FREQUENCY_TRACKED:
+      return "tracked";
+    case mpdrig_FREQUENCY_UNLOCKED:
+      return "unlocked";
   }
   return "unknown";
 }
@@ -165,9 +171,17 @@ void AppendSensors(std::string* out, const SensorsView& s, dds_time_t now) {
   *out += "{\"counter\":";
   AppendNumber(out, static_cast<double>(s.counter));
   const std::pair<const char*, double> fields[] = {
-      {"t", s.t},     {"piston_m", s.piston_m}, {"choke_deg", s.choke_deg}, {"P1", s.P1},
-      {"P2", s.P2},   {"C1", s.C1},             {"C2", s.C2},               {"FT1", s.FT1},
-      {"FT2", s.FT2}, {"FT3", s.FT3},           {"FT4", s.FT4},
+      {"t", s.t},
+      {"piston_m", s.piston_m},
+      {"choke_deg", s.choke_deg},
+      {"P1", s.P1},
+      {"P2", s.P2},
+      {"C1", s.C1},
+      {"C2", s.C2},
+      {"FT1", s.FT1},
+      {"FT2", s.FT2},
+      {"FT3", s.FT3},
+      {"FT4", s.FT4},
       {"age_ms", static_cast<double>(now - s.written_ns) * 1e-6}};
   for (const auto& [key, value] : fields) {
     *out += ',';
@@ -180,12 +194,18 @@ void AppendSensors(std::string* out, const SensorsView& s, dds_time_t now) {
 }
 
 std::optional<std::string> ActionOf(const std::string& action, mpdrig_ShadowAction* wire) {
-  if (action == "effect_on") *wire = mpdrig_SHADOW_EFFECT_ON;
-  else if (action == "effect_off") *wire = mpdrig_SHADOW_EFFECT_OFF;
-  else if (action == "set") *wire = mpdrig_SHADOW_SET;
-  else if (action == "reset") *wire = mpdrig_SHADOW_RESET;
-  else if (action == "fit_now") *wire = mpdrig_SHADOW_FIT_NOW;
-  else return "unknown action '" + action + "' (effect_on, effect_off, set, reset, fit_now)";
+  if (action == "effect_on")
+    *wire = mpdrig_SHADOW_EFFECT_ON;
+  else if (action == "effect_off")
+    *wire = mpdrig_SHADOW_EFFECT_OFF;
+  else if (action == "set")
+    *wire = mpdrig_SHADOW_SET;
+  else if (action == "reset")
+    *wire = mpdrig_SHADOW_RESET;
+  else if (action == "fit_now")
+    *wire = mpdrig_SHADOW_FIT_NOW;
+  else
+    return "unknown action '" + action + "' (effect_on, effect_off, set, reset, fit_now)";
   return std::nullopt;
 }
 
@@ -211,9 +231,9 @@ struct RigFeed::RigView {
   std::optional<EstimateView> estimate;
   std::optional<StatusView> status;
   std::optional<ShadowStatusView> shadow_status;
-  std::deque<ProfileView> profiles;       // the newest few, for the aligned snapshot
-  std::deque<PtAt> rig_pt, shadow_pt;     // the newest few seconds of PT1..PT10
-  std::uint64_t samples = 0;  // sensor samples taken
+  std::deque<ProfileView> profiles;    // the newest few, for the aligned snapshot
+  std::deque<PtAt> rig_pt, shadow_pt;  // the newest few seconds of PT1..PT10
+  std::uint64_t samples = 0;           // sensor samples taken
   // Charts: rig {PT1, piston, choke, FT2}, estimate {BHP}, shadow {PT1}, error {error, nrmse...}.
   Series rig_series, estimate_series, shadow_series, error_series;
   std::vector<std::string> error_channels;
@@ -243,11 +263,11 @@ Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
   auto* topics = &session->topics;
   const dds::Qos sensor_qos = dds::SensorQos(false);
   const dds::Qos status_qos = dds::StatusQos();
-#define MPDRIG_OPEN(member, T, name, qos)                                          \
-  {                                                                                \
+#define MPDRIG_OPEN(member, T, name, qos)                                           \
+  {                                                                                 \
     auto reader = OpenReader<mpdrig_##T>(p, topics, &mpdrig_##T##_desc, name, qos); \
-    if (!reader.ok()) return reader.status().Within(name);                    \
-    session->member.emplace(std::move(reader).value());                           \
+    if (!reader.ok()) return reader.status().Within(name);                          \
+    session->member.emplace(std::move(reader).value());                             \
   }
   MPDRIG_OPEN(sensors, RigSensors, "mpdrig_sensors", sensor_qos)
   MPDRIG_OPEN(estimate, RigEstimate, "mpdrig_estimate", sensor_qos)
@@ -261,8 +281,7 @@ Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
   dds::Qos command_qos;  // as the shadow's reader: a command is not state (reliable, keep all)
   dds_qset_reliability(command_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(command_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer =
-      dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), command_qos);
+  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), command_qos);
   if (!writer.ok()) return writer.status();
   session->topics.push_back(std::move(command_topic).value());
   session->shadow_command.emplace(std::move(writer).value());
@@ -363,9 +382,13 @@ void RigFeed::Drain() {
   count(s.estimate->TakeEach([&](const mpdrig_RigEstimate& w, const dds_sample_info_t&) {
     if (!Wanted(w.rig_id)) return;
     RigView& v = View(w.rig_id);
-    v.estimate = EstimateView{w.sim_time_s,        w.BHP_est_barg, w.piston_position_est_m,
-                              w.piston_velocity_est_mps, w.FT4_est_lpm,
-                              w.disturbance_frequency_hz, SourceName(w.frequency_source)};
+    v.estimate = EstimateView{w.sim_time_s,
+                              w.BHP_est_barg,
+                              w.piston_position_est_m,
+                              w.piston_velocity_est_mps,
+                              w.FT4_est_lpm,
+                              w.disturbance_frequency_hz,
+                              SourceName(w.frequency_source)};
     v.fresh_estimate = true;
   }));
   count(s.profile->TakeEach([&](const mpdrig_PressureProfile& w, const dds_sample_info_t&) {
@@ -506,12 +529,11 @@ void AppendStatus(std::string* out, const StatusView& st) {
 void AppendShadowStatus(std::string* out, const ShadowStatusView& st) {
   *out += "{\"t\":";
   AppendNumber(out, st.t);
-  const std::pair<const char*, double> numbers[] = {
-      {"window_s", st.window_s},
-      {"error", st.error},
-      {"last_change_t", st.last_change_t},
-      {"error_at_change", st.error_at_change},
-      {"rejected", static_cast<double>(st.rejected)}};
+  const std::pair<const char*, double> numbers[] = {{"window_s", st.window_s},
+                                                    {"error", st.error},
+                                                    {"last_change_t", st.last_change_t},
+                                                    {"error_at_change", st.error_at_change},
+                                                    {"rejected", static_cast<double>(st.rejected)}};
   for (const auto& [key, value] : numbers) {
     *out += ',';
     AppendKey(out, key);
@@ -532,9 +554,10 @@ void AppendShadowStatus(std::string* out, const ShadowStatusView& st) {
   }
   *out += ",\"nrmse\":";
   AppendNumbers(out, st.nrmse);
-  const std::pair<const char*, const std::string*> texts[] = {{"last_change", &st.last_change},
-                                                                {"last_rejection", &st.last_rejection},
-                                                                {"fit_state", &st.fit_state}};
+  const std::pair<const char*, const std::string*> texts[] = {
+      {"last_change", &st.last_change},
+      {"last_rejection", &st.last_rejection},
+      {"fit_state", &st.fit_state}};
   for (const auto& [key, text] : texts) {
     *out += ',';
     AppendKey(out, key);

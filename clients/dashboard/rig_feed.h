@@ -34,7 +34,7 @@ namespace mpdrig::dashboard {
 
 struct FeedOptions {
   int domain = 0;
-  std::string dds_config;        // Cyclone XML (inline); empty: loopback only
+  std::string dds_config;         // Cyclone XML (inline); empty: loopback only
   std::vector<std::string> rigs;  // the rigs to show; empty: every rig that reports a status
   double idle_s = 5.0;            // close DDS this long after the last request
   double frame_hz = 20.0;         // drains (and history points) per second
