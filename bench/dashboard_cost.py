@@ -47,7 +47,7 @@ def measure(pids, seconds, during=None):
     runs meanwhile."""
     start = {name: cpu_s(pid) for name, pid in pids.items()}
     t0 = time.monotonic()
-    extra = during(seconds) if during else None
+    extra = during(seconds) if during else time.sleep(seconds)
     wall = time.monotonic() - t0
     return {name: 100.0 * (cpu_s(pid) - start[name]) / wall for name, pid in pids.items()}, extra
 
