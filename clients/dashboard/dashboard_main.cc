@@ -12,6 +12,7 @@
 //                                           watching: a monitor does not keep DDS open)
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -54,6 +55,13 @@ std::string ErrorJson(const std::string& message) {
 }
 
 void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed) {
+  // httplib's default also sets SO_REUSEPORT, with which a second dashboard on the same port
+  // would start "fine" and take half the connections: only SO_REUSEADDR (a restart may bind at
+  // once), so that a port in use is an error.
+  server->set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
   server->set_default_headers({{"Cache-Control", "no-store"}});
   server->Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(mpdrig::dashboard::PageHtml(), "text/html; charset=utf-8");

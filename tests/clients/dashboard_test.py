@@ -33,6 +33,10 @@ RIG = "mystery"
 EFFECT = "unsteady_friction"  # the hidden effect and the switch clicked
 WINDOW_S = 10.0  # the shadow's error window
 IDLE_S = 3.0  # the dashboard's idle time before it closes DDS
+# The rig's sensor noise. "none" for now: at the lab's noise (thesis Table 4.1.1) the shadow's
+# error is dominated by the noise it cannot model, and does not yet halve with the right effect
+# (the shadow's comparison is being made noise-aware). DASHBOARD_TEST_NOISE=lab tries it.
+NOISE = os.environ.get("DASHBOARD_TEST_NOISE", "none")
 
 _claims = []  # the domain's lock file stays open (claimed) while the test runs
 
@@ -141,7 +145,7 @@ def main():
         procs.start([mpdrig_exe, "serve", "--clock", "realtime", "--rate-hz", "100",
                      "--domain", str(domain), "--rig", RIG, "--heave-amp-m", "0.1",
                      "--heave-hz", "0.25", "--pump-lpm", "10", "--choke-deg", "31",
-                     "--cells", "50", "--hidden-effect", EFFECT, "--sensor-noise", "none"])
+                     "--cells", "50", "--hidden-effect", EFFECT, "--sensor-noise", NOISE])
         procs.start([mpdrig_exe, "shadow", "--rig", RIG, "--domain", str(domain),
                      "--cells", "50", "--window-s", str(WINDOW_S), "--warmup-s", "20",
                      "--status-period-s", "0.5"], stdout=subprocess.DEVNULL)
