@@ -13,8 +13,12 @@ core), and while watched: the age of the newest sensor sample each answer shows 
 `age_ms`: now minus the sample's write time) plus the answer's own round trip, and the sensor
 samples the dashboard took per rig and second (RATE_HZ if it keeps up with every sample).
 
+With --browser, a fourth phase: the page itself in Debian's headless Chromium (Selenium), on
+rig-1: the CPU of the service, the dashboard and Chromium (all its processes), and the age of the
+newest sample when the page drew it.
+
   bench/dashboard_cost.py [--rigs 10] [--rate-hz 100] [--phase-s 20] [--domain 97]
-                          [--build build]
+                          [--build build] [--browser]
 """
 import argparse
 import json
@@ -80,6 +84,62 @@ def watch(url, rigs, seconds):
     return ages, trips, rates
 
 
+def children(pid):
+    """Every descendant process of `pid` (Chromium runs a dozen), from the parents in /proc."""
+    parent_of = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    parent_of[int(entry)] = int(f.read().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                pass
+    found, todo = [], [pid]
+    while todo:
+        parent = todo.pop()
+        kids = [p for p, pp in parent_of.items() if pp == parent]
+        found += kids
+        todo += kids
+    return found
+
+
+def browser_phase(url, pids, seconds, watched_serve, absent_serve):
+    from selenium import webdriver
+    from selenium.webdriver.chrome.service import Service
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1500,1400"):
+        options.add_argument(arg)
+    driver_service = Service("/usr/bin/chromedriver")
+    browser = webdriver.Chrome(service=driver_service, options=options)
+    try:
+        browser.get(url + "?rig=rig-1")
+        time.sleep(5.0)  # the page loads and the charts fill
+        tree = children(driver_service.process.pid)
+        browser_cpu0 = sum(cpu_s(p) for p in tree if os.path.exists(f"/proc/{p}"))
+        frames0 = browser.execute_script("return window.mpdrigDashboard.frames;")
+
+        def sample(duration):
+            ages, end = [], time.monotonic() + duration
+            while time.monotonic() < end:
+                ages.append(browser.execute_script("return window.mpdrigDashboard.shownAgeMs;"))
+                time.sleep(0.2)
+            return [a for a in ages if a is not None]
+
+        cpu, ages = measure(pids, seconds, sample)
+        browser_cpu = sum(cpu_s(p) for p in tree if os.path.exists(f"/proc/{p}")) - browser_cpu0
+        frames = browser.execute_script("return window.mpdrigDashboard.frames;") - frames0
+        print(f"  chromium: serve {cpu['serve']:5.2f} %, dashboard {cpu['dashboard']:4.2f} %, "
+              f"chromium {100.0 * browser_cpu / seconds:.1f} % (the page drew "
+              f"{frames / seconds:.1f} frames/s)")
+        if ages:
+            print(f"  newest sample's age when the page drew it: median "
+                  f"{statistics.median(ages):.0f} ms, p95 {pct(ages, 0.95):.0f} ms, max "
+                  f"{max(ages):.0f} ms")
+    finally:
+        browser.quit()
+
+
 def pct(values, q):
     values = sorted(values)
     return values[min(len(values) - 1, int(q * len(values)))]
@@ -92,6 +152,8 @@ def main():
     parser.add_argument("--phase-s", type=float, default=20.0)
     parser.add_argument("--domain", type=int, default=97)
     parser.add_argument("--build", default=os.path.join(os.path.dirname(__file__), "..", "build"))
+    parser.add_argument("--browser", action="store_true",
+                        help="also watch rig-1 in headless Chromium (needs python3-selenium)")
     args = parser.parse_args()
     mpdrig = os.path.join(args.build, "service", "mpdrig")
     dashboard = os.path.join(args.build, "clients", "dashboard")
@@ -141,6 +203,8 @@ def main():
                   f"{sum(r[2] for r in rates)}")
         print(f"  the service: idle - absent = {idle['serve'] - absent['serve']:+.2f} %, "
               f"watched - absent = {watched['serve'] - absent['serve']:+.2f} %")
+        if args.browser:
+            browser_phase(url, pids, args.phase_s, watched["serve"], absent["serve"])
         print(f"  load average at the end: {os.getloadavg()[0]:.1f}")
         return 0
     finally:
