@@ -7,6 +7,7 @@ would see it:
   - it renders with data (readouts are numbers, the pressure profile is drawn) and fetches
     nothing but its own server;
   - the numbers move (rig time and PT1 change between two looks);
+  - the rig selector lists both rigs of the service and switches the page to the other one;
   - clicking the hidden effect's switch reaches the shadow (its status lists the effect and
     the page's switch shows it on);
   - the shadow's overall error then falls to at most half of what it was, within one window;
@@ -30,6 +31,7 @@ import urllib.request
 
 SKIP = 77
 RIG = "mystery"
+OTHER = "plain"  # a second rig in the same service, without a shadow: the rig selector
 EFFECT = "unsteady_friction"  # the hidden effect and the switch clicked
 WINDOW_S = 10.0  # the shadow's error window
 IDLE_S = 3.0  # the dashboard's idle time before it closes DDS
@@ -143,7 +145,7 @@ def main():
     procs = Processes()
     try:
         procs.start([mpdrig_exe, "serve", "--clock", "realtime", "--rate-hz", "100",
-                     "--domain", str(domain), "--rig", RIG, "--heave-amp-m", "0.1",
+                     "--domain", str(domain), "--rig", RIG, "--rig", OTHER, "--heave-amp-m", "0.1",
                      "--heave-hz", "0.25", "--pump-lpm", "10", "--choke-deg", "31",
                      "--cells", "50", "--hidden-effect", EFFECT, "--sensor-noise", NOISE])
         procs.start([mpdrig_exe, "shadow", "--rig", RIG, "--domain", str(domain),
@@ -186,6 +188,22 @@ def main():
         assert t1 - t0 > 0.5, f"the rig time did not move: {t0} -> {t1}"
         assert p1 != p0, f"PT1 did not move under heave: {p0} -> {p1}"
         print(f"moving: rig time {t0} -> {t1} s, PT1 {p0} -> {p1} barg", flush=True)
+
+        # The rig selector: both rigs, and the other one shown when chosen (it has no shadow).
+        from selenium.webdriver.support.ui import Select
+        selector = Select(browser.find_element("id", "rig"))
+        names = sorted(o.text for o in selector.options)
+        assert names == sorted([RIG, OTHER]), f"the selector lists {names}"
+        selector.select_by_visible_text(OTHER)
+        wait_for(f"the page to show {OTHER}", lambda: js(browser, """
+            const s = window.mpdrigDashboard.snap; return s && s.rig === arguments[0] &&
+              !!s.sensors && !s.shadow_status;""".replace("arguments[0]", f"'{OTHER}'"))
+                 and "No shadow model" in browser.find_element("id", "shadow-none").text, 10)
+        selector.select_by_visible_text(RIG)
+        wait_for(f"the page to show {RIG} again",
+                 lambda: js(browser, "const s = window.mpdrigDashboard.snap;"
+                                     f"return s && s.rig === '{RIG}' && !!s.sensors;"), 10)
+        print(f"selector: {names}, switched to {OTHER} and back", flush=True)
 
         # The shadow's error, once warmed up, over a few seconds without the effect.
         wait_for("the shadow's error (warm-up and one window)", lambda: shadow_error(browser), 90)
