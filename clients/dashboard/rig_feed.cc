@@ -242,15 +242,18 @@ struct RigFeed::RigView {
 
 namespace {
 
+// Creates topic `name` and a reader of it into `*reader`; the topic is kept in `topics`.
 template <typename T>
-Result<dds::Reader<T>> OpenReader(dds_entity_t participant, std::vector<dds::Entity>* topics,
-                                  const dds_topic_descriptor_t* descriptor, const char* name,
-                                  const dds::Qos& qos) {
+Status OpenReader(std::optional<dds::Reader<T>>* reader, dds_entity_t participant,
+                  std::vector<dds::Entity>* topics, const dds_topic_descriptor_t* descriptor,
+                  const char* name, const dds::Qos& qos) {
   auto topic = dds::CreateTopic(participant, descriptor, name);
-  if (!topic.ok()) return topic.status();
-  auto reader = dds::Reader<T>::Create(participant, topic->handle(), qos);
+  if (!topic.ok()) return topic.status().Within(name);
+  auto created = dds::Reader<T>::Create(participant, topic->handle(), qos);
   topics->push_back(std::move(topic).value());
-  return reader;
+  if (!created.ok()) return created.status().Within(name);
+  reader->emplace(std::move(created).value());
+  return Status::Ok();
 }
 
 // The DDS entities of a watched period: one participant, a reader per topic, the command writer.
@@ -263,19 +266,18 @@ Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
   auto* topics = &session->topics;
   const dds::Qos sensor_qos = dds::SensorQos(false);
   const dds::Qos status_qos = dds::StatusQos();
-#define MPDRIG_OPEN(member, T, name, qos)                                           \
-  {                                                                                 \
-    auto reader = OpenReader<mpdrig_##T>(p, topics, &mpdrig_##T##_desc, name, qos); \
-    if (!reader.ok()) return reader.status().Within(name);                          \
-    session->member.emplace(std::move(reader).value());                             \
-  }
-  MPDRIG_OPEN(sensors, RigSensors, "mpdrig_sensors", sensor_qos)
-  MPDRIG_OPEN(estimate, RigEstimate, "mpdrig_estimate", sensor_qos)
-  MPDRIG_OPEN(profile, PressureProfile, "mpdrig_pressure_profile", sensor_qos)
-  MPDRIG_OPEN(status, RigStatus, "mpdrig_status", status_qos)
-  MPDRIG_OPEN(shadow_sensors, RigSensors, "mpdrig_shadow_sensors", sensor_qos)
-  MPDRIG_OPEN(shadow_status, ShadowStatus, "mpdrig_shadow_status", status_qos)
-#undef MPDRIG_OPEN
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->sensors, p, topics, &mpdrig_RigSensors_desc,
+                                    "mpdrig_sensors", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->estimate, p, topics, &mpdrig_RigEstimate_desc,
+                                    "mpdrig_estimate", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->profile, p, topics, &mpdrig_PressureProfile_desc,
+                                    "mpdrig_pressure_profile", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(
+      OpenReader(&session->status, p, topics, &mpdrig_RigStatus_desc, "mpdrig_status", status_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_sensors, p, topics, &mpdrig_RigSensors_desc,
+                                    "mpdrig_shadow_sensors", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_status, p, topics, &mpdrig_ShadowStatus_desc,
+                                    "mpdrig_shadow_status", status_qos));
   auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
   if (!command_topic.ok()) return command_topic.status();
   dds::Qos command_qos;  // as the shadow's reader: a command is not state (reliable, keep all)
@@ -369,7 +371,11 @@ void RigFeed::Drain() {
   Session& s = *session_;
   std::uint64_t taken = 0;
   auto count = [&](const Result<int>& n) {
-    if (n.ok()) taken += static_cast<std::uint64_t>(*n);
+    if (n.ok()) {
+      taken += static_cast<std::uint64_t>(*n);
+    } else {
+      health_.error = n.status().message();  // shown by the page (GET /api/rigs)
+    }
   };
   count(s.sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
     if (!Wanted(w.rig_id)) return;
