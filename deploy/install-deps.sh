@@ -20,12 +20,14 @@ packages=(
   libsundials-dev        # ARKODE for the method-of-lines scheme (pulls MPI/PETSc: ~700 MB)
   libprotobuf-dev protobuf-compiler  # rig configuration files
   libcli11-dev           # command line
+  libcpp-httplib-dev     # the dashboard's web server (clients/dashboard)
   cyclonedds-dev cyclonedds-tools  # DDS service: C API, headers and idlc (the IDL compiler)
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libfftw3-dev pkg-config  # spectra for `mpdrig compare` (bands, lag, transfer functions)
   libceres-dev           # `mpdrig fit`: bounded nonlinear least squares and covariance
-  # headless browser for the test that renders the comparison report (tests/service/report_test)
-  chromium
+  # headless browser for the test that renders the comparison report (tests/service/report_test),
+  # and its WebDriver with Selenium for the dashboard's test (tests/clients/dashboard_test.py)
+  chromium chromium-driver python3-selenium
   # DDS Security for a class (deploy/security/make-class): the CA, identities, signed
   # governance and permissions; tshark for the test that reads the wire (tests/security)
   openssl tshark

@@ -1,0 +1,202 @@
+// dashboard: a live web page of the rigs on a DDS domain, for a browser on the same machine.
+// It speaks only the DDS topics (clients/dashboard/rig_feed.h) and serves one self-contained
+// page (HTML, CSS and JavaScript in this binary: no fetch leaves the machine, so it works on a
+// lab PC without internet) plus a small JSON API the page polls:
+//
+//   GET  /                                  the page
+//   GET  /api/rigs                          the rigs seen, and whether DDS is open
+//   GET  /api/state?rig=ID&since=SEQ        one rig's newest values and history since SEQ
+//   POST /api/shadow?rig=ID&action=A&arg=X  a shadow model command (effect_on, effect_off, set,
+//                                           reset, fit_now); answers with its command_id
+//   GET  /api/health                        DDS open or not, samples, CPU (does not count as
+//                                           watching: a monitor does not keep DDS open)
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <thread>
+
+#include <httplib.h>
+#include <CLI/CLI.hpp>
+
+#include "clients/dashboard/json_out.h"
+#include "clients/dashboard/page.h"
+#include "clients/dashboard/rig_feed.h"
+
+namespace {
+
+using mpdrig::dashboard::AppendString;
+
+struct Args {
+  int domain = 0;
+  int port = 8080;
+  std::string host = "127.0.0.1";
+  std::vector<std::string> rigs;
+  std::string dds_config;
+  double idle_s = 5.0;
+  double frame_hz = 20.0;
+  double duration_s = 0.0;
+};
+
+double CpuSeconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+std::string ErrorJson(const std::string& message) {
+  std::string out = "{\"ok\":false,\"error\":";
+  AppendString(&out, message);
+  return out + "}";
+}
+
+void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed) {
+  // httplib's default also sets SO_REUSEPORT, with which a second dashboard on the same port
+  // would start "fine" and take half the connections: only SO_REUSEADDR (a restart may bind at
+  // once), so that a port in use is an error.
+  server->set_socket_options([](socket_t sock) {
+    int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+  });
+  server->set_default_headers({{"Cache-Control", "no-store"}});
+  server->Get("/", [](const httplib::Request&, httplib::Response& res) {
+    res.set_content(mpdrig::dashboard::PageHtml(), "text/html; charset=utf-8");
+  });
+  server->Get("/api/rigs", [feed](const httplib::Request&, httplib::Response& res) {
+    feed->Touch();
+    res.set_content(feed->RigsJson(), "application/json");
+  });
+  server->Get("/api/state", [feed](const httplib::Request& req, httplib::Response& res) {
+    feed->Touch();
+    std::uint64_t since = 0;
+    if (req.has_param("since"))
+      since = std::strtoull(req.get_param_value("since").c_str(), nullptr, 10);
+    res.set_content(feed->StateJson(req.get_param_value("rig"), since), "application/json");
+  });
+  server->Post("/api/shadow", [feed](const httplib::Request& req, httplib::Response& res) {
+    auto sent = feed->SendShadowCommand(req.get_param_value("rig"), req.get_param_value("action"),
+                                        req.get_param_value("arg"));
+    if (!sent.ok()) {
+      res.status = 400;
+      res.set_content(ErrorJson(sent.status().message()), "application/json");
+      return;
+    }
+    res.set_content("{\"ok\":true,\"command_id\":\"" + std::to_string(*sent) + "\"}",
+                    "application/json");
+  });
+  server->Get("/api/health", [feed](const httplib::Request&, httplib::Response& res) {
+    const auto h = feed->Health();
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "{\"dds\":\"%s\",\"sessions_opened\":%llu,\"samples_taken\":%llu,"
+                  "\"frames\":%llu,\"cpu_s\":%.3f}",
+                  h.open ? "open" : "closed", static_cast<unsigned long long>(h.sessions_opened),
+                  static_cast<unsigned long long>(h.samples_taken),
+                  static_cast<unsigned long long>(h.frames), CpuSeconds());
+    res.set_content(text, "application/json");
+  });
+}
+
+// Stops the server on SIGINT or SIGTERM, or after `duration_s` (0: never). The signals are
+// blocked in every thread and taken here with sigtimedwait, so no handler runs in a signal
+// context.
+void StopOnSignal(httplib::Server* server, const sigset_t& signals, double duration_s) {
+  timespec step{0, 200'000'000};
+  double waited_s = 0.0;
+  for (;;) {
+    if (sigtimedwait(&signals, nullptr, &step) > 0) break;
+    waited_s += 0.2;
+    if (duration_s > 0.0 && waited_s >= duration_s) break;
+    if (!server->is_running() && waited_s > 5.0) return;  // it failed to listen
+  }
+  server->stop();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("dashboard - a live web page of the rigs and the shadow model on a DDS domain");
+  app.footer(
+      "Serves http://HOST:PORT/ (a browser on this machine: http://127.0.0.1:8080/). The page\n"
+      "shows the pressure along the pipe (rig, observer estimate, shadow model), PT1 with the\n"
+      "observer's BHP estimate and the shadow's, piston, choke and pump, the rig's status, and\n"
+      "the shadow's error with a switch per catalogue effect and a \"fit now\" button.\n"
+      "DDS is opened only while a browser watches (a request in the last --idle-s seconds):\n"
+      "with no browser the rigs' services send nothing to the dashboard.\n"
+      "  mpdrig serve --rig rig-1 &  mpdrig shadow --rig rig-1 &  dashboard --port 8080");
+  Args args;
+  app.add_option("--domain", args.domain, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  app.add_option("--port", args.port, "TCP port of the page (0: any free port, printed)")
+      ->check(CLI::Range(0, 65535))
+      ->capture_default_str();
+  app.add_option("--host", args.host,
+                 "address to listen on (127.0.0.1: this machine only; 0.0.0.0: the lab's network)")
+      ->capture_default_str();
+  app.add_option("--rig", args.rigs, "a rig to show (repeatable; default: every rig seen)");
+  app.add_option("--dds-config", args.dds_config,
+                 "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
+  app.add_option("--idle-s", args.idle_s, "close DDS this long after the last request [s]")
+      ->check(CLI::Range(0.5, 3600.0))
+      ->capture_default_str();
+  app.add_option("--frame-hz", args.frame_hz,
+                 "how often the topics are drained and a chart point is kept [Hz]")
+      ->check(CLI::Range(1.0, 100.0))
+      ->capture_default_str();
+  app.add_option("--duration", args.duration_s, "stop after this long [s] (0: until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+
+  if (!args.dds_config.empty() && args.dds_config.front() != '<') {
+    std::FILE* f = std::fopen(args.dds_config.c_str(), "rb");
+    if (f == nullptr) {
+      std::fprintf(stderr, "dashboard: cannot read --dds-config %s\n", args.dds_config.c_str());
+      return 2;
+    }
+    std::string text;
+    char buffer[4096];
+    for (std::size_t n; (n = std::fread(buffer, 1, sizeof buffer, f)) > 0;) text.append(buffer, n);
+    std::fclose(f);
+    args.dds_config = text;
+  }
+
+  // Block the stop signals before any thread starts, so that only StopOnSignal takes them.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  mpdrig::dashboard::FeedOptions options;
+  options.domain = args.domain;
+  options.dds_config = args.dds_config;
+  options.rigs = args.rigs;
+  options.idle_s = args.idle_s;
+  options.frame_hz = args.frame_hz;
+  auto feed = mpdrig::dashboard::RigFeed::Create(options);
+  if (!feed.ok()) {
+    std::fprintf(stderr, "dashboard: %s\n", feed.status().message().c_str());
+    return 1;
+  }
+  httplib::Server server;
+  Route(&server, feed->get());
+  const int port = args.port == 0 ? server.bind_to_any_port(args.host)
+                                  : (server.bind_to_port(args.host, args.port) ? args.port : -1);
+  if (port <= 0) {
+    std::fprintf(stderr, "dashboard: cannot listen on %s:%d (in use? try another --port)\n",
+                 args.host.c_str(), args.port);
+    return 1;
+  }
+  std::printf("dashboard: http://%s:%d/ (DDS domain %d)\n", args.host.c_str(), port, args.domain);
+  std::fflush(stdout);
+  std::thread stopper(StopOnSignal, &server, signals, args.duration_s);
+  const bool listened = server.listen_after_bind();
+  stopper.join();
+  return listened ? 0 : 1;
+}

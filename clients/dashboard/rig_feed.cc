@@ -1,0 +1,721 @@
+#include "clients/dashboard/rig_feed.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+#include "clients/dashboard/json_out.h"
+#include "mpdrig.h"
+#include "service/dds/dds.h"
+
+namespace mpdrig::dashboard {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// One RigSensors sample as held (the wire's lab units), with when it was written.
+struct SensorsView {
+  std::uint64_t counter = 0;
+  double t = 0.0;
+  double piston_m = kNaN, choke_deg = kNaN, P1 = kNaN, P2 = kNaN, C1 = kNaN, C2 = kNaN;
+  double PT[10] = {kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
+  double FT1 = kNaN, FT2 = kNaN, FT3 = kNaN, FT4 = kNaN;
+  dds_time_t written_ns = 0;
+};
+
+SensorsView FromWire(const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
+  SensorsView v;
+  v.counter = s.sample_counter;
+  v.t = s.sim_time_s;
+  v.piston_m = s.piston_position_m;
+  v.choke_deg = s.choke_position_deg;
+  v.P1 = s.P1_barg;
+  v.P2 = s.P2_barg;
+  std::copy(std::begin(s.PT_barg), std::end(s.PT_barg), std::begin(v.PT));
+  v.C1 = s.C1_barg;
+  v.C2 = s.C2_barg;
+  v.FT1 = s.FT1_lpm;
+  v.FT2 = s.FT2_lpm;
+  v.FT3 = s.FT3_lpm;
+  v.FT4 = s.FT4_lpm;
+  v.written_ns = info.source_timestamp;
+  return v;
+}
+
+struct EstimateView {
+  double t = 0.0, bhp = kNaN, piston_m = kNaN, velocity = kNaN, FT4 = kNaN, freq_hz = kNaN;
+  std::string source;
+};
+
+struct ProfileView {
+  std::uint64_t counter = 0;
+  double t = 0.0;
+  std::vector<double> x, p, p_est;
+};
+
+// PT1..PT10 of one sample, kept for a few seconds so that the profile chart can show the rig,
+// the observer and the shadow at one instant: the shadow trails the rig by a few samples, and
+// under heave a tenth of a second moves PT1 by several hundredths of a bar.
+struct PtAt {
+  std::uint64_t counter;
+  std::array<double, 10> PT;
+};
+constexpr std::size_t kPtRing = 400;      // 4 s at 100 Hz
+constexpr std::size_t kProfileRing = 64;  // 6 s at the default 10 Hz
+
+template <typename T>
+void PushRing(std::deque<T>* ring, T item, std::size_t size) {
+  ring->push_back(std::move(item));
+  while (ring->size() > size) ring->pop_front();
+}
+
+struct StatusView {
+  std::string clock;
+  double t = 0.0, rtf = 0.0, longest_stall_s = 0.0;
+  std::uint64_t deadline_misses = 0, lost_periods = 0, rejected = 0;
+  std::string last_rejection, noise;
+  std::vector<std::string> warnings, effects, owners;
+};
+
+struct ShadowStatusView {
+  double t = 0.0, window_s = 0.0, error = kNaN, last_change_t = -1.0, error_at_change = kNaN;
+  std::vector<std::string> channels, effects, parameters, available;
+  std::vector<double> nrmse;
+  std::string last_change, last_rejection, fit_state;
+  std::uint64_t rejected = 0, last_command_id = 0;
+};
+
+std::vector<std::string> Strings(const dds_sequence_string& seq) {
+  std::vector<std::string> out;
+  out.reserve(seq._length);
+  for (std::uint32_t i = 0; i < seq._length; ++i) out.emplace_back(seq._buffer[i]);
+  return out;
+}
+
+std::vector<double> Doubles(const dds_sequence_double& seq) {
+  return std::vector<double>(seq._buffer, seq._buffer + seq._length);
+}
+
+const char* ClockName(mpdrig_ClockMode clock) {
+  switch (clock) {
+    case mpdrig_CLOCK_REALTIME:
+      return "realtime";
+    case mpdrig_CLOCK_FAST:
+      return "fast";
+    case mpdrig_CLOCK_LOCKSTEP:
+      return "lockstep";
+  }
+  return "unknown";
+}
+
+const char* SourceName(mpdrig_FrequencySource source) {
+  switch (source) {
+    case mpdrig_FREQUENCY_PISTON_SINE:
+      return "piston sine";
+    case mpdrig_FREQUENCY_TRACKED:
+      return "tracked";
+    case mpdrig_FREQUENCY_UNLOCKED:
+      return "unlocked";
+  }
+  return "unknown";
+}
+
+// A thinned time series for one chart: one point per frame at most, the newest `history_s` of
+// rig time. A point is {sequence number, rig time, values...}; the sequence lets a browser ask
+// only for what it has not got.
+class Series {
+ public:
+  void Add(std::uint64_t seq, double t, std::vector<double> values, double history_s) {
+    if (!points_.empty() && t <= points_.back().t) {
+      if (t == points_.back().t) return;  // nothing new since the last frame
+      points_.clear();                    // time went back: another run of the rig
+    }
+    points_.push_back({seq, t, std::move(values)});
+    while (!points_.empty() && points_.front().t < t - history_s) points_.pop_front();
+  }
+  void Clear() { points_.clear(); }
+
+  void AppendJson(std::string* out, std::uint64_t since) const {
+    *out += '[';
+    bool first = true;
+    for (const Point& p : points_) {
+      if (p.seq <= since) continue;
+      if (!first) *out += ',';
+      first = false;
+      *out += '[';
+      AppendNumber(out, static_cast<double>(p.seq));
+      *out += ',';
+      AppendNumber(out, p.t);
+      for (const double v : p.values) {
+        *out += ',';
+        AppendNumber(out, v);
+      }
+      *out += ']';
+    }
+    *out += ']';
+  }
+
+ private:
+  struct Point {
+    std::uint64_t seq;
+    double t;
+    std::vector<double> values;
+  };
+  std::deque<Point> points_;
+};
+
+void AppendSensors(std::string* out, const SensorsView& s, dds_time_t now) {
+  *out += "{\"counter\":";
+  AppendNumber(out, static_cast<double>(s.counter));
+  const std::pair<const char*, double> fields[] = {
+      {"t", s.t},
+      {"piston_m", s.piston_m},
+      {"choke_deg", s.choke_deg},
+      {"P1", s.P1},
+      {"P2", s.P2},
+      {"C1", s.C1},
+      {"C2", s.C2},
+      {"FT1", s.FT1},
+      {"FT2", s.FT2},
+      {"FT3", s.FT3},
+      {"FT4", s.FT4},
+      {"age_ms", static_cast<double>(now - s.written_ns) * 1e-6}};
+  for (const auto& [key, value] : fields) {
+    *out += ',';
+    AppendKey(out, key);
+    AppendNumber(out, value);
+  }
+  *out += ",\"PT\":";
+  AppendNumbers(out, std::vector<double>(std::begin(s.PT), std::end(s.PT)));
+  *out += '}';
+}
+
+std::optional<std::string> ActionOf(const std::string& action, mpdrig_ShadowAction* wire) {
+  if (action == "effect_on")
+    *wire = mpdrig_SHADOW_EFFECT_ON;
+  else if (action == "effect_off")
+    *wire = mpdrig_SHADOW_EFFECT_OFF;
+  else if (action == "set")
+    *wire = mpdrig_SHADOW_SET;
+  else if (action == "reset")
+    *wire = mpdrig_SHADOW_RESET;
+  else if (action == "fit_now")
+    *wire = mpdrig_SHADOW_FIT_NOW;
+  else
+    return "unknown action '" + action + "' (effect_on, effect_off, set, reset, fit_now)";
+  return std::nullopt;
+}
+
+}  // namespace
+
+struct RigFeed::DomainHolder {
+  dds::Domain domain;
+};
+
+struct RigFeed::Session {
+  dds::Entity participant;  // first: destroyed last (deleting it deletes its children)
+  std::vector<dds::Entity> topics;
+  std::optional<dds::Reader<mpdrig_RigSensors>> sensors, shadow_sensors;
+  std::optional<dds::Reader<mpdrig_RigEstimate>> estimate;
+  std::optional<dds::Reader<mpdrig_PressureProfile>> profile;
+  std::optional<dds::Reader<mpdrig_RigStatus>> status;
+  std::optional<dds::Reader<mpdrig_ShadowStatus>> shadow_status;
+  std::optional<dds::Writer<mpdrig_ShadowCommand>> shadow_command;
+};
+
+struct RigFeed::RigView {
+  std::optional<SensorsView> sensors, shadow;
+  std::optional<EstimateView> estimate;
+  std::optional<StatusView> status;
+  std::optional<ShadowStatusView> shadow_status;
+  std::deque<ProfileView> profiles;    // the newest few, for the aligned snapshot
+  std::deque<PtAt> rig_pt, shadow_pt;  // the newest few seconds of PT1..PT10
+  std::uint64_t samples = 0;           // sensor samples taken
+  // Charts: rig {PT1, piston, choke, FT2}, estimate {BHP}, shadow {PT1}, error {error, nrmse...}.
+  Series rig_series, estimate_series, shadow_series, error_series;
+  std::vector<std::string> error_channels;
+  bool fresh_sensors = false, fresh_estimate = false, fresh_shadow = false, fresh_error = false;
+};
+
+namespace {
+
+// Creates topic `name` and a reader of it into `*reader`; the topic is kept in `topics`.
+template <typename T>
+Status OpenReader(std::optional<dds::Reader<T>>* reader, dds_entity_t participant,
+                  std::vector<dds::Entity>* topics, const dds_topic_descriptor_t* descriptor,
+                  const char* name, const dds::Qos& qos) {
+  auto topic = dds::CreateTopic(participant, descriptor, name);
+  if (!topic.ok()) return topic.status().Within(name);
+  auto created = dds::Reader<T>::Create(participant, topic->handle(), qos);
+  topics->push_back(std::move(topic).value());
+  if (!created.ok()) return created.status().Within(name);
+  reader->emplace(std::move(created).value());
+  return Status::Ok();
+}
+
+// The DDS entities of a watched period: one participant, a reader per topic, the command writer.
+Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
+  auto session = std::make_unique<RigFeed::Session>();
+  auto participant = dds::CreateParticipant(domain);
+  if (!participant.ok()) return participant.status();
+  session->participant = std::move(participant).value();
+  const dds_entity_t p = session->participant.handle();
+  auto* topics = &session->topics;
+  const dds::Qos sensor_qos = dds::SensorQos(false);
+  const dds::Qos status_qos = dds::StatusQos();
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->sensors, p, topics, &mpdrig_RigSensors_desc,
+                                    "mpdrig_sensors", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->estimate, p, topics, &mpdrig_RigEstimate_desc,
+                                    "mpdrig_estimate", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->profile, p, topics, &mpdrig_PressureProfile_desc,
+                                    "mpdrig_pressure_profile", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(
+      OpenReader(&session->status, p, topics, &mpdrig_RigStatus_desc, "mpdrig_status", status_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_sensors, p, topics, &mpdrig_RigSensors_desc,
+                                    "mpdrig_shadow_sensors", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_status, p, topics, &mpdrig_ShadowStatus_desc,
+                                    "mpdrig_shadow_status", status_qos));
+  auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
+  if (!command_topic.ok()) return command_topic.status();
+  dds::Qos command_qos;  // as the shadow's reader: a command is not state (reliable, keep all)
+  dds_qset_reliability(command_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(command_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), command_qos);
+  if (!writer.ok()) return writer.status();
+  session->topics.push_back(std::move(command_topic).value());
+  session->shadow_command.emplace(std::move(writer).value());
+  return session;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<RigFeed>> RigFeed::Create(const FeedOptions& options) {
+  if (!(options.frame_hz > 0.0 && options.frame_hz <= 100.0))
+    return Status::Error("the frame rate must be in (0, 100] Hz");
+  if (!(options.idle_s > 0.0)) return Status::Error("the idle time must be positive");
+  auto domain = dds::Domain::Create(
+      options.domain, options.dds_config.empty() ? dds::LoopbackConfig() : options.dds_config);
+  if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
+  std::unique_ptr<RigFeed> feed(new RigFeed(options));
+  feed->domain_ = std::make_unique<DomainHolder>(DomainHolder{std::move(domain).value()});
+  feed->thread_ = std::thread([f = feed.get()] { f->Run(); });
+  return feed;
+}
+
+RigFeed::RigFeed(const FeedOptions& options) : options_(options) {}
+
+RigFeed::~RigFeed() {
+  {
+    std::lock_guard lock(mu_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  session_.reset();
+}
+
+void RigFeed::Touch() {
+  std::lock_guard lock(mu_);
+  last_touch_ = std::chrono::steady_clock::now();
+  touched_ = true;
+  if (!session_) wake_.notify_all();  // open now, not at the next frame
+}
+
+void RigFeed::Run() {
+  using Clock = std::chrono::steady_clock;
+  const auto frame = std::chrono::duration<double>(1.0 / options_.frame_hz);
+  const auto idle = std::chrono::duration<double>(options_.idle_s);
+  Clock::time_point last_attempt{};
+  std::unique_lock lock(mu_);
+  while (!stop_) {
+    wake_.wait_for(lock, frame);
+    if (stop_) break;
+    const auto now = Clock::now();
+    const bool watched = touched_ && now - last_touch_ < idle;
+    if (!watched && session_) {
+      session_.reset();  // nobody watches: the service's writers lose their reader
+      views_.clear();
+      health_.open = false;
+    }
+    if (watched && !session_ && now - last_attempt > std::chrono::seconds(1)) {
+      last_attempt = now;
+      auto session = OpenSession(options_.domain);
+      if (session.ok()) {
+        session_ = std::move(session).value();
+        health_.open = true;
+        health_.error.clear();
+        ++health_.sessions_opened;
+      } else {
+        health_.error = session.status().message();
+      }
+    }
+    if (session_) Drain();
+  }
+}
+
+bool RigFeed::Wanted(const char* rig_id) const {
+  return options_.rigs.empty() ||
+         std::find(options_.rigs.begin(), options_.rigs.end(), rig_id) != options_.rigs.end();
+}
+
+RigFeed::RigView& RigFeed::View(const std::string& rig_id) {
+  auto& view = views_[rig_id];
+  if (!view) view = std::make_unique<RigView>();
+  return *view;
+}
+
+void RigFeed::Drain() {
+  Session& s = *session_;
+  std::uint64_t taken = 0;
+  auto count = [&](const Result<int>& n) {
+    if (n.ok()) {
+      taken += static_cast<std::uint64_t>(*n);
+    } else {
+      health_.error = n.status().message();  // shown by the page (GET /api/rigs)
+    }
+  };
+  count(s.sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
+    if (!Wanted(w.rig_id)) return;
+    RigView& v = View(w.rig_id);
+    v.sensors = FromWire(w, info);
+    PushRing(&v.rig_pt, PtAt{w.sample_counter, std::to_array(w.PT_barg)}, kPtRing);
+    v.fresh_sensors = true;
+    ++v.samples;
+  }));
+  count(s.estimate->TakeEach([&](const mpdrig_RigEstimate& w, const dds_sample_info_t&) {
+    if (!Wanted(w.rig_id)) return;
+    RigView& v = View(w.rig_id);
+    v.estimate = EstimateView{w.sim_time_s,
+                              w.BHP_est_barg,
+                              w.piston_position_est_m,
+                              w.piston_velocity_est_mps,
+                              w.FT4_est_lpm,
+                              w.disturbance_frequency_hz,
+                              SourceName(w.frequency_source)};
+    v.fresh_estimate = true;
+  }));
+  count(s.profile->TakeEach([&](const mpdrig_PressureProfile& w, const dds_sample_info_t&) {
+    if (!Wanted(w.rig_id)) return;
+    PushRing(&View(w.rig_id).profiles,
+             ProfileView{w.sample_counter, w.sim_time_s, Doubles(w.position_m),
+                         Doubles(w.pressure_barg), Doubles(w.pressure_est_barg)},
+             kProfileRing);
+  }));
+  count(s.status->TakeEach([&](const mpdrig_RigStatus& w, const dds_sample_info_t&) {
+    if (!Wanted(w.rig_id)) return;
+    StatusView st;
+    st.clock = ClockName(w.clock);
+    st.t = w.sim_time_s;
+    st.rtf = w.real_time_factor;
+    st.deadline_misses = w.deadline_misses;
+    st.lost_periods = w.lost_periods;
+    st.longest_stall_s = w.longest_stall_s;
+    st.rejected = w.rejected_commands;
+    st.last_rejection = w.last_rejection;
+    st.noise = w.sensor_noise;
+    st.warnings = Strings(w.warnings);
+    st.effects = Strings(w.active_effects);
+    st.owners = Strings(w.actuator_owners);
+    View(w.rig_id).status = std::move(st);
+  }));
+  count(s.shadow_sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
+    if (!Wanted(w.rig_id)) return;
+    RigView& v = View(w.rig_id);
+    v.shadow = FromWire(w, info);
+    PushRing(&v.shadow_pt, PtAt{w.sample_counter, std::to_array(w.PT_barg)}, kPtRing);
+    v.fresh_shadow = true;
+  }));
+  count(s.shadow_status->TakeEach([&](const mpdrig_ShadowStatus& w, const dds_sample_info_t&) {
+    if (!Wanted(w.rig_id)) return;
+    ShadowStatusView st;
+    st.t = w.sim_time_s;
+    st.window_s = w.window_s;
+    st.error = w.error;
+    st.channels = Strings(w.channels);
+    st.nrmse = Doubles(w.nrmse);
+    st.effects = Strings(w.active_effects);
+    st.parameters = Strings(w.parameters);
+    st.available = Strings(w.available_effects);
+    st.last_change = w.last_change;
+    st.last_change_t = w.last_change_sim_time_s;
+    st.error_at_change = w.error_at_last_change;
+    st.rejected = w.rejected_commands;
+    st.last_rejection = w.last_rejection;
+    st.last_command_id = w.last_command_id;
+    st.fit_state = w.fit_state;
+    RigView& v = View(w.rig_id);
+    v.shadow_status = std::move(st);
+    v.fresh_error = true;
+  }));
+  health_.samples_taken += taken;
+  ++health_.frames;
+
+  // One history point per series per frame: the newest sample (the thinning).
+  for (auto& [id, v] : views_) {
+    if (v->fresh_sensors) {
+      const SensorsView& x = *v->sensors;
+      v->rig_series.Add(next_seq_++, x.t, {x.PT[0], x.piston_m, x.choke_deg, x.FT2},
+                        options_.history_s);
+    }
+    if (v->fresh_estimate) {
+      v->estimate_series.Add(next_seq_++, v->estimate->t, {v->estimate->bhp}, options_.history_s);
+    }
+    if (v->fresh_shadow) {
+      v->shadow_series.Add(next_seq_++, v->shadow->t, {v->shadow->PT[0]}, options_.history_s);
+    }
+    if (v->fresh_error) {
+      const ShadowStatusView& st = *v->shadow_status;
+      if (st.channels != v->error_channels) {  // another shadow, or other channels: start over
+        v->error_series.Clear();
+        v->error_channels = st.channels;
+      }
+      std::vector<double> values{st.error};
+      values.insert(values.end(), st.nrmse.begin(), st.nrmse.end());
+      v->error_series.Add(next_seq_++, st.t, std::move(values), options_.history_s);
+    }
+    v->fresh_sensors = v->fresh_estimate = v->fresh_shadow = v->fresh_error = false;
+  }
+}
+
+std::string RigFeed::RigsJson() const {
+  std::lock_guard lock(mu_);
+  std::vector<std::string> rigs = options_.rigs;
+  for (const auto& [id, v] : views_) {
+    if (std::find(rigs.begin(), rigs.end(), id) == rigs.end()) rigs.push_back(id);
+  }
+  std::sort(rigs.begin(), rigs.end());
+  std::string out = "{\"rigs\":";
+  AppendStrings(&out, rigs);
+  out += ",\"dds\":";
+  AppendString(&out, session_ ? "open" : (touched_ ? "opening" : "closed"));
+  out += ",\"error\":";
+  AppendString(&out, health_.error);
+  out += '}';
+  return out;
+}
+
+FeedHealth RigFeed::Health() const {
+  std::lock_guard lock(mu_);
+  return health_;
+}
+
+namespace {
+
+void AppendStatus(std::string* out, const StatusView& st) {
+  *out += "{\"clock\":";
+  AppendString(out, st.clock);
+  const std::pair<const char*, double> numbers[] = {
+      {"t", st.t},
+      {"rtf", st.rtf},
+      {"deadline_misses", static_cast<double>(st.deadline_misses)},
+      {"lost_periods", static_cast<double>(st.lost_periods)},
+      {"longest_stall_s", st.longest_stall_s},
+      {"rejected", static_cast<double>(st.rejected)}};
+  for (const auto& [key, value] : numbers) {
+    *out += ',';
+    AppendKey(out, key);
+    AppendNumber(out, value);
+  }
+  *out += ",\"last_rejection\":";
+  AppendString(out, st.last_rejection);
+  *out += ",\"noise\":";
+  AppendString(out, st.noise);
+  *out += ",\"warnings\":";
+  AppendStrings(out, st.warnings);
+  *out += ",\"effects\":";
+  AppendStrings(out, st.effects);
+  *out += ",\"owners\":";
+  AppendStrings(out, st.owners);
+  *out += '}';
+}
+
+void AppendShadowStatus(std::string* out, const ShadowStatusView& st) {
+  *out += "{\"t\":";
+  AppendNumber(out, st.t);
+  const std::pair<const char*, double> numbers[] = {{"window_s", st.window_s},
+                                                    {"error", st.error},
+                                                    {"last_change_t", st.last_change_t},
+                                                    {"error_at_change", st.error_at_change},
+                                                    {"rejected", static_cast<double>(st.rejected)}};
+  for (const auto& [key, value] : numbers) {
+    *out += ',';
+    AppendKey(out, key);
+    AppendNumber(out, value);
+  }
+  // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
+  *out += ",\"last_command_id\":";
+  AppendString(out, std::to_string(st.last_command_id));
+  const std::pair<const char*, const std::vector<std::string>*> lists[] = {
+      {"channels", &st.channels},
+      {"effects", &st.effects},
+      {"parameters", &st.parameters},
+      {"available", &st.available}};
+  for (const auto& [key, list] : lists) {
+    *out += ',';
+    AppendKey(out, key);
+    AppendStrings(out, *list);
+  }
+  *out += ",\"nrmse\":";
+  AppendNumbers(out, st.nrmse);
+  const std::pair<const char*, const std::string*> texts[] = {
+      {"last_change", &st.last_change},
+      {"last_rejection", &st.last_rejection},
+      {"fit_state", &st.fit_state}};
+  for (const auto& [key, text] : texts) {
+    *out += ',';
+    AppendKey(out, key);
+    AppendString(out, *text);
+  }
+  *out += '}';
+}
+
+}  // namespace
+
+// The pressure along the pipe at one instant for the rig, the observer and the shadow: the newest
+// profile sample the shadow has reached (the newest one without a shadow), with the rig's and the
+// shadow's PT1..PT10 of that same sample.
+void RigFeed::AppendAlignedProfile(std::string* out, const RigView& v) {
+  if (v.profiles.empty()) return;
+  const ProfileView* chosen = &v.profiles.back();
+  if (!v.shadow_pt.empty()) {
+    const std::uint64_t reached = v.shadow_pt.back().counter;
+    for (auto it = v.profiles.rbegin(); it != v.profiles.rend(); ++it) {
+      chosen = &*it;
+      if (it->counter <= reached) break;
+    }
+  }
+  auto pt_at = [&](const std::deque<PtAt>& ring) -> std::vector<double> {
+    for (auto it = ring.rbegin(); it != ring.rend(); ++it) {
+      if (it->counter == chosen->counter) return {it->PT.begin(), it->PT.end()};
+      if (it->counter < chosen->counter) break;
+    }
+    return {};
+  };
+  *out += ",\"profile\":{\"t\":";
+  AppendNumber(out, chosen->t);
+  *out += ",\"x\":";
+  AppendNumbers(out, chosen->x);
+  *out += ",\"p\":";
+  AppendNumbers(out, chosen->p);
+  *out += ",\"p_est\":";
+  AppendNumbers(out, chosen->p_est);
+  *out += ",\"rig_PT\":";
+  AppendNumbers(out, pt_at(v.rig_pt));
+  *out += ",\"shadow_PT\":";
+  AppendNumbers(out, pt_at(v.shadow_pt));
+  *out += '}';
+}
+
+std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) const {
+  std::lock_guard lock(mu_);
+  std::string out = "{\"rig\":";
+  AppendString(&out, rig_id);
+  out += ",\"dds\":";
+  AppendString(&out, session_ ? "open" : "opening");
+  const auto found = views_.find(rig_id);
+  if (found == views_.end()) {
+    out += ",\"known\":false}";
+    return out;
+  }
+  const RigView& v = *found->second;
+  const dds_time_t now = dds_time();
+  out += ",\"known\":true,\"samples\":";
+  AppendNumber(&out, static_cast<double>(v.samples));
+  out += ",\"seq\":";
+  AppendNumber(&out, static_cast<double>(next_seq_ - 1));
+  if (v.sensors) {
+    out += ",\"sensors\":";
+    AppendSensors(&out, *v.sensors, now);
+  }
+  if (v.shadow) {
+    out += ",\"shadow\":";
+    AppendSensors(&out, *v.shadow, now);
+  }
+  if (v.estimate) {
+    const EstimateView& e = *v.estimate;
+    out += ",\"estimate\":{\"t\":";
+    AppendNumber(&out, e.t);
+    out += ",\"bhp\":";
+    AppendNumber(&out, e.bhp);
+    out += ",\"piston_m\":";
+    AppendNumber(&out, e.piston_m);
+    out += ",\"velocity\":";
+    AppendNumber(&out, e.velocity);
+    out += ",\"FT4\":";
+    AppendNumber(&out, e.FT4);
+    out += ",\"freq_hz\":";
+    AppendNumber(&out, e.freq_hz);
+    out += ",\"source\":";
+    AppendString(&out, e.source);
+    out += '}';
+  }
+  AppendAlignedProfile(&out, v);
+  if (v.status) {
+    out += ",\"status\":";
+    AppendStatus(&out, *v.status);
+  }
+  if (v.shadow_status) {
+    out += ",\"shadow_status\":";
+    AppendShadowStatus(&out, *v.shadow_status);
+  }
+  out += ",\"hist\":{\"rig\":";
+  v.rig_series.AppendJson(&out, since);
+  out += ",\"est\":";
+  v.estimate_series.AppendJson(&out, since);
+  out += ",\"shadow\":";
+  v.shadow_series.AppendJson(&out, since);
+  out += ",\"err\":";
+  v.error_series.AppendJson(&out, since);
+  out += ",\"err_channels\":";
+  AppendStrings(&out, v.error_channels);
+  out += "}}";
+  return out;
+}
+
+Result<std::uint64_t> RigFeed::SendShadowCommand(const std::string& rig_id,
+                                                 const std::string& action,
+                                                 const std::string& argument) {
+  mpdrig_ShadowAction wire_action{};
+  if (auto bad = ActionOf(action, &wire_action)) return Status::Error(*bad);
+  const bool needs_argument = wire_action == mpdrig_SHADOW_EFFECT_ON ||
+                              wire_action == mpdrig_SHADOW_EFFECT_OFF ||
+                              wire_action == mpdrig_SHADOW_SET;
+  if (needs_argument && argument.empty())
+    return Status::Error(action + " needs an argument (an effect name, or KEY=VALUE for set)");
+  if (rig_id.empty()) return Status::Error("no rig chosen");
+  Touch();
+  // The writer exists while a browser watches; a shadow that started a moment ago may not have
+  // matched it yet, so wait a little (without holding the feed) before saying there is none.
+  for (int attempt = 0;; ++attempt) {
+    {
+      std::lock_guard lock(mu_);
+      if (session_) {
+        dds_publication_matched_status_t matched{};
+        const dds_entity_t writer = session_->shadow_command->handle();
+        const Status got = dds::Check(dds_get_publication_matched_status(writer, &matched),
+                                      "dds_get_publication_matched_status");
+        if (!got.ok()) return got;
+        if (matched.current_count > 0) {
+          mpdrig_ShadowCommand command{};
+          std::string id_text = rig_id, argument_text = argument;
+          command.rig_id = id_text.data();
+          command.command_id = static_cast<std::uint64_t>(
+              std::chrono::system_clock::now().time_since_epoch().count());
+          command.action = wire_action;
+          command.argument = argument_text.data();
+          MPDRIG_RETURN_IF_ERROR(session_->shadow_command->Write(command));
+          return command.command_id;
+        }
+      }
+    }
+    if (attempt >= 40) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  return Status::Error("no shadow model is listening (start `mpdrig shadow --rig " + rig_id +
+                       "` on this domain)");
+}
+
+}  // namespace mpdrig::dashboard
