@@ -108,12 +108,6 @@ int main(int argc, char** argv) {
       dds::Reader<mpdrig_ShadowStatus>::Create(scope->sub(), status_topic->handle(),
                                                dds::StatusQos());
   if (!status.ok()) return Fail(status.status().message());
-  dds::Qos qos;  // as the shadow's reader: reliable, keep all
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(), qos);
-  if (!writer.ok()) return Fail(writer.status().message());
-
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   // The shadow's current status first (transient-local: it arrives once matched).
   bool have = false;
@@ -145,6 +139,21 @@ int main(int argc, char** argv) {
   } else {
     return 0;
   }
+  // Only now: reading the status needs no right to command (a watcher under security has none).
+  dds::Qos qos;  // as the shadow's reader: reliable, keep all
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(), qos);
+  if (!writer.ok()) return Fail(writer.status().message());
+  // A command written before the shadow's reader has matched would be lost (volatile).
+  for (dds_publication_matched_status_t matched{};
+       dds_get_publication_matched_status(writer->handle(), &matched) == DDS_RETCODE_OK &&
+       matched.current_count == 0;) {
+    if (std::chrono::steady_clock::now() >= deadline)
+      return Fail("the shadow's command reader did not match within --timeout");
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+
   mpdrig_ShadowCommand command{};
   command.rig_id = rig_id.data();
   command.command_id =
