@@ -110,14 +110,23 @@ Status ShadowModel::Rebuild() {
   start_time_s_ = first->time_s;
   fed_until_s_ = first != history_.begin() ? std::prev(first)->time_s : -1.0e300;
   replaying_ = true;
-  const Status status = FeedUntil(frontier_s);
+  Status status = Status::Ok();
+  // In blocks, as the live rows are fed: every row sees the look-ahead it would have seen live,
+  // so the error after a change compares with the error before it.
+  if (Reconstructing()) {
+    for (double until_s = start_time_s_ + options_.block_s; status.ok() && until_s < frontier_s;
+         until_s += options_.block_s) {
+      status = FeedUntil(until_s);
+    }
+  }
+  if (status.ok()) status = FeedUntil(frontier_s);
   replaying_ = false;
   return status;
 }
 
-LogInputColumns ShadowModel::HeldColumns(std::size_t first) const {
+LogInputColumns ShadowModel::HeldColumns(std::size_t first, std::size_t end) const {
   LogInputColumns columns;
-  for (std::size_t i = first; i < history_.size(); ++i) {
+  for (std::size_t i = first; i < std::min(end, history_.size()); ++i) {
     const LogRow& row = history_[i];
     columns.time_s.push_back(row.time_s);
     columns.piston_position_m.push_back(row.measured_inputs[0]);
@@ -153,7 +162,13 @@ Status ShadowModel::FeedUntil(double until_s) {
                        [](const LogRow& row, double t) { return row.time_s < t; }) -
       history_.begin());
   a = std::min(a, b);
-  const LogInputColumns done = ReconstructInputColumns(HeldColumns(a), *plan_);
+  // Ahead: the look-ahead of the last row fed, as live (not every row a replay holds).
+  const auto ahead = static_cast<std::size_t>(
+      std::upper_bound(history_.begin(), history_.end(), until_s + options_.lookahead_s,
+                       [](double t, const LogRow& row) { return t < row.time_s; }) -
+      history_.begin());
+  const LogInputColumns done =
+      ReconstructInputColumns(HeldColumns(a, std::max(ahead, e)), *plan_);
   for (std::size_t i = b; i < e; ++i) {
     LogRow row = history_[i];
     const std::size_t k = i - a;

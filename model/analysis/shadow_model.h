@@ -25,6 +25,7 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
 #include <deque>
 #include <memory>
 #include <optional>
@@ -110,8 +111,8 @@ class ShadowModel {
   ShadowModel(RigParams params, ShadowOptions options);
   Status Rebuild();
   void Take(const PipelineSample& sample);
-  // The held rows' inputs as columns, from index `first`.
-  LogInputColumns HeldColumns(std::size_t first) const;
+  // The held rows' inputs as columns, indices [first, end).
+  LogInputColumns HeldColumns(std::size_t first, std::size_t end = SIZE_MAX) const;
   // Feeds the pipeline the held rows up to `until_s` (reconstructed where planned).
   Status FeedUntil(double until_s);
   bool Reconstructing() const { return options_.reconstruct_inputs; }
