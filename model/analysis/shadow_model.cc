@@ -151,33 +151,41 @@ Status ShadowModel::FeedUntil(double until_s) {
     fed_until_s_ = history_[e - 1].time_s;
     return Status::Ok();
   }
-  // Two-sided where the rows allow: every row from the level windows' reach back (or the piston's,
-  // if longer) to the newest; the rows fed are at least lookahead_s behind the newest.
-  const double dt = plan_->sample_interval_s;
-  const double back_s = std::max(plan_->piston_half_width_s,
-                                 static_cast<double>(plan_->level_reach_samples()) * dt);
-  const double from_s = history_[b].time_s - back_s;
-  auto a = static_cast<std::size_t>(
-      std::lower_bound(history_.begin(), history_.end(), from_s,
-                       [](const LogRow& row, double t) { return row.time_s < t; }) -
-      history_.begin());
-  a = std::min(a, b);
-  // Ahead: the look-ahead of the last row fed, as live (not every row a replay holds).
-  const auto ahead = static_cast<std::size_t>(
-      std::upper_bound(history_.begin(), history_.end(), until_s + options_.lookahead_s,
-                       [](double t, const LogRow& row) { return t < row.time_s; }) -
-      history_.begin());
-  const LogInputColumns done =
-      ReconstructInputColumns(HeldColumns(a, std::max(ahead, e)), *plan_);
-  for (std::size_t i = b; i < e; ++i) {
-    LogRow row = history_[i];
-    const std::size_t k = i - a;
-    row.piston_position_m = done.piston_position_m[k];
-    row.choke_opening_frac = done.choke_opening_frac[k];
-    row.pump_flow_m3ps = done.pump_flow_m3ps[k];
-    row.outlet_pressure_pa = done.outlet_pressure_pa[k];
-    MPDRIG_RETURN_IF_ERROR(pipeline_->Push(row));
+  // A row is reconstructed once, when first fed (the inputs do not depend on the model): a
+  // replay after a change feeds the very inputs the live model had.
+  const auto r = std::max(
+      b, static_cast<std::size_t>(std::lower_bound(history_.begin(), history_.end(),
+                                                   reconstructed_until_s_, by_time) -
+                                  history_.begin()));
+  if (r < e) {
+    // Two-sided where the rows allow: from the level windows' reach back (or the piston's, if
+    // longer) to the look-ahead of the last row fed, as live.
+    const double dt = plan_->sample_interval_s;
+    const double back_s = std::max(plan_->piston_half_width_s,
+                                   static_cast<double>(plan_->level_reach_samples()) * dt);
+    const double from_s = history_[r].time_s - back_s;
+    auto a = static_cast<std::size_t>(
+        std::lower_bound(history_.begin(), history_.end(), from_s,
+                         [](const LogRow& row, double t) { return row.time_s < t; }) -
+        history_.begin());
+    a = std::min(a, r);
+    const auto ahead = static_cast<std::size_t>(
+        std::upper_bound(history_.begin(), history_.end(), until_s + options_.lookahead_s,
+                         [](double t, const LogRow& row) { return t < row.time_s; }) -
+        history_.begin());
+    const LogInputColumns done =
+        ReconstructInputColumns(HeldColumns(a, std::max(ahead, e)), *plan_);
+    for (std::size_t i = r; i < e; ++i) {
+      LogRow& row = history_[i];
+      const std::size_t k = i - a;
+      row.piston_position_m = done.piston_position_m[k];
+      row.choke_opening_frac = done.choke_opening_frac[k];
+      row.pump_flow_m3ps = done.pump_flow_m3ps[k];
+      row.outlet_pressure_pa = done.outlet_pressure_pa[k];
+    }
+    reconstructed_until_s_ = history_[e - 1].time_s;
   }
+  for (std::size_t i = b; i < e; ++i) MPDRIG_RETURN_IF_ERROR(pipeline_->Push(history_[i]));
   fed_until_s_ = history_[e - 1].time_s;
   return Status::Ok();
 }
@@ -308,6 +316,7 @@ void ShadowModel::Reset() {
   pipeline_.reset();
   plan_.reset();
   fed_until_s_ = -1.0e300;
+  reconstructed_until_s_ = -1.0e300;
   last_time_s_ = -1.0e300;
 }
 

@@ -129,6 +129,8 @@ class ShadowModel {
   std::unique_ptr<RowPipeline> pipeline_;
   std::optional<InputReconstruction> plan_;  // made once plan_s of rows are held
   double fed_until_s_ = -1.0e300;            // the last row fed to the pipeline
+  // Rows of history_ up to this time hold their reconstructed inputs (measured_inputs: raw).
+  double reconstructed_until_s_ = -1.0e300;
   double start_time_s_ = 0.0;  // the pipeline's first row
   bool replaying_ = false;     // Rebuild is feeding held rows: no output
   std::deque<WindowEntry> window_;

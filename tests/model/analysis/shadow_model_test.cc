@@ -1,10 +1,10 @@
 // The shadow model beside a rig: fed a rig's measured samples, its error over the window is small
 // when it is the rig's model, and when the rig has a physical effect the shadow lacks, switching
-// that effect on (SetParams replays the held rows) cuts the error, a wrong one does not.
+// that effect on (SetParams replays the held rows) cuts the error, a wrong one does not; at the
+// lab's sensor noise the same wherever the noise allows it (the floor a perfect model scores).
 #include "model/analysis/shadow_model.h"
 
 #include <cmath>
-#include <cstdlib>
 #include <string>
 #include <numbers>
 #include <vector>
@@ -13,7 +13,6 @@
 
 #include "model/common/units.h"
 #include "model/effects/effect.h"
-#include "model/riglog/channels.h"
 #include "model/sim/sensor_noise.h"
 
 namespace mpdrig {
@@ -164,22 +163,27 @@ Scores Score(const std::vector<RigSample>& rig, const ShadowOptions& options,
 //   effect at least 2.2 times the floor: halving needs the effect's own error to be about twice
 //   the noise's, sqrt(without^2 - floor^2) >= sqrt(3) floor);
 // - with any wrong effect, not halve it.
-// pump_curve is invisible to a replay: the rig's FT2 already is the pump's delivered flow, which
-// the shadow replays; it scores at the floor without the effect.
-TEST(ShadowModel, AtLabNoiseTheRightEffectHalvesTheErrorWhereTheNoiseAllows) {
-  const std::vector<Excitation> heaves = {
-      {0.1, 0.25, 31.0, 10.0},  // the service's mystery-rig test's slower heave
-      {0.08, 0.4, 40.0, 15.0},
-      {0.1, 0.8, 40.0, 20.0}};
+// pump_curve cannot be shown by a replay: the rig's FT2 already is the pump's delivered flow,
+// which the shadow replays (the effect on counts the curve twice); only the last check holds it.
+struct Heave {
+  const char* name;
+  Excitation excitation;
+  int halved_at_least;  // cases (effect x seed) where the noise allows halving, measured
+};
+class ShadowAtLabNoise : public ::testing::TestWithParam<Heave> {};
+
+TEST_P(ShadowAtLabNoise, RightEffectHalvesTheErrorWhereTheNoiseAllowsWrongOneNever) {
+  const Excitation& heave = GetParam().excitation;
+  const char* h = GetParam().name;
   std::vector<std::string> effects;
   for (const EffectInfo* info : EffectCatalogue()) effects.emplace_back(info->name);
   int halved = 0;
-  for (std::size_t h = 0; h < heaves.size(); ++h) {
+  {
     for (const std::uint64_t seed : {1u, 2u}) {
       for (const std::string& effect : effects) {
         RigParams truth;
         ASSERT_TRUE(ApplyEffectSpec(&truth, effect).ok());
-        const std::vector<RigSample> clean = RigRun(truth, 50.0, heaves[h]);
+        const std::vector<RigSample> clean = RigRun(truth, 40.0, heave);
         std::vector<RigParams> candidates = {truth};
         std::vector<std::string> names = {effect};
         for (const std::string& wrong : effects) {
@@ -204,12 +208,16 @@ TEST(ShadowModel, AtLabNoiseTheRightEffectHalvesTheErrorWhereTheNoiseAllows) {
           if (scores.with[k] < best_wrong) best_wrong = scores.with[k], best_wrong_name = names[k];
         }
         const bool allows = scores.without >= 2.2 * floor;
-        std::printf("  heave %zu seed %llu %-22s without %.4f right %.4f floor %.4f ratio %.2f%s"
+        std::printf("  heave %s seed %llu %-22s without %.4f right %.4f floor %.4f ratio %.2f%s"
                     " | best wrong %s %.4f\n",
                     h, static_cast<unsigned long long>(seed), effect.c_str(), scores.without,
                     right, floor, right / scores.without, allows ? " (noise allows halving)" : "",
                     best_wrong_name.c_str(), best_wrong);
-        EXPECT_LE(right, 1.25 * floor) << effect << " heave " << h << " seed " << seed;
+        if (effect == "pump_curve") {
+          EXPECT_GT(scores.with[0], 0.5 * scores.without) << "pump_curve on, heave " << h;
+        } else {
+          EXPECT_LE(right, 1.25 * floor) << effect << " heave " << h << " seed " << seed;
+        }
         if (allows && effect != "pump_curve") {
           EXPECT_LE(right, 0.5 * scores.without) << effect << " heave " << h << " seed " << seed;
           ++halved;
@@ -220,8 +228,19 @@ TEST(ShadowModel, AtLabNoiseTheRightEffectHalvesTheErrorWhereTheNoiseAllows) {
       }
     }
   }
-  EXPECT_GE(halved, 6);  // the test would not test halving if the noise never allowed it
+  // The noise allows halving as often as measured (else this heave would test nothing of it).
+  EXPECT_GE(halved, GetParam().halved_at_least);
 }
+
+INSTANTIATE_TEST_SUITE_P(
+    Heaves, ShadowAtLabNoise,
+    ::testing::Values(
+        // The service test's slower heave: the noise allows no halving (floor ~0.14).
+        Heave{"slow_0p25Hz", {0.1, 0.25, 31.0, 10.0}, 0},
+        Heave{"mid_0p4Hz", {0.08, 0.4, 40.0, 15.0}, 2},  // choke_inertia, both seeds
+        // unsteady and helical friction, choke inertia, hose, sensor lag; both seeds.
+        Heave{"fast_0p8Hz", {0.1, 0.8, 40.0, 20.0}, 10}),
+    [](const auto& info) { return std::string(info.param.name); });
 
 TEST(ShadowModel, RefusesABadParameterAndKeepsItsModel) {
   auto shadow = ShadowModel::Create(RigParams(), Options());
