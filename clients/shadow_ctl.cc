@@ -104,9 +104,8 @@ int main(int argc, char** argv) {
   auto status_topic = dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, "mpdrig_shadow_status");
   if (!command_topic.ok()) return Fail(command_topic.status().message());
   if (!status_topic.ok()) return Fail(status_topic.status().message());
-  auto status =
-      dds::Reader<mpdrig_ShadowStatus>::Create(scope->sub(), status_topic->handle(),
-                                               dds::StatusQos());
+  auto status = dds::Reader<mpdrig_ShadowStatus>::Create(scope->sub(), status_topic->handle(),
+                                                         dds::StatusQos());
   if (!status.ok()) return Fail(status.status().message());
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   // The shadow's current status first (transient-local: it arrives once matched).
@@ -143,7 +142,8 @@ int main(int argc, char** argv) {
   dds::Qos qos;  // as the shadow's reader: reliable, keep all
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(), qos);
+  auto writer =
+      dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(), qos);
   if (!writer.ok()) return Fail(writer.status().message());
   // A command written before the shadow's reader has matched would be lost (volatile).
   for (dds_publication_matched_status_t matched{};
@@ -190,8 +190,9 @@ int main(int argc, char** argv) {
     });
     if (code >= 0) return code;
     if (fitting) {
-      until = std::max(until, deadline + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                             std::chrono::duration<double>(fit_timeout_s)));
+      until = std::max(until,
+                       deadline + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(fit_timeout_s)));
     }
   }
   if (fitting) return Fail("the fit did not end within --fit-timeout (it goes on in the shadow)");

@@ -153,10 +153,10 @@ Status ShadowModel::FeedUntil(double until_s) {
   }
   // A row is reconstructed once, when first fed (the inputs do not depend on the model): a
   // replay after a change feeds the very inputs the live model had.
-  const auto r = std::max(
-      b, static_cast<std::size_t>(std::lower_bound(history_.begin(), history_.end(),
-                                                   reconstructed_until_s_, by_time) -
-                                  history_.begin()));
+  const auto r =
+      std::max(b, static_cast<std::size_t>(std::lower_bound(history_.begin(), history_.end(),
+                                                            reconstructed_until_s_, by_time) -
+                                           history_.begin()));
   if (r < e) {
     // Two-sided where the rows allow: from the level windows' reach back (or the piston's, if
     // longer) to the look-ahead of the last row fed, as live.
@@ -305,7 +305,8 @@ Result<MeasuredLog> ShadowModel::HeldLog(double span_s) const {
     }
     if (measured) log.channels.push_back(std::move(channel));
   }
-  if (log.channels.empty()) return Status::Error("no compared channel is measured in the rows held");
+  if (log.channels.empty())
+    return Status::Error("no compared channel is measured in the rows held");
   ReconstructInputs(&log);
   return log;
 }

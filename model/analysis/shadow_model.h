@@ -50,9 +50,9 @@ struct ShadowOptions {
   // Reconstruct the inputs under their noise (false: replay them as measured, the piston smoothed
   // over smoothing_s).
   bool reconstruct_inputs = true;
-  double lookahead_s = 5.0;  // the model runs this far behind the rig (reconstructed inputs)
-  double plan_s = 10.0;      // rows held before the first plan of the reconstruction
-  double block_s = 0.25;     // the reconstruction runs on blocks of this much rig time
+  double lookahead_s = 5.0;    // the model runs this far behind the rig (reconstructed inputs)
+  double plan_s = 10.0;        // rows held before the first plan of the reconstruction
+  double block_s = 0.25;       // the reconstruction runs on blocks of this much rig time
   double reach_back_s = 20.0;  // the level windows' longest reach back (rows held for it)
   // Rows held at least this long (for a fit on the last minutes, HeldLog); a change replays only
   // the warm-up and the window of them.

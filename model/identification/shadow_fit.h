@@ -24,9 +24,9 @@ inline constexpr const char* kShadowFitBaseKeys[] = {"wave_speed_mps", "friction
 Result<std::vector<FitParameter>> ShadowFitParameters(const RigParams& params);
 
 struct ShadowFitOutcome {
-  RigParams params;          // `start` with the estimates written in
-  FitResult fit;             // keys, estimates, errors before and after on the rows
-  std::string summary;       // "c=851 m/s, f1=0.152 1/s, unsteady_friction.k=0.98, err a -> b"
+  RigParams params;     // `start` with the estimates written in
+  FitResult fit;        // keys, estimates, errors before and after on the rows
+  std::string summary;  // "c=851 m/s, f1=0.152 1/s, unsteady_friction.k=0.98, err a -> b"
 };
 
 // Fits on `log` (the shadow's rows, ShadowModel::HeldLog) from `start`.

@@ -76,18 +76,17 @@ int RunShadow(const ShadowArgs& args) {
                   "reconstructed under their noise, the model %g s behind the rig",
                   args.lookahead_s);
   }
-  std::fprintf(stderr,
-               "mpdrig shadow: rig %s on DDS domain %d; %s; window %g s after a %g s warm-up\n"
-               "  inputs: %s\n"
-               "  topics: mpdrig_sensors (in), mpdrig_shadow_command (in), "
-               "mpdrig_shadow_sensors, mpdrig_shadow_status (out)\n  security: %s\n",
-               args.rig_id.c_str(), args.domain, args.model.Describe(*params).c_str(),
-               args.window_s, args.warmup_s,
-               inputs,
-               args.security.empty()
-                   ? "none"
-                   : ("DDS Security with " + args.security + ", partition rig." + args.rig_id)
-                         .c_str());
+  std::fprintf(
+      stderr,
+      "mpdrig shadow: rig %s on DDS domain %d; %s; window %g s after a %g s warm-up\n"
+      "  inputs: %s\n"
+      "  topics: mpdrig_sensors (in), mpdrig_shadow_command (in), "
+      "mpdrig_shadow_sensors, mpdrig_shadow_status (out)\n  security: %s\n",
+      args.rig_id.c_str(), args.domain, args.model.Describe(*params).c_str(), args.window_s,
+      args.warmup_s, inputs,
+      args.security.empty()
+          ? "none"
+          : ("DDS Security with " + args.security + ", partition rig." + args.rig_id).c_str());
   const Status run = (*shadow)->Run(g_stop);
   if (!run.ok()) return Fail(name, run);
   std::fprintf(stderr, "mpdrig shadow: %llu samples, error over the last %g s: %.4f\n",

@@ -58,7 +58,8 @@ struct ShadowService::Impl {
   std::unique_ptr<ShadowModel> model;
   std::vector<std::string> parameters;  // "key=value", as set
   std::optional<dds::Domain> domain;
-  dds::Entity participant, publisher, subscriber, sensors_topic, shadow_sensors_topic, status_topic, command_topic;
+  dds::Entity participant, publisher, subscriber, sensors_topic, shadow_sensors_topic, status_topic,
+      command_topic;
   std::optional<dds::Reader<mpdrig_RigSensors>> sensors;
   std::optional<dds::Writer<mpdrig_RigSensors>> shadow_sensors;
   std::optional<dds::Writer<mpdrig_ShadowStatus>> status;
@@ -68,7 +69,7 @@ struct ShadowService::Impl {
   std::uint64_t rejected = 0;
   std::uint64_t last_command_id = 0;
   std::string last_rejection;
-  std::string fit_state;  // ShadowStatus.fit_state
+  std::string fit_state;         // ShadowStatus.fit_state
   std::shared_ptr<FitSlot> fit;  // the fit running, if any
   std::thread fit_thread;
   double fit_error_at_start = std::numeric_limits<double>::quiet_NaN();
@@ -88,8 +89,7 @@ struct ShadowService::Impl {
     for (const FitParameter& p : *parameters) keys += (keys.empty() ? "" : ", ") + p.key;
     char text[160];
     std::snprintf(text, sizeof text, "running: %s on the last %.0f s of rows (t = %.1f s)",
-                  keys.c_str(), log->time_s().back() - log->time_s().front(),
-                  model->last_time_s());
+                  keys.c_str(), log->time_s().back() - log->time_s().front(), model->last_time_s());
     fit_state = text;
     fit = std::make_shared<FitSlot>();
     fit_error_at_start = model->error();
@@ -364,8 +364,8 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
   MPDRIG_RETURN_IF_ERROR(
       topic(&mpdrig_ShadowCommand_desc, kShadowCommandTopic, &impl->command_topic));
   // Keep all: the model needs every sample in order (a gap is a hold of the inputs).
-  auto sensors =
-      dds::Reader<mpdrig_RigSensors>::Create(sub, impl->sensors_topic.handle(), dds::SensorQos(true));
+  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(sub, impl->sensors_topic.handle(),
+                                                        dds::SensorQos(true));
   if (!sensors.ok()) return sensors.status();
   impl->sensors.emplace(std::move(sensors).value());
   auto shadow_sensors = dds::Writer<mpdrig_RigSensors>::Create(

@@ -7,8 +7,9 @@
 //                           effects and parameters, the last change (status QoS);
 // and takes mpdrig_shadow_command (effect on/off, set a parameter, reset, fit now; reliable, keep
 // all: a command is not state). Fit now runs on a worker thread (ShadowStatus.fit_state says
-// "running: ...", then "done: ..." or "failed: ..."); a second one while it runs is refused. A bad command is refused and counted on the shadow's status; the
-// shadow runs on. Optionally writes the error over time as CSV: time_s, error, <channel>_nrmse.
+// "running: ...", then "done: ..." or "failed: ..."); a second one while it runs is refused. A bad
+// command is refused and counted on the shadow's status; the shadow runs on. Optionally writes the
+// error over time as CSV: time_s, error, <channel>_nrmse.
 #pragma once
 
 #include <atomic>

@@ -596,14 +596,14 @@ TEST_F(SecureClass, StudentGetsAPrivateRigWithinTheServicesLimits) {
 TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
   StartService();
   const std::string shadow_log = Dir("shadow.log");
-  Process shadow({MPDRIG_EXE, "shadow", "--security", Dir("alice"), "--rig", "alice", "--domain",
-                  std::to_string(domain_), "--warmup-s", "1", "--window-s", "2", "--duration",
-                  "60"},
-                 shadow_log);
+  Process shadow(
+      {MPDRIG_EXE, "shadow", "--security", Dir("alice"), "--rig", "alice", "--domain",
+       std::to_string(domain_), "--warmup-s", "1", "--window-s", "2", "--duration", "60"},
+      shadow_log);
   ASSERT_TRUE(shadow.started());
   auto ctl = [&](const std::string& who, const std::vector<std::string>& extra,
                  const std::string& out) {
-    std::vector<std::string> args{SHADOW_CTL_EXE, "--rig", "alice", "--domain",
+    std::vector<std::string> args{SHADOW_CTL_EXE,          "--rig",     "alice", "--domain",
                                   std::to_string(domain_), "--timeout", "20"};
     if (!who.empty()) args.insert(args.end(), {"--security", Dir(who.c_str())});
     args.insert(args.end(), extra.begin(), extra.end());
@@ -612,7 +612,8 @@ TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
   };
   const std::string alice_out = Dir("ctl-alice.txt");
   EXPECT_EQ(ctl("alice", {"--effect-on", "unsteady_friction"}, alice_out), 0)
-      << ReadFile(alice_out) << "\nshadow said:\n" << ReadFile(shadow_log);
+      << ReadFile(alice_out) << "\nshadow said:\n"
+      << ReadFile(shadow_log);
   EXPECT_NE(ReadFile(alice_out).find("effects: [unsteady_friction"), std::string::npos)
       << ReadFile(alice_out);
   // Bob reads it (alice's rig is one he watches) but cannot switch it.
@@ -624,7 +625,7 @@ TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
       << ReadFile(bob_switch);
   // Without security: no answer at all.
   const std::string intruder = Dir("ctl-intruder.txt");
-  std::vector<std::string> args{SHADOW_CTL_EXE, "--rig",     "alice", "--domain",
+  std::vector<std::string> args{SHADOW_CTL_EXE,          "--rig",     "alice", "--domain",
                                 std::to_string(domain_), "--timeout", "3"};
   Process open(args, intruder);
   EXPECT_EQ(open.Wait(15.0), 1) << ReadFile(intruder);

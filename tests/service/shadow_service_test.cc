@@ -261,8 +261,7 @@ TEST_F(ShadowServiceTest, ErrorHalvesWithTheHiddenEffectAndNotWithAWrongOne) {
   const double b1 = ValueIn(fitted.fit_state, "choke_inertia.b1_per_m");
   const double c = ValueIn(fitted.fit_state, "c");
   EXPECT_NEAR(b1, 5.0e5, 0.3 * 5.0e5) << fitted.fit_state;  // the effect's default: the truth
-  EXPECT_NEAR(c, RigParams().wave_speed_mps, 0.03 * RigParams().wave_speed_mps)
-      << fitted.fit_state;
+  EXPECT_NEAR(c, RigParams().wave_speed_mps, 0.03 * RigParams().wave_speed_mps) << fitted.fit_state;
   EXPECT_LT(fitted.error, 0.8 * weak.error) << fitted.fit_state;
   std::printf("  fit now from b1 = 1.5e5: error %.4f -> %.4f; %s\n", weak.error, fitted.error,
               fitted.fit_state.c_str());

@@ -5,8 +5,8 @@
 #include "model/analysis/shadow_model.h"
 
 #include <cmath>
-#include <string>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -70,8 +70,8 @@ std::vector<RigSample> LabNoise(std::vector<RigSample> rig, std::uint64_t seed,
     const RigSample truth = s;
     noise.MeasureSample(&s);
     if (!inputs_too) {
-      for (Channel c : {Channel::kPistonPosition, Channel::kChokePosition, Channel::kFT2,
-                        Channel::kC1})
+      for (Channel c :
+           {Channel::kPistonPosition, Channel::kChokePosition, Channel::kFT2, Channel::kC1})
         s.values[Index(c)] = truth.values[Index(c)];
     }
   }
@@ -208,11 +208,12 @@ TEST_P(ShadowAtLabNoise, RightEffectHalvesTheErrorWhereTheNoiseAllowsWrongOneNev
           if (scores.with[k] < best_wrong) best_wrong = scores.with[k], best_wrong_name = names[k];
         }
         const bool allows = scores.without >= 2.2 * floor;
-        std::printf("  heave %s seed %llu %-22s without %.4f right %.4f floor %.4f ratio %.2f%s"
-                    " | best wrong %s %.4f\n",
-                    h, static_cast<unsigned long long>(seed), effect.c_str(), scores.without,
-                    right, floor, right / scores.without, allows ? " (noise allows halving)" : "",
-                    best_wrong_name.c_str(), best_wrong);
+        std::printf(
+            "  heave %s seed %llu %-22s without %.4f right %.4f floor %.4f ratio %.2f%s"
+            " | best wrong %s %.4f\n",
+            h, static_cast<unsigned long long>(seed), effect.c_str(), scores.without, right, floor,
+            right / scores.without, allows ? " (noise allows halving)" : "",
+            best_wrong_name.c_str(), best_wrong);
         if (effect == "pump_curve") {
           EXPECT_GT(scores.with[0], 0.5 * scores.without) << "pump_curve on, heave " << h;
         } else {

@@ -75,39 +75,39 @@ class ShadowFit : public ::testing::TestWithParam<Case> {};
 TEST_P(ShadowFit, FitNowBringsTheWrongParameterBackAndTheErrorDown) {
   const Case& c = GetParam();
   for (const std::uint64_t seed : {7u, 8u}) {
-  const Excitation& excitation = c.excitation;
-  RigParams truth;
-  if (*c.truth_effect != '\0') {
-    ASSERT_TRUE(ApplyEffectSpec(&truth, c.truth_effect).ok());
-  }
-  RigParams start = truth;
-  ASSERT_TRUE(ApplyOverride(&start, c.start_set).ok()) << c.start_set;
-  const auto true_value = GetParamValue(truth, c.key);
-  ASSERT_TRUE(true_value.ok());
+    const Excitation& excitation = c.excitation;
+    RigParams truth;
+    if (*c.truth_effect != '\0') {
+      ASSERT_TRUE(ApplyEffectSpec(&truth, c.truth_effect).ok());
+    }
+    RigParams start = truth;
+    ASSERT_TRUE(ApplyOverride(&start, c.start_set).ok()) << c.start_set;
+    const auto true_value = GetParamValue(truth, c.key);
+    ASSERT_TRUE(true_value.ok());
 
-  ShadowOptions options;
-  options.simulation.cells = kCells;
-  options.window_s = 10.0;
-  options.warmup_s = 20.0;
-  options.history_s = 60.0;
-  auto shadow = ShadowModel::Create(start, options);
-  ASSERT_TRUE(shadow.ok());
-  for (const RigSample& s : NoisyRig(truth, 60.0, excitation, seed)) {
-    ASSERT_TRUE((*shadow)->Push(s).ok());
-  }
-  const double before = (*shadow)->error();
-  auto log = (*shadow)->HeldLog(60.0);
-  ASSERT_TRUE(log.ok()) << log.status().message();
-  auto fit = FitShadowParameters(std::move(log).value(), start, options.simulation);
-  ASSERT_TRUE(fit.ok()) << fit.status().message();
-  const auto estimate = GetParamValue(fit->params, c.key);
-  ASSERT_TRUE(estimate.ok());
-  ASSERT_TRUE((*shadow)->SetParams(fit->params).ok());
-  const double after = (*shadow)->error();
-  std::printf("  %s: %s, truth %g; shadow error %.4f -> %.4f\n", c.name, fit->summary.c_str(),
-              *true_value, before, after);
-  EXPECT_NEAR(*estimate, *true_value, c.tolerance * std::abs(*true_value)) << fit->summary;
-  EXPECT_LT(after, 0.7 * before) << fit->summary;
+    ShadowOptions options;
+    options.simulation.cells = kCells;
+    options.window_s = 10.0;
+    options.warmup_s = 20.0;
+    options.history_s = 60.0;
+    auto shadow = ShadowModel::Create(start, options);
+    ASSERT_TRUE(shadow.ok());
+    for (const RigSample& s : NoisyRig(truth, 60.0, excitation, seed)) {
+      ASSERT_TRUE((*shadow)->Push(s).ok());
+    }
+    const double before = (*shadow)->error();
+    auto log = (*shadow)->HeldLog(60.0);
+    ASSERT_TRUE(log.ok()) << log.status().message();
+    auto fit = FitShadowParameters(std::move(log).value(), start, options.simulation);
+    ASSERT_TRUE(fit.ok()) << fit.status().message();
+    const auto estimate = GetParamValue(fit->params, c.key);
+    ASSERT_TRUE(estimate.ok());
+    ASSERT_TRUE((*shadow)->SetParams(fit->params).ok());
+    const double after = (*shadow)->error();
+    std::printf("  %s: %s, truth %g; shadow error %.4f -> %.4f\n", c.name, fit->summary.c_str(),
+                *true_value, before, after);
+    EXPECT_NEAR(*estimate, *true_value, c.tolerance * std::abs(*true_value)) << fit->summary;
+    EXPECT_LT(after, 0.7 * before) << fit->summary;
   }
 }
 
@@ -118,8 +118,12 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Case{"wave_speed", "", "wave_speed_mps=1100", "wave_speed_mps", 0.03},
                       Case{"friction", "", "friction_f1_per_s=0.6", "friction_f1_per_s", 0.25},
                       // A faster heave, where the transmitters' lag shows above the noise.
-                      Case{"effect_strength", "sensor_lag", "sensor_lag.time_constant_s=0.01",
-                           "sensor_lag.time_constant_s", 0.3, {0.08, 0.4, 40.0, 15.0}}),
+                      Case{"effect_strength",
+                           "sensor_lag",
+                           "sensor_lag.time_constant_s=0.01",
+                           "sensor_lag.time_constant_s",
+                           0.3,
+                           {0.08, 0.4, 40.0, 15.0}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(ShadowFitParameters, BaseKeysThenTheActiveEffectsStrengths) {
