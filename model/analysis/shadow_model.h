@@ -1,7 +1,6 @@
 // The model run beside a rig, in step with it (`mpdrig shadow`): each measured sample's inputs
 // (piston position, choke position, FT2, C1) drive the model as a replayed log's do
-// (RowPipeline: the piston smoothed over smoothing_s and differentiated, the choke used as
-// measured), and the model's channels are compared with the measured ones over a sliding window
+// (RowPipeline), and the model's channels are compared with the measured ones over a sliding window
 // with compare's metrics (compare.h):
 //   NRMSE_k = ||y_k - yhat_k|| / ||y_k - mean(y_k)||   over the window, per compared channel,
 //   error   = mean of the defined NRMSE_k                (as compare's `error`).
@@ -13,7 +12,10 @@
 // model/sim/log_inputs.h): a delayed, two-sided reconstruction over the rows held, whose windows
 // reach back over the held rows and ahead over the look-ahead. The plan (each input's noise, the
 // piston's band) is made from the first plan_s of rows; the level windows reach back at most
-// reach_back_s (the rows held for it) and ahead the look-ahead.
+// reach_back_s (the rows held for it) and ahead the look-ahead. Each row is reconstructed once,
+// when first fed, so a replay after a change feeds the very inputs the live model had (the error
+// after a change compares with the one before). Without reconstruction the inputs are used as
+// measured, the piston smoothed over smoothing_s before it is differentiated, with no delay.
 //
 // A change to the model (an effect on or off, a parameter) replays the rows held from the last
 // warmup_s + window_s with the new model, so its error over the window is known at once, as if
