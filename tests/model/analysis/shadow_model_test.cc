@@ -256,6 +256,20 @@ TEST(ShadowModel, RefusesABadParameterAndKeepsItsModel) {
   gap.values.fill(std::nan(""));
   EXPECT_TRUE((*shadow)->Push(gap).ok());
   EXPECT_EQ((*shadow)->skipped_samples(), 1);
+  // Nothing held: no log to fit on, with the reason.
+  auto held = (*shadow)->HeldLog(60.0);
+  ASSERT_FALSE(held.ok());
+  EXPECT_NE(held.status().message().find("holds 0 rows"), std::string::npos)
+      << held.status().message();
+  // A look-ahead or reconstruction reach out of range is refused, saying which.
+  ShadowOptions bad_options = Options();
+  bad_options.lookahead_s = -1.0;
+  auto refused = ShadowModel::Create(RigParams(), bad_options);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("look-ahead"), std::string::npos);
+  bad_options = Options();
+  bad_options.reach_back_s = 1.0e3;
+  EXPECT_FALSE(ShadowModel::Create(RigParams(), bad_options).ok());
 }
 
 }  // namespace
