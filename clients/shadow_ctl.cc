@@ -6,7 +6,9 @@
 //   shadow_ctl --rig rig-1 --set wave_speed_mps=900
 //   shadow_ctl --rig rig-1 --effect-off unsteady_friction
 //   shadow_ctl --rig rig-1 --reset
+//   shadow_ctl --rig rig-1 --fit-now              # waits for the fit (up to --fit-timeout)
 //   shadow_ctl --rig rig-1                       # only print the shadow's status
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -17,6 +19,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 
 namespace {
 
@@ -43,6 +46,7 @@ void Print(const mpdrig_ShadowStatus& s) {
     std::printf("  last change: %s at t = %.2f s (error then %.4f)\n", s.last_change,
                 s.last_change_sim_time_s, s.error_at_last_change);
   }
+  if (s.fit_state[0] != '\0') std::printf("  fit: %s\n", s.fit_state);
   if (s.rejected_commands > 0) {
     std::printf("  %llu commands refused, the last: %s\n",
                 static_cast<unsigned long long>(s.rejected_commands), s.last_rejection);
@@ -57,8 +61,9 @@ int main(int argc, char** argv) {
   int domain = 0;
   std::string dds_config;
   std::string effect_on, effect_off, set;
-  bool reset = false;
-  double timeout_s = 10.0;
+  bool reset = false, fit_now = false;
+  double timeout_s = 10.0, fit_timeout_s = 600.0;
+  std::string security;
   app.add_option("--rig", rig_id, "the rig the shadow follows")->capture_default_str();
   app.add_option("--domain", domain, "DDS domain id")
       ->check(CLI::Range(0, 232))
@@ -68,9 +73,20 @@ int main(int argc, char** argv) {
   auto* off = app.add_option("--effect-off", effect_off, "switch an effect off: NAME");
   auto* param = app.add_option("--set", set, "set a parameter: KEY=VALUE (EFFECT.KEY too)");
   auto* again = app.add_flag("--reset", reset, "back to the model the shadow started with");
-  on->excludes(off, param, again);
-  off->excludes(param, again);
-  param->excludes(again);
+  auto* fit = app.add_flag("--fit-now", fit_now,
+                           "fit c, f1 and the active effects' strengths on the shadow's last "
+                           "minutes of rows, in the background; waits for the result");
+  on->excludes(off, param, again, fit);
+  off->excludes(param, again, fit);
+  param->excludes(again, fit);
+  again->excludes(fit);
+  app.add_option("--fit-timeout", fit_timeout_s, "with --fit-now: wait this long for the fit [s]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--security", security,
+                 "DDS Security: an identity directory of a class (deploy/security/make-class OUT "
+                 "NAME: OUT/NAME) allowed to use the rig's shadow; its topics are then in "
+                 "partition rig.<rig id>. Refuses an invalid directory, saying why");
   app.add_option("--timeout", timeout_s, "give up after this long [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -80,22 +96,17 @@ int main(int argc, char** argv) {
   auto created =
       dds::Domain::Create(domain, dds_config.empty() ? dds::LoopbackConfig() : dds_config);
   if (!created.ok()) return Fail(created.status().message());
-  auto participant = dds::CreateParticipant(domain);
-  if (!participant.ok()) return Fail(participant.status().message());
-  const dds_entity_t p = participant->handle();
+  // With --security the shadow's topics are in its rig's partition.
+  auto scope = dds::CreateClientScope(domain, security, rig_id);
+  if (!scope.ok()) return Fail(scope.status().message());
+  const dds_entity_t p = scope->participant.handle();
   auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
   auto status_topic = dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, "mpdrig_shadow_status");
   if (!command_topic.ok()) return Fail(command_topic.status().message());
   if (!status_topic.ok()) return Fail(status_topic.status().message());
-  auto status =
-      dds::Reader<mpdrig_ShadowStatus>::Create(p, status_topic->handle(), dds::StatusQos());
+  auto status = dds::Reader<mpdrig_ShadowStatus>::Create(scope->sub(), status_topic->handle(),
+                                                         dds::StatusQos());
   if (!status.ok()) return Fail(status.status().message());
-  dds::Qos qos;  // as the shadow's reader: reliable, keep all
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), qos);
-  if (!writer.ok()) return Fail(writer.status().message());
-
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
   // The shadow's current status first (transient-local: it arrives once matched).
   bool have = false;
@@ -122,9 +133,27 @@ int main(int argc, char** argv) {
     action = mpdrig_SHADOW_SET, argument = set;
   } else if (reset) {
     action = mpdrig_SHADOW_RESET;
+  } else if (fit_now) {
+    action = mpdrig_SHADOW_FIT_NOW;
   } else {
     return 0;
   }
+  // Only now: reading the status needs no right to command (a watcher under security has none).
+  dds::Qos qos;  // as the shadow's reader: reliable, keep all
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  auto writer =
+      dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(), qos);
+  if (!writer.ok()) return Fail(writer.status().message());
+  // A command written before the shadow's reader has matched would be lost (volatile).
+  for (dds_publication_matched_status_t matched{};
+       dds_get_publication_matched_status(writer->handle(), &matched) == DDS_RETCODE_OK &&
+       matched.current_count == 0;) {
+    if (std::chrono::steady_clock::now() >= deadline)
+      return Fail("the shadow's command reader did not match within --timeout");
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+
   mpdrig_ShadowCommand command{};
   command.rig_id = rig_id.data();
   command.command_id =
@@ -133,23 +162,39 @@ int main(int argc, char** argv) {
   command.argument = argument.data();
   auto written = writer->Write(command);
   if (!written.ok()) return Fail(written.message());
-  // The answer: the status that names this command.
-  while (std::chrono::steady_clock::now() < deadline) {
+  // The answer: the status that names this command; for a fit, then the one that ends it.
+  bool fitting = false;
+  auto until = deadline;
+  while (std::chrono::steady_clock::now() < until) {
     auto ready = status->Wait(DDS_MSECS(100));
     if (!ready.ok()) return Fail(ready.status().message());
     int code = -1;
     (void)status->TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-      if (rig_id != s.rig_id || s.last_command_id != command.command_id) return;
+      if (code >= 0 || rig_id != s.rig_id || s.last_command_id != command.command_id) return;
+      const std::string fit_state = s.fit_state;
       if (s.rejected_commands > before_rejected) {
         std::printf("refused: %s\n", s.last_rejection);
         code = 1;
-      } else {
+      } else if (action == mpdrig_SHADOW_FIT_NOW && fit_state.rfind("running:", 0) == 0) {
+        if (!fitting) std::printf("fit %s\n", s.fit_state);
+        fitting = true;
+      } else if (action == mpdrig_SHADOW_FIT_NOW && fitting) {
+        std::printf("after the fit:\n");
+        Print(s);
+        code = fit_state.rfind("done:", 0) == 0 ? 0 : 1;
+      } else if (action != mpdrig_SHADOW_FIT_NOW) {
         std::printf("after the change:\n");
         Print(s);
         code = 0;
       }
     });
     if (code >= 0) return code;
+    if (fitting) {
+      until = std::max(until,
+                       deadline + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(fit_timeout_s)));
+    }
   }
+  if (fitting) return Fail("the fit did not end within --fit-timeout (it goes on in the shadow)");
   return Fail("the shadow did not answer the command within --timeout");
 }

@@ -27,6 +27,10 @@ struct ShadowArgs {
   double warmup_s = kReplayWarmupS;
   double smoothing_s = 0.05;
   double status_period_s = 0.5;
+  bool raw_inputs = false;
+  double lookahead_s = 5.0;
+  double fit_window_s = 180.0;
+  std::string security;
 };
 
 int RunShadow(const ShadowArgs& args) {
@@ -40,12 +44,16 @@ int RunShadow(const ShadowArgs& args) {
   model.window_s = args.window_s;
   model.warmup_s = args.warmup_s;
   model.smoothing_s = args.smoothing_s;
+  model.reconstruct_inputs = !args.raw_inputs;
+  model.lookahead_s = args.lookahead_s;
   service::ShadowServeOptions serve;
   serve.rig_id = args.rig_id;
   serve.domain = static_cast<dds_domainid_t>(args.domain);
   serve.duration_s = args.duration_s;
   serve.status_period_s = args.status_period_s;
   serve.log_path = args.log_path;
+  serve.security_dir = args.security;
+  serve.fit_window_s = args.fit_window_s;
   if (!args.dds_config.empty()) {
     std::ifstream file(args.dds_config);
     if (file) {
@@ -60,12 +68,25 @@ int RunShadow(const ShadowArgs& args) {
   if (!shadow.ok()) return Fail(name, shadow.status());
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
-  std::fprintf(stderr,
-               "mpdrig shadow: rig %s on DDS domain %d; %s; window %g s after a %g s warm-up\n"
-               "  topics: mpdrig_sensors (in), mpdrig_shadow_command (in), "
-               "mpdrig_shadow_sensors, mpdrig_shadow_status (out)\n",
-               args.rig_id.c_str(), args.domain, args.model.Describe(*params).c_str(),
-               args.window_s, args.warmup_s);
+  char inputs[160];
+  std::snprintf(inputs, sizeof inputs, "%s",
+                args.raw_inputs ? "as measured (--raw-inputs)" : "reconstructed under their noise");
+  if (!args.raw_inputs) {
+    std::snprintf(inputs, sizeof inputs,
+                  "reconstructed under their noise, the model %g s behind the rig",
+                  args.lookahead_s);
+  }
+  std::fprintf(
+      stderr,
+      "mpdrig shadow: rig %s on DDS domain %d; %s; window %g s after a %g s warm-up\n"
+      "  inputs: %s\n"
+      "  topics: mpdrig_sensors (in), mpdrig_shadow_command (in), "
+      "mpdrig_shadow_sensors, mpdrig_shadow_status (out)\n  security: %s\n",
+      args.rig_id.c_str(), args.domain, args.model.Describe(*params).c_str(), args.window_s,
+      args.warmup_s, inputs,
+      args.security.empty()
+          ? "none"
+          : ("DDS Security with " + args.security + ", partition rig." + args.rig_id).c_str());
   const Status run = (*shadow)->Run(g_stop);
   if (!run.ok()) return Fail(name, run);
   std::fprintf(stderr, "mpdrig shadow: %llu samples, error over the last %g s: %.4f\n",
@@ -82,11 +103,16 @@ void AddShadowCommand(CLI::App* app, int* exit_code) {
       app->add_subcommand("shadow", "Run the model beside a live rig and publish its error");
   command->footer(
       "Subscribes to a rig's mpdrig_sensors, replays its measured inputs (piston, choke, FT2, C1)\n"
-      "through the model in step with it, and publishes the model's channels on\n"
+      "through the model beside it, and publishes the model's channels on\n"
       "mpdrig_shadow_sensors and its error over a sliding window (compare's NRMSE per channel\n"
       "and their mean) on mpdrig_shadow_status. mpdrig_shadow_command switches an effect on or\n"
-      "off, sets a parameter or resets it; the rows held (warm-up + window) are replayed with\n"
-      "the changed model, so the error answers within the window.\n"
+      "off, sets a parameter, resets it, or fits now (c, f1 and the active effects' strengths\n"
+      "on the last --fit-window-s, in the background; applied when done); the rows held\n"
+      "(warm-up + window) are replayed with the changed model, so the error answers at once.\n"
+      "The inputs are measurements, as noisy as the outputs: by default the shadow reconstructs\n"
+      "them under their noise as compare does (each input's noise and the piston's band from\n"
+      "the first 10 s of rows) and so runs --lookahead-s behind the rig; --raw-inputs replays\n"
+      "them as measured (the choke's and FT2's noise then comes back as pressure noise).\n"
       "  mpdrig shadow --rig rig-1 --log error.csv\n"
       "  mpdrig shadow --rig rig-1 --effect unsteady_friction --duration 120");
   args->model.AddAll(command);
@@ -121,6 +147,26 @@ void AddShadowCommand(CLI::App* app, int* exit_code) {
                    "status (and a --log row) every this much rig time [s]")
       ->check(CLI::Range(0.01, 60.0))
       ->capture_default_str();
+  command->add_flag("--raw-inputs", args->raw_inputs,
+                    "replay the inputs as measured (the piston smoothed) instead of reconstructed "
+                    "under their noise; the model then keeps pace with the rig");
+  command
+      ->add_option("--lookahead-s", args->lookahead_s,
+                   "reconstructed inputs: the model runs this far behind the rig, so each input "
+                   "is smoothed over the samples on both sides [s]")
+      ->check(CLI::Range(0.0, 60.0))
+      ->capture_default_str();
+  command
+      ->add_option("--fit-window-s", args->fit_window_s,
+                   "fit now (shadow_ctl --fit-now) fits c, f1 and the active effects' strengths "
+                   "on the rows of the last this many seconds, held for it [s]")
+      ->check(CLI::Range(10.0, 3600.0))
+      ->capture_default_str();
+  command->add_option(
+      "--security", args->security,
+      "DDS Security: an identity directory of a class (deploy/security/make-class OUT NAME: "
+      "OUT/NAME) allowed to read the rig; the shadow's topics are then in the rig's partition "
+      "rig.<rig id>. Refuses an invalid directory, saying why");
   command->callback([args, exit_code]() { *exit_code = RunShadow(*args); });
 }
 

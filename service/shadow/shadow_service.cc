@@ -1,15 +1,20 @@
 #include "service/shadow/shadow_service.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #include "model/effects/effect.h"
+#include "model/identification/shadow_fit.h"
 #include "mpdrig.h"
+#include "service/dds/security.h"
 #include "service/rig/wire.h"
 
 namespace mpdrig::service {
@@ -36,6 +41,15 @@ dds_sequence_string StringSequence(std::vector<std::string>* texts, std::vector<
   return seq;
 }
 
+// A fit on its worker thread: what it computes, shared with it (it owns nothing of the service, so
+// a service that stops while it runs can leave it to finish alone).
+struct FitSlot {
+  std::mutex mutex;
+  bool finished = false;
+  Status status = Status::Ok();
+  ShadowFitOutcome outcome;
+};
+
 }  // namespace
 
 struct ShadowService::Impl {
@@ -44,7 +58,8 @@ struct ShadowService::Impl {
   std::unique_ptr<ShadowModel> model;
   std::vector<std::string> parameters;  // "key=value", as set
   std::optional<dds::Domain> domain;
-  dds::Entity participant, sensors_topic, shadow_sensors_topic, status_topic, command_topic;
+  dds::Entity participant, publisher, subscriber, sensors_topic, shadow_sensors_topic, status_topic,
+      command_topic;
   std::optional<dds::Reader<mpdrig_RigSensors>> sensors;
   std::optional<dds::Writer<mpdrig_RigSensors>> shadow_sensors;
   std::optional<dds::Writer<mpdrig_ShadowStatus>> status;
@@ -54,7 +69,79 @@ struct ShadowService::Impl {
   std::uint64_t rejected = 0;
   std::uint64_t last_command_id = 0;
   std::string last_rejection;
-  std::string fit_state;  // ShadowStatus.fit_state
+  std::string fit_state;         // ShadowStatus.fit_state
+  std::shared_ptr<FitSlot> fit;  // the fit running, if any
+  std::thread fit_thread;
+  double fit_error_at_start = std::numeric_limits<double>::quiet_NaN();
+
+  ~Impl() {
+    // A fit cannot be interrupted: it finishes alone, on its own copies.
+    if (fit_thread.joinable()) fit_thread.detach();
+  }
+
+  Status StartFit() {
+    if (fit) return Status::Error("a fit is running (" + fit_state + "); wait for it");
+    auto log = model->HeldLog(options.fit_window_s);
+    if (!log.ok()) return log.status();
+    auto parameters = ShadowFitParameters(model->params());
+    if (!parameters.ok()) return parameters.status();
+    std::string keys;
+    for (const FitParameter& p : *parameters) keys += (keys.empty() ? "" : ", ") + p.key;
+    char text[160];
+    std::snprintf(text, sizeof text, "running: %s on the last %.0f s of rows (t = %.1f s)",
+                  keys.c_str(), log->time_s().back() - log->time_s().front(), model->last_time_s());
+    fit_state = text;
+    fit = std::make_shared<FitSlot>();
+    fit_error_at_start = model->error();
+    if (fit_thread.joinable()) fit_thread.join();
+    fit_thread = std::thread([slot = fit, log = std::move(log).value(), start = model->params(),
+                              simulation = model->options().simulation,
+                              iterations = options.fit_max_iterations]() mutable {
+      auto outcome = FitShadowParameters(std::move(log), start, simulation, iterations);
+      std::lock_guard<std::mutex> lock(slot->mutex);
+      if (outcome.ok()) {
+        slot->outcome = std::move(outcome).value();
+      } else {
+        slot->status = outcome.status();
+      }
+      slot->finished = true;
+    });
+    return Status::Ok();
+  }
+
+  // A finished fit: its estimates written into the model as it is now (an effect switched off
+  // meanwhile keeps off; its estimate is dropped) and replayed, as a SetParams.
+  void FinishFit() {
+    if (!fit) return;
+    {
+      std::lock_guard<std::mutex> lock(fit->mutex);
+      if (!fit->finished) return;
+    }
+    fit_thread.join();
+    std::shared_ptr<FitSlot> done = std::move(fit);
+    fit.reset();
+    if (!done->status.ok()) {
+      fit_state = "failed: " + done->status.message();
+      next_status_s = -std::numeric_limits<double>::infinity();
+      return;
+    }
+    RigParams params = model->params();
+    const FitResult& result = done->outcome.fit;
+    for (std::size_t j = 0; j < result.keys.size(); ++j) {
+      (void)SetParamValue(&params, result.keys[j], result.estimates[j]);
+    }
+    const double before = model->error();
+    const Status applied = model->SetParams(params);
+    if (!applied.ok()) {
+      fit_state = "failed: the fitted parameters were refused: " + applied.message();
+    } else {
+      fit_state = "done: " + done->outcome.summary;
+      last_change = "fit now: " + done->outcome.summary;
+      last_change_s = model->last_time_s();
+      error_at_change = before;
+    }
+    next_status_s = -std::numeric_limits<double>::infinity();
+  }
   std::string last_change;
   double last_change_s = -1.0;
   double error_at_change = std::numeric_limits<double>::quiet_NaN();
@@ -101,9 +188,16 @@ struct ShadowService::Impl {
         params = initial_params;
         change = "reset";
         break;
-      case mpdrig_SHADOW_FIT_NOW:
-        status = Status::Error("fit now is not built yet");
-        break;
+      case mpdrig_SHADOW_FIT_NOW: {
+        // Nothing changes now: the fit's answer comes later (fit_state, then a change).
+        const Status started = StartFit();
+        if (!started.ok()) {
+          Refuse(std::string(kShadowCommandTopic) + " refused: fit now: " + started.message());
+        } else {
+          next_status_s = -std::numeric_limits<double>::infinity();
+        }
+        return;
+      }
       default:
         status =
             Status::Error("unknown action " + std::to_string(static_cast<int>(command.action)));
@@ -220,8 +314,14 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
   if (!(options.duration_s >= 0.0) || !(options.status_period_s > 0.0)) {
     return Status::Error("shadow: duration must be >= 0 and the status period > 0");
   }
+  if (!(options.fit_window_s > 0.0 && options.fit_window_s <= 3600.0) ||
+      options.fit_max_iterations < 1) {
+    return Status::Error("shadow: the fit window must be in (0, 3600] s and allow an iteration");
+  }
   auto impl = std::make_unique<Impl>();
   impl->options = options;
+  // The rows a fit needs are held (a change replays only the warm-up and the window of them).
+  model_options.history_s = std::max(model_options.history_s, options.fit_window_s);
   impl->initial_params = params;
   auto model = ShadowModel::Create(std::move(params), std::move(model_options));
   if (!model.ok()) return model.status();
@@ -242,10 +342,15 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
     }
     impl->domain.emplace(std::move(domain).value());
   }
-  auto participant = dds::CreateParticipant(options.domain);
-  if (!participant.ok()) return participant.status();
-  impl->participant = std::move(participant).value();
+  // With security the rig's topics, and so the shadow's, are in the rig's partition.
+  auto scope = dds::CreateClientScope(options.domain, options.security_dir, options.rig_id);
+  if (!scope.ok()) return scope.status();
+  impl->participant = std::move(scope->participant);
+  impl->publisher = std::move(scope->publisher);
+  impl->subscriber = std::move(scope->subscriber);
   const dds_entity_t p = impl->participant.handle();
+  const dds_entity_t pub = impl->publisher.handle() > 0 ? impl->publisher.handle() : p;
+  const dds_entity_t sub = impl->subscriber.handle() > 0 ? impl->subscriber.handle() : p;
   auto topic = [p](const dds_topic_descriptor_t* d, const char* name, dds::Entity* out) {
     auto created = dds::CreateTopic(p, d, name);
     if (!created.ok()) return created.status();
@@ -259,23 +364,23 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
   MPDRIG_RETURN_IF_ERROR(
       topic(&mpdrig_ShadowCommand_desc, kShadowCommandTopic, &impl->command_topic));
   // Keep all: the model needs every sample in order (a gap is a hold of the inputs).
-  auto sensors =
-      dds::Reader<mpdrig_RigSensors>::Create(p, impl->sensors_topic.handle(), dds::SensorQos(true));
+  auto sensors = dds::Reader<mpdrig_RigSensors>::Create(sub, impl->sensors_topic.handle(),
+                                                        dds::SensorQos(true));
   if (!sensors.ok()) return sensors.status();
   impl->sensors.emplace(std::move(sensors).value());
   auto shadow_sensors = dds::Writer<mpdrig_RigSensors>::Create(
-      p, impl->shadow_sensors_topic.handle(), dds::SensorQos(false));
+      pub, impl->shadow_sensors_topic.handle(), dds::SensorQos(false));
   if (!shadow_sensors.ok()) return shadow_sensors.status();
   impl->shadow_sensors.emplace(std::move(shadow_sensors).value());
   auto status =
-      dds::Writer<mpdrig_ShadowStatus>::Create(p, impl->status_topic.handle(), dds::StatusQos());
+      dds::Writer<mpdrig_ShadowStatus>::Create(pub, impl->status_topic.handle(), dds::StatusQos());
   if (!status.ok()) return status.status();
   impl->status.emplace(std::move(status).value());
   dds::Qos command_qos;  // a command is not state: reliable, keep all, volatile
   dds_qset_reliability(command_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(command_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
   auto commands =
-      dds::Reader<mpdrig_ShadowCommand>::Create(p, impl->command_topic.handle(), command_qos);
+      dds::Reader<mpdrig_ShadowCommand>::Create(sub, impl->command_topic.handle(), command_qos);
   if (!commands.ok()) return commands.status();
   impl->commands.emplace(std::move(commands).value());
   return std::unique_ptr<ShadowService>(new ShadowService(std::move(impl)));
@@ -291,6 +396,7 @@ Status ShadowService::Run(const std::atomic<bool>& stop) {
         [&](const mpdrig_ShadowCommand& c, const dds_sample_info_t&) { s.Apply(c); });
     if (!taken.ok()) return taken.status();
     MPDRIG_RETURN_IF_ERROR(s.TakeSamples(&done));
+    s.FinishFit();
   }
   if (s.samples > 0) MPDRIG_RETURN_IF_ERROR(s.PublishStatus(s.model->last_time_s()));
   return Status::Ok();

@@ -5,9 +5,11 @@
 //                           units, the rig's id; sensor QoS);
 //   mpdrig_shadow_status  - its error over the sliding window, per channel and overall, its
 //                           effects and parameters, the last change (status QoS);
-// and takes mpdrig_shadow_command (effect on/off, set a parameter, reset; reliable, keep all:
-// a command is not state). A bad command is refused and counted on the shadow's status; the
-// shadow runs on. Optionally writes the error over time as CSV: time_s, error, <channel>_nrmse.
+// and takes mpdrig_shadow_command (effect on/off, set a parameter, reset, fit now; reliable, keep
+// all: a command is not state). Fit now runs on a worker thread (ShadowStatus.fit_state says
+// "running: ...", then "done: ..." or "failed: ..."); a second one while it runs is refused. A bad
+// command is refused and counted on the shadow's status; the shadow runs on. Optionally writes the
+// error over time as CSV: time_s, error, <channel>_nrmse.
 #pragma once
 
 #include <atomic>
@@ -35,6 +37,15 @@ struct ShadowServeOptions {
   // Status (and a CSV row) every this much rig time.
   double status_period_s = 0.5;
   std::string log_path;  // the CSV ("" : none)
+  // DDS Security: an identity directory of a class (deploy/security/make-class OUT/NAME) allowed
+  // to read the rig and to use the shadow's topics; then every topic of the shadow (the rig's
+  // sensors in, its own in and out) is in the rig's partition (RigPartition). "" : none.
+  std::string security_dir;
+  // "Fit now" (SHADOW_FIT_NOW): c, f1 and the active effects' strengths fitted on the rows of the
+  // last fit_window_s (held for it), on a worker thread; the shadow runs on and applies the fit
+  // when it is done. At most fit_max_iterations solver iterations.
+  double fit_window_s = 180.0;
+  int fit_max_iterations = 15;
 };
 
 class ShadowService {

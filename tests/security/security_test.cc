@@ -589,6 +589,53 @@ TEST_F(SecureClass, StudentGetsAPrivateRigWithinTheServicesLimits) {
       2.0, [&](double) { return instructor_on_private.samples() > before + 50; }));
 }
 
+// A shadow model under security: alice runs `mpdrig shadow` of her rig with her identity (its
+// topics in her rig's partition) and switches it with shadow_ctl; bob, who may watch alice's rig,
+// reads her shadow's status but may not switch it (his permissions publish only in his own
+// partitions); without security nobody sees it.
+TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
+  StartService();
+  const std::string shadow_log = Dir("shadow.log");
+  Process shadow(
+      {MPDRIG_EXE, "shadow", "--security", Dir("alice"), "--rig", "alice", "--domain",
+       std::to_string(domain_), "--warmup-s", "1", "--window-s", "2", "--duration", "60"},
+      shadow_log);
+  ASSERT_TRUE(shadow.started());
+  auto ctl = [&](const std::string& who, const std::vector<std::string>& extra,
+                 const std::string& out) {
+    std::vector<std::string> args{SHADOW_CTL_EXE,          "--rig",     "alice", "--domain",
+                                  std::to_string(domain_), "--timeout", "20"};
+    if (!who.empty()) args.insert(args.end(), {"--security", Dir(who.c_str())});
+    args.insert(args.end(), extra.begin(), extra.end());
+    Process process(args, out);
+    return process.Wait(30.0);
+  };
+  const std::string alice_out = Dir("ctl-alice.txt");
+  EXPECT_EQ(ctl("alice", {"--effect-on", "unsteady_friction"}, alice_out), 0)
+      << ReadFile(alice_out) << "\nshadow said:\n"
+      << ReadFile(shadow_log);
+  EXPECT_NE(ReadFile(alice_out).find("effects: [unsteady_friction"), std::string::npos)
+      << ReadFile(alice_out);
+  // Bob reads it (alice's rig is one he watches) but cannot switch it.
+  const std::string bob_read = Dir("ctl-bob-read.txt");
+  EXPECT_EQ(ctl("bob", {}, bob_read), 0) << ReadFile(bob_read);
+  EXPECT_NE(ReadFile(bob_read).find("shadow of alice"), std::string::npos) << ReadFile(bob_read);
+  const std::string bob_switch = Dir("ctl-bob-switch.txt");
+  EXPECT_NE(ctl("bob", {"--effect-off", "unsteady_friction"}, bob_switch), 0)
+      << ReadFile(bob_switch);
+  // Without security: no answer at all.
+  const std::string intruder = Dir("ctl-intruder.txt");
+  std::vector<std::string> args{SHADOW_CTL_EXE,          "--rig",     "alice", "--domain",
+                                std::to_string(domain_), "--timeout", "3"};
+  Process open(args, intruder);
+  EXPECT_EQ(open.Wait(15.0), 1) << ReadFile(intruder);
+  // Alice's shadow still has its effect: bob's command never reached it.
+  const std::string alice_again = Dir("ctl-alice-again.txt");
+  EXPECT_EQ(ctl("alice", {}, alice_again), 0) << ReadFile(alice_again);
+  EXPECT_NE(ReadFile(alice_again).find("effects: [unsteady_friction"), std::string::npos)
+      << ReadFile(alice_again);
+}
+
 // The 8 bytes of a double as it goes on the wire (little-endian CDR on this machine).
 std::string Bytes(double value) {
   std::string bytes(sizeof value, '\0');

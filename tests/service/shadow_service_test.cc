@@ -1,13 +1,16 @@
 // The shadow beside a mystery rig over loopback DDS: a rig with a hidden effect (lockstep, so the
-// test sets the pace), the shadow subscribed to its sensors; the shadow's error, read from its
-// status topic, falls by half when the model command switches the right effect on, and a bad
-// command is refused and counted.
+// test sets the pace) read through the lab's sensor noise (thesis Table 4.1.1), the shadow
+// subscribed to its sensors; the shadow's error, read from its status topic, falls by half when
+// the model command switches the right effect on, not with a wrong one, and a bad command is
+// refused and counted; fit now, asked with the effect at a wrong strength, brings the strength
+// back and the error down while the shadow runs on, and a second one meanwhile is refused.
 #include "service/shadow/shadow_service.h"
 
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <string>
@@ -34,7 +37,15 @@ struct StatusSeen {
   std::uint64_t rejected = 0;
   std::string last_rejection;
   std::vector<std::string> effects;
+  std::string fit_state;
 };
+
+// The number after `key=` in `text` (NaN if absent).
+double ValueIn(const std::string& text, const std::string& key) {
+  const std::size_t at = text.find(key + "=");
+  if (at == std::string::npos) return std::nan("");
+  return std::strtod(text.c_str() + at + key.size() + 1, nullptr);
+}
 
 class ShadowServiceTest : public ::testing::Test {
  protected:
@@ -54,14 +65,19 @@ class ShadowServiceTest : public ::testing::Test {
     log_path_ = ::testing::TempDir() + "mpdrig-shadow-error.csv";
     shadow_options.log_path = log_path_;
 
+    // The choke's inertance, at a heave that shows it above the lab's noise: choke 40 deg,
+    // 15 L/min, 0.08 m at 0.4 Hz (the model test measures the effects at this and a slower one).
     RigParams truth;
-    ASSERT_TRUE(ApplyEffectSpec(&truth, "unsteady_friction").ok());
-    auto rig = RigHost::Create("mystery", truth, grid, 100.0, {31.0, 10.0, 0.0});
+    ASSERT_TRUE(ApplyEffectSpec(&truth, "choke_inertia").ok());
+    SensorOptions sensors;
+    sensors.noise = SensorNoise::Lab();
+    sensors.seed = 3;
+    auto rig = RigHost::Create("mystery", truth, grid, 100.0, {40.0, 15.0, 0.0}, {}, sensors);
     ASSERT_TRUE(rig.ok()) << rig.status().message();
     PistonCommandIn heave;
     heave.mode = PistonCommandIn::Mode::kSine;
-    heave.amplitude_m = 0.1;
-    heave.frequency_hz = 0.25;
+    heave.amplitude_m = 0.08;
+    heave.frequency_hz = 0.4;
     ASSERT_TRUE(rig->SetPiston(heave).ok());
     std::vector<RigHost> rigs;
     rigs.push_back(std::move(rig).value());
@@ -147,6 +163,7 @@ class ShadowServiceTest : public ::testing::Test {
         seen.last_change = s.last_change;
         seen.rejected = s.rejected_commands;
         seen.last_rejection = s.last_rejection;
+        seen.fit_state = s.fit_state;
         seen.effects.clear();
         for (std::uint32_t k = 0; k < s.active_effects._length; ++k)
           seen.effects.push_back(s.active_effects._buffer[k]);
@@ -158,6 +175,19 @@ class ShadowServiceTest : public ::testing::Test {
     }
     ADD_FAILURE() << "the shadow did not catch up: status at " << seen.sim_time_s << " s, rig at "
                   << rig_time_s_ << " s, last change '" << seen.last_change << "'";
+    return seen;
+  }
+
+  // The shadow's status once its fit has ended (fit_state "done: ..." or "failed: ..."), the rig
+  // still, the shadow running on.
+  StatusSeen WaitFit() {
+    StatusSeen seen;
+    for (int i = 0; i < 1200; ++i) {
+      seen = WaitShadow();
+      if (seen.fit_state.rfind("done:", 0) == 0 || seen.fit_state.rfind("failed:", 0) == 0)
+        return seen;
+    }
+    ADD_FAILURE() << "the fit did not end: '" << seen.fit_state << "'";
     return seen;
   }
 
@@ -195,8 +225,8 @@ TEST_F(ShadowServiceTest, ErrorHalvesWithTheHiddenEffectAndNotWithAWrongOne) {
   EXPECT_EQ(refused.rejected, 1u);
   EXPECT_NE(refused.last_rejection.find("no_such_effect"), std::string::npos);
 
-  Command(mpdrig_SHADOW_EFFECT_ON, "unsteady_friction");
-  const StatusSeen right = WaitShadow("effect on: unsteady_friction", 1);
+  Command(mpdrig_SHADOW_EFFECT_ON, "choke_inertia");
+  const StatusSeen right = WaitShadow("effect on: choke_inertia", 1);
   EXPECT_LE(right.error, 0.5 * without.error) << "without " << without.error;
   ASSERT_EQ(right.effects.size(), 1u);
   RunRig(10.0);  // a window later, still halved (the live model, not only the replay)
@@ -214,6 +244,27 @@ TEST_F(ShadowServiceTest, ErrorHalvesWithTheHiddenEffectAndNotWithAWrongOne) {
   EXPECT_GT(wrong.error, 0.5 * without.error);
   std::printf("  shadow error: without %.4f, right effect %.4f (a window later %.4f), wrong %.4f\n",
               without.error, right.error, later.error, wrong.error);
+
+  // The right effect at a third of its strength, then fit now; a second fit while the first
+  // runs is refused, saying why.
+  Command(mpdrig_SHADOW_EFFECT_OFF, "helical_friction");
+  (void)WaitShadow("effect off: helical_friction", 1);
+  Command(mpdrig_SHADOW_EFFECT_ON, "choke_inertia:b1_per_m=1.5e5");
+  const StatusSeen weak = WaitShadow("effect on: choke_inertia:b1_per_m=1.5e5", 1);
+  Command(mpdrig_SHADOW_FIT_NOW, "");
+  Command(mpdrig_SHADOW_FIT_NOW, "");
+  const StatusSeen twice = WaitShadow("", 2);
+  EXPECT_NE(twice.last_rejection.find("a fit is running"), std::string::npos)
+      << twice.last_rejection;
+  const StatusSeen fitted = WaitFit();
+  ASSERT_EQ(fitted.fit_state.rfind("done:", 0), 0u) << fitted.fit_state;
+  const double b1 = ValueIn(fitted.fit_state, "choke_inertia.b1_per_m");
+  const double c = ValueIn(fitted.fit_state, "c");
+  EXPECT_NEAR(b1, 5.0e5, 0.3 * 5.0e5) << fitted.fit_state;  // the effect's default: the truth
+  EXPECT_NEAR(c, RigParams().wave_speed_mps, 0.03 * RigParams().wave_speed_mps) << fitted.fit_state;
+  EXPECT_LT(fitted.error, 0.8 * weak.error) << fitted.fit_state;
+  std::printf("  fit now from b1 = 1.5e5: error %.4f -> %.4f; %s\n", weak.error, fitted.error,
+              fitted.fit_state.c_str());
 
   // The CSV: the header, then a row per status with the time and the overall error.
   std::ifstream log(log_path_);
