@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "model/params/rig_params.h"
-#include "model/pipe/pipe_law.h"
+#include "model/core/pipe_law.h"
 
 namespace mpdrig {
 

@@ -20,7 +20,6 @@
 // catalogue.inc (README: "Add a physical effect").
 #pragma once
 
-#include <array>
 #include <functional>
 #include <memory>
 #include <span>
@@ -29,15 +28,12 @@
 #include <vector>
 
 #include "model/common/status.h"
+#include "model/core/rig_channels.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_extension.h"
 #include "model/pipe/pipe_solver.h"
-#include "model/sim/rig_channels.h"
 
 namespace mpdrig {
-
-// Every channel of a rig sample, SI with absolute pressure, indexed by Index(Channel).
-using ChannelValues = std::array<double, kChannelCount>;
 
 // The boundary inputs of the step just taken (at its end) and its length.
 struct StepRecord {

@@ -13,7 +13,7 @@
 #include <span>
 
 #include "model/boundary/choke.h"
-#include "model/pipe/pipe_law.h"
+#include "model/core/pipe_law.h"
 
 namespace mpdrig {
 

@@ -20,7 +20,7 @@
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_extension.h"
-#include "model/pipe/pipe_law.h"
+#include "model/core/pipe_law.h"
 
 namespace mpdrig {
 

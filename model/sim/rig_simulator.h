@@ -24,7 +24,7 @@
 #include "model/effects/effect.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_solver.h"
-#include "model/sim/rig_channels.h"
+#include "model/core/rig_channels.h"
 
 namespace mpdrig {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "model/identification/fit.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 

@@ -6,7 +6,7 @@
 #include <sstream>
 
 #include "model/effects/effect.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 
 namespace mpdrig::cli {
 

@@ -19,7 +19,7 @@
 #include <gtest/gtest.h>
 
 #include "model/common/units.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/rig_log.h"
 #include "tests/support/sanitizer.h"

@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "model/effects/effect.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 #include "model/sim/rig_simulator.h"
 #include "tests/model/rig_test_util.h"
 

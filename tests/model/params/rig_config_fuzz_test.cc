@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "model/effects/effect.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 #include "model/params/rig_params.h"
 #include "tests/support/mutator.h"
 

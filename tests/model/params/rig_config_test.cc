@@ -1,4 +1,4 @@
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 
 #include <filesystem>
 #include <fstream>

@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "model/params/rig_config.pb.h"
+#include "model/config/rig_config.pb.h"
 
 namespace mpdrig {
 namespace {
