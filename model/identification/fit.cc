@@ -443,36 +443,6 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
   return Status::Ok();
 }
 
-double WindowError(const MeasuredLog& log, const ModelTraces& model, double window_begin_s,
-                   double window_end_s) {
-  MPDRIG_CHECK(model.values_si.size() == log.channels.size());
-  const std::vector<double>& time = log.time_s();
-  double total = 0.0;
-  int count = 0;
-  for (std::size_t c = 0; c < log.channels.size(); ++c) {
-    const std::vector<double>& y = log.channels[c].values_si;
-    const std::vector<double>& yhat = model.values_si[c];
-    double sum = 0.0;
-    long samples = 0;
-    for (std::size_t n = 0; n < time.size(); ++n) {
-      if (time[n] < window_begin_s || time[n] > window_end_s || !std::isfinite(y[n])) continue;
-      sum += y[n];
-      ++samples;
-    }
-    if (samples == 0) continue;
-    const double mean = sum / static_cast<double>(samples);
-    double sse = 0.0, sst = 0.0;
-    for (std::size_t n = 0; n < time.size(); ++n) {
-      if (time[n] < window_begin_s || time[n] > window_end_s || !std::isfinite(y[n])) continue;
-      sse += (yhat[n] - y[n]) * (yhat[n] - y[n]);
-      sst += (y[n] - mean) * (y[n] - mean);
-    }
-    const double nrmse = sst > 0.0 ? std::sqrt(sse / sst) : kNaN;
-    if (std::isfinite(nrmse)) total += nrmse, ++count;
-  }
-  return count > 0 ? total / count : kNaN;
-}
-
 Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
                                 const std::vector<FitParameter>& parameters,
                                 const FitOptions& options) {

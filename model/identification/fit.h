@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "model/analysis/compare.h"
+#include "model/analysis/window_error.h"  // WindowError: the error fit reports
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/sim/rig_simulator.h"
@@ -97,11 +98,6 @@ struct FitResult {
   // FitParametersAndInputLevels: the levels estimated at the first fit's parameters.
   InputLevelCorrection input_levels;
 };
-
-// Mean NRMSE over the compared channels with a defined NRMSE, on the window: the metric of
-// compare's `error` restricted to [window_begin_s, window_end_s].
-double WindowError(const MeasuredLog& log, const ModelTraces& model, double window_begin_s,
-                   double window_end_s);
 
 // Fits `parameters` starting from `start` (its values are the initial guesses, clamped into the
 // bounds). A replay that fails (e.g. leaves the model's range) counts as an infeasible step.
