@@ -413,12 +413,7 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
       return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
                            "' is not switched on (add --effect " + std::string(effect_name) + ")");
     }
-    if (value < param.min_value || value > param.max_value) {
-      std::ostringstream out;
-      out << key << " = " << value << " " << param.unit << " is outside [" << param.min_value
-          << ", " << param.max_value << "]";
-      return Status::Error(out.str());
-    }
+    MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, param.unit, param.min_value, param.max_value));
     for (auto& [name, existing] : setting->values) {
       if (name == param_key) {
         existing = value;
@@ -433,12 +428,7 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
     return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
                          ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
-  if (value < info->min_value || value > info->max_value) {
-    std::ostringstream out;
-    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
-        << info->max_value << "]";
-    return Status::Error(out.str());
-  }
+  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
   params->*(info->member) = value;
   return Status::Ok();
 }

@@ -99,12 +99,8 @@ Status RigParams::Validate() const {
     if (!std::isfinite(value)) {
       return Status::Error(std::string(info.key) + " is not a finite number");
     }
-    if (value < info.min_value || value > info.max_value) {
-      std::ostringstream out;
-      out << info.key << " = " << value << " " << info.unit << " is outside [" << info.min_value
-          << ", " << info.max_value << "]";
-      return Status::Error(out.str());
-    }
+    MPDRIG_RETURN_IF_ERROR(
+        CheckInRange(info.key, value, info.unit, info.min_value, info.max_value));
   }
   // The piston displaces (A_d - A_d2) per metre (5.4.1): an upper rod no thicker than the lower
   // one would make the heave push fluid the wrong way, or not at all.
@@ -219,6 +215,15 @@ Status SetEffectParam(RigParams* params, std::string_view key, std::string_view 
 
 }  // namespace
 
+Status CheckInRange(std::string_view key, double value, std::string_view unit, double min_value,
+                    double max_value) {
+  if (std::isfinite(value) && value >= min_value && value <= max_value) return Status::Ok();
+  std::ostringstream out;
+  out << key << " = " << value << " " << unit << " is outside [" << min_value << ", " << max_value
+      << "]";
+  return Status::Error(out.str());
+}
+
 Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
   if (key.find('.') != std::string_view::npos) return SetEffectParam(params, key, value_text);
   const ParamInfo* info = FindParam(key);
@@ -229,12 +234,7 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
   auto parsed = ParseNumber(key, value_text, info->unit);
   if (!parsed.ok()) return parsed.status();
   const double value = *parsed;
-  if (value < info->min_value || value > info->max_value) {
-    std::ostringstream out;
-    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
-        << info->max_value << "]";
-    return Status::Error(out.str());
-  }
+  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
   params->*info->member = value;
   return Status::Ok();
 }

@@ -101,6 +101,11 @@ struct ParamInfo {
 std::span<const ParamInfo> ParamTable();
 const ParamInfo* FindParam(std::string_view key);
 
+// Ok when min_value <= value <= max_value, else "key = value unit is outside [min, max]" (NaN
+// and infinities are outside): the one wording of a bound check, for the table and effects.
+Status CheckInRange(std::string_view key, double value, std::string_view unit, double min_value,
+                    double max_value);
+
 // Sets one parameter from its key and a text value (`--set wave_speed_mps=1100`). An unknown key
 // lists the valid ones; a NaN, an unparsable number or a value outside the bounds is an error.
 // An effect's parameter is "EFFECT.KEY" (`--set unsteady_friction.k=0.02`); the effect must be
