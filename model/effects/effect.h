@@ -1,5 +1,6 @@
-// Physical effects: named pieces of physics beyond the thesis's model that can be switched on
-// (issue 4). The thesis lists its own suspects (chapters 5, 8, 11); each is an effect here.
+// Physical effects: named pieces of physics beyond the thesis's model that can be switched on,
+// so that a log the base model cannot explain can be tested against each suspect. The thesis lists
+// its own suspects (chapters 5, 8, 11); each is an effect here.
 //
 // An effect has
 //   - an EffectInfo: its name, the physics in one line, the thesis sections, what it explains

@@ -1,4 +1,4 @@
-// "Which physical effect is missing?" (issue 4): fit the base model to a log, show where it still
+// "Which physical effect is missing?": fit the base model to a log, show where it still
 // fails, try every effect of the catalogue, and rank them on data they were not fitted on.
 //
 // 1. Split the log in time: the first `fit_fraction` is the fitting data, the rest the scoring

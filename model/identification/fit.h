@@ -1,4 +1,4 @@
-// Parameter identification against a rig log (issue 4; the thesis's chapter 8-9 tuning,
+// Parameter identification against a rig log (the thesis's chapter 8-9 tuning,
 // automated): bounded nonlinear least squares of any base or effect parameter.
 //
 // Residuals: for every compared channel c present in the log (ComparedChannels(), P1 P2

@@ -25,7 +25,7 @@ struct ChokePoint {
   double g_m2;          // flow coefficient G [m^2]
 };
 
-// A physical effect switched on (model/effects/, issue 4): its registry name and the parameters
+// A physical effect switched on (model/effects/): its registry name and the parameters
 // given explicitly; the others keep the effect's defaults. The effect registry checks names and
 // bounds (ValidateEffects in model/effects/effect.h) before anything is simulated.
 struct EffectSetting {

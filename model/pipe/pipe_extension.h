@@ -1,4 +1,4 @@
-// Hooks through which physics beyond the thesis's pipe model reaches a pipe solver (issue 4).
+// Hooks through which physics beyond the thesis's pipe model reaches a pipe solver.
 //
 // A PipeExtension is what a pipe solver sees of a physical effect (model/effects/effect.h): an
 // extra momentum source along the pipe, or its own closure of an end of the pipe. Every hook has

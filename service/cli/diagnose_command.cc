@@ -1,4 +1,4 @@
-// mpdrig diagnose: which physical effect is the model missing? (issue 4)
+// mpdrig diagnose: which physical effect is the model missing?
 // mpdrig synth: a synthetic lab log with a hidden effect, to try diagnose on a known answer.
 #include <algorithm>
 #include <atomic>

@@ -206,7 +206,7 @@ TEST(RigParams, ApplyOverride) {
   EXPECT_EQ(params.friction_f1_per_s, 0.24);
 }
 
-// Issue 15, item 9 (part): an upper rod no thicker than the lower one (or 0) was accepted and
+// Found by a bad-input probe: an upper rod no thicker than the lower one (or 0) was accepted and
 // reversed (or removed) the piston's effect.
 TEST(RigParams, ValidateCatchesRodsThatReverseThePiston) {
   for (auto [upper, lower] :
