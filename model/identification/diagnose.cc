@@ -416,6 +416,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   fit_options.replay = replay;
   fit_options.window_end_s = diagnosis.fit_end_s;
   fit_options.max_iterations = options.max_iterations;
+  fit_options.solver_log = options.solver_log;
   const double steps = 1.0 + candidates.size();
   auto report = [&](std::string_view stage, double done) {
     if (options.progress) options.progress(stage, done / steps);

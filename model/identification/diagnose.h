@@ -92,6 +92,7 @@ struct DiagnoseOptions {
   std::function<void(const std::vector<std::function<void()>>&)> run_tasks;
   // "baseline", "<effect>", "compare"; fraction of the whole diagnosis done.
   std::function<void(std::string_view stage, double fraction)> progress;
+  bool solver_log = false;  // FitOptions::solver_log for every fit
 };
 
 inline constexpr int kDiagnoseCells = 50;

@@ -551,11 +551,8 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   solver.line_search_interpolation_type = ceres::QUADRATIC;
   solver.max_num_line_search_step_size_iterations = 4;
   solver.num_threads = 1;
-  // MPDRIG_CERES_LOG=1 in the environment prints Ceres's per-iteration table to stdout (trust
-  // region ratio, step, radius): the way to see why a fit stops.
-  const bool ceres_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;
-  solver.logging_type = ceres_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-  solver.minimizer_progress_to_stdout = ceres_log;
+  solver.logging_type = options.solver_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver.minimizer_progress_to_stdout = options.solver_log;
   ProgressCallback callback(residuals, options.progress);
   solver.callbacks.push_back(&callback);
   std::string options_error;

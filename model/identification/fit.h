@@ -77,6 +77,10 @@ struct FitOptions {
   bool central_differences = false;
   // Called after each solver iteration: iteration number and current error (mean NRMSE).
   std::function<void(int iteration, double error)> progress;
+  // Prints Ceres's per-iteration table to stdout (trust region ratio, step, radius): the way to
+  // see why a fit stops. The command line sets it from MPDRIG_CERES_LOG; the model reads no
+  // environment.
+  bool solver_log = false;
 };
 
 struct FitResult {

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -54,6 +55,7 @@ int RunDiagnose(DiagnoseArgs args) {
   options.fit_fraction = args.fit_fraction;
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
+  options.solver_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;  // Ceres's iteration table
   const Status prepared = PrepareReplay(&*log, *params, options.simulation, &options.replay,
                                         args.quiet, InputLevels::kAfterTheFit);
   if (!prepared.ok()) return Fail(name, prepared);
