@@ -11,8 +11,8 @@
 
 #include <vector>
 
-#include "model/params/rig_params.h"
 #include "model/core/pipe_law.h"
+#include "model/params/rig_params.h"
 
 namespace mpdrig {
 

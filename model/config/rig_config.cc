@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "model/common/units.h"
-#include "model/effects/effect.h"
 #include "model/config/rig_config.pb.h"
+#include "model/effects/effect.h"
 
 namespace mpdrig {
 namespace {

@@ -386,7 +386,7 @@ Result<double> GetParamValue(const RigParams& params, std::string_view key) {
     const EffectSetting* setting = params.FindEffect(effect_name);
     if (setting == nullptr) {
       return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on (add --effect " + std::string(effect_name) + ")");
+                           "' is not switched on");
     }
     const double* value = setting->Find(param_key);
     return value != nullptr ? *value : found->second->default_value;
@@ -411,7 +411,7 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
     EffectSetting* setting = params->FindEffect(effect_name);
     if (setting == nullptr) {
       return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on (add --effect " + std::string(effect_name) + ")");
+                           "' is not switched on");
     }
     MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, param.unit, param.min_value, param.max_value));
     for (auto& [name, existing] : setting->values) {

@@ -199,7 +199,7 @@ Status SetEffectParam(RigParams* params, std::string_view key, std::string_view 
   EffectSetting* effect = params->FindEffect(effect_name);
   if (effect == nullptr) {
     return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                         "' is not switched on (add --effect " + std::string(effect_name) + ")");
+                         "' is not switched on");
   }
   auto value = ParseNumber(key, value_text, "see `mpdrig effects`");
   if (!value.ok()) return value.status();
@@ -242,7 +242,7 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
 Status ApplyOverride(RigParams* params, std::string_view assignment) {
   const std::size_t equals = assignment.find('=');
   if (equals == std::string_view::npos) {
-    return Status::Error("--set expects key=value, got '" + std::string(assignment) + "'");
+    return Status::Error("expected key=value, got '" + std::string(assignment) + "'");
   }
   return SetParam(params, assignment.substr(0, equals), assignment.substr(equals + 1));
 }

@@ -397,6 +397,19 @@ TEST_F(CliTest, SimulateNamesABadSensorNoise) {
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 
+// The model names what is wrong; the command line adds the flag that fixes it.
+TEST_F(CliTest, AnEffectParameterOfAnEffectThatIsOffNamesTheFlagThatSwitchesItOn) {
+  const RunResult run =
+      Run("simulate --piston 0 --duration 1 --set unsteady_friction.k=0.02 --out " +
+          Quote(Path("E.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err,
+                       "effect 'unsteady_friction' is not switched on (add --effect "
+                       "unsteady_friction)"))
+      << run.err;
+  EXPECT_FALSE(fs::exists(Path("E.csv")));
+}
+
 TEST_F(CliTest, SimulateRequiresOut) {
   const RunResult run = Run("simulate --piston sine:amp_m=0.1,freq_hz=0.2 --duration 1");
   EXPECT_NE(run.exit_code, 0);

@@ -299,8 +299,8 @@ TEST(RigLogReaderErrors, GapInTimeLongerThanTheLimit) {
   EXPECT_EQ(log.status().message(),
             path +
                 ":4:1: time_s: 100000.01 is 100000 s after the previous sample's 0.01 (line 3), "
-                "a gap longer than 10 s (an interrupted recording or a wrong time; raise the "
-                "limit with --max-gap-s if it is real)");
+                "a gap longer than 10 s (an interrupted recording or a wrong time; a longer gap "
+                "limit admits it if it is real)");
   ReadOptions wider;
   wider.max_gap_s = 2.0e5;
   Result<RigLog> accepted = ReadRigLog(path, wider);
