@@ -38,24 +38,6 @@ constexpr double kSingularRatio = 1.0e-12;
 // norm has no influence (bit-identical replays give 0; round-off alone stays far below).
 constexpr double kNoInfluence = 1.0e-9;
 
-struct TuningRange {
-  std::string_view key;
-  double lower;
-  double upper;
-};
-
-// Plausible tuning ranges around the thesis values (Table 9.4.1, 8.2.1, 8.3.2).
-constexpr TuningRange kTuningRanges[] = {
-    {"wave_speed_mps", 300.0, 1500.0},
-    {"friction_f1_per_s", 0.0, 5.0},
-    {"friction_f2_per_m", 0.0, 10.0},
-    {"choke_leak_m2", 0.0, 1.0e-5},
-    {"density_kgpm3", 900.0, 1100.0},
-    {"choke_density_kgpm3", 900.0, 1100.0},
-    {"piston_friction_fd1_pa_s_per_m", -5.0e5, 5.0e5},
-    {"piston_friction_fd2_pa_s2_per_m2", -5.0e6, 5.0e6},
-};
-
 // Splits "EFFECT.KEY"; nullopt-like empty effect name when there is no dot.
 std::pair<std::string_view, std::string_view> SplitEffectKey(std::string_view key) {
   const std::size_t dot = key.find('.');
@@ -360,12 +342,9 @@ Result<FitParameter> DefaultFitParameter(std::string_view key) {
     return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
                          ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
-  double lower = info->min_value, upper = info->max_value;
-  bool tabled = false;
-  for (const TuningRange& range : kTuningRanges) {
-    if (range.key == key) lower = range.lower, upper = range.upper, tabled = true;
-  }
-  if (!tabled) {
+  double lower = info->fit_min, upper = info->fit_max;
+  if (!(info->fit_min < info->fit_max)) {
+    lower = info->min_value, upper = info->max_value;
     // A factor of 3 either way around the thesis value (the sign kept), or the table's bounds.
     const double value = RigParams{}.*(info->member);
     if (value != 0.0) {

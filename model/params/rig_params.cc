@@ -11,7 +11,8 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Bounds are physical plausibility limits, not tuning ranges: they catch unit mistakes
-// (a wave speed in km/s, a radius in mm) without forbidding experiments.
+// (a wave speed in km/s, a radius in mm) without forbidding experiments. The last two numbers,
+// where given, are the tuning range `fit` searches (ParamInfo::fit_min, fit_max).
 const ParamInfo kParams[] = {
     {"pipe_length_m", "m", "copper pipe length L (Table 8.1.2)", &RigParams::pipe_length_m, 1.0,
      1.0e5},
@@ -21,20 +22,20 @@ const ParamInfo kParams[] = {
      "height of the outlet above the inlet (coil height, Table 8.1.2)",
      &RigParams::pipe_elevation_gain_m, -1.0e4, 1.0e4},
     {"wave_speed_mps", "m/s", "speed of sound c (tuned 850, Table 9.4.1)",
-     &RigParams::wave_speed_mps, 10.0, 5000.0},
+     &RigParams::wave_speed_mps, 10.0, 5000.0, 300.0, 1500.0},
     {"density_kgpm3", "kg/m^3", "water density rho_ref at p_ref (5.2.1)", &RigParams::density_kgpm3,
-     100.0, 5000.0},
+     100.0, 5000.0, 900.0, 1100.0},
     {"reference_pressure_pa", "Pa", "reference pressure p_ref of (5.2.1), absolute",
      &RigParams::reference_pressure_pa, 0.0, 1.0e8},
     {"friction_f1_per_s", "1/s", "linear pipe friction f1 in f(u) = f1 u + f2 u|u| (8.6.8, 9.4.1)",
-     &RigParams::friction_f1_per_s, 0.0, 1.0e3},
+     &RigParams::friction_f1_per_s, 0.0, 1.0e3, 0.0, 5.0},
     {"friction_f2_per_m", "1/m", "quadratic pipe friction f2 in f(u) = f1 u + f2 u|u| (8.6.8)",
-     &RigParams::friction_f2_per_m, 0.0, 1.0e4},
+     &RigParams::friction_f2_per_m, 0.0, 1.0e4, 0.0, 10.0},
     {"gravity_mps2", "m/s^2", "gravitational acceleration g", &RigParams::gravity_mps2, 0.0, 100.0},
     {"choke_leak_m2", "m^2", "choke leak: floor of the characteristic G (Table 9.4.1)",
-     &RigParams::choke_leak_m2, 0.0, 1.0e-2},
+     &RigParams::choke_leak_m2, 0.0, 1.0e-2, 0.0, 1.0e-5},
     {"choke_density_kgpm3", "kg/m^3", "fluid density at the choke rho_L (5.3.2)",
-     &RigParams::choke_density_kgpm3, 100.0, 5000.0},
+     &RigParams::choke_density_kgpm3, 100.0, 5000.0, 900.0, 1100.0},
     {"choke_time_constant_s", "s", "choke actuator first-order time constant (5.3)",
      &RigParams::choke_time_constant_s, 0.0, 100.0},
     {"choke_rate_limit_frac_per_s", "1/s",
@@ -47,10 +48,10 @@ const ParamInfo kParams[] = {
     {"compartment_height_m", "m", "heave generator compartment height h (5.4.2, Table 8.1.1)",
      &RigParams::compartment_height_m, 0.0, 100.0},
     {"piston_friction_fd1_pa_s_per_m", "Pa s/m", "piston pressure drop, linear term f_d1 (8.2.1)",
-     &RigParams::piston_friction_fd1_pa_s_per_m, -1.0e9, 1.0e9},
+     &RigParams::piston_friction_fd1_pa_s_per_m, -1.0e9, 1.0e9, -5.0e5, 5.0e5},
     {"piston_friction_fd2_pa_s2_per_m2", "Pa s^2/m^2",
      "piston pressure drop, quadratic term f_d2 (8.2.1)",
-     &RigParams::piston_friction_fd2_pa_s2_per_m2, -1.0e10, 1.0e10},
+     &RigParams::piston_friction_fd2_pa_s2_per_m2, -1.0e10, 1.0e10, -5.0e6, 5.0e6},
     {"atmospheric_pressure_pa", "Pa", "atmospheric pressure (gauge <-> absolute)",
      &RigParams::atmospheric_pressure_pa, 1.0e4, 2.0e5},
 };

@@ -96,6 +96,11 @@ struct ParamInfo {
   double RigParams::*member;
   double min_value;  // inclusive
   double max_value;  // inclusive
+  // The range `mpdrig fit` searches by default where the thesis gives a plausible tuning range
+  // (Tables 9.4.1, 8.2.1, 8.3.2); none (fit_min == fit_max): a factor of 3 either way around the
+  // thesis value. Within [min_value, max_value].
+  double fit_min = 0.0;
+  double fit_max = 0.0;
 };
 
 std::span<const ParamInfo> ParamTable();

@@ -312,5 +312,21 @@ TEST(RigParams, TableAndConfigProtoAreInSync) {
   EXPECT_EQ(scalar_fields, static_cast<int>(ParamTable().size()));
 }
 
+// The tuning ranges `fit` searches live in the parameter table beside the bounds: each lies
+// within its parameter's bounds and holds the thesis value it starts from.
+TEST(RigParams, TuningRangesLieWithinTheBoundsAndHoldTheThesisValues) {
+  const RigParams defaults;
+  int ranges = 0;
+  for (const ParamInfo& info : ParamTable()) {
+    if (!(info.fit_min < info.fit_max)) continue;
+    ++ranges;
+    EXPECT_GE(info.fit_min, info.min_value) << info.key;
+    EXPECT_LE(info.fit_max, info.max_value) << info.key;
+    const double value = defaults.*(info.member);
+    EXPECT_TRUE(value >= info.fit_min && value <= info.fit_max) << info.key << " = " << value;
+  }
+  EXPECT_GE(ranges, 3) << "wave speed, pipe friction and choke leak have tuning ranges";
+}
+
 }  // namespace
 }  // namespace mpdrig
