@@ -50,7 +50,7 @@ else
   echo "DDS Security off"
 fi
 # Noise-free sensors: the probe recognises a command by FT2 reading exactly the commanded flow
-# (with serve's default lab noise since issue 11 it never does, and the probe gives up).
+# (with serve's default lab noise it never does, and the probe gives up).
 "$mpdrig" serve --clock realtime --rate-hz "$rate" --duration "$seconds" --domain "$domain" \
   --sensor-noise none "${serve_security[@]}" 2>"$work/serve.txt" &
 pids+=($!)

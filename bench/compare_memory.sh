@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Peak memory and wall time of `mpdrig compare` on a long log (issue 3: "an hour at 1 kHz works in
+# Peak memory and wall time of `mpdrig compare` on a long log (the target: "an hour at 1 kHz works in
 # bounded memory"), measured with GNU time (`/usr/bin/time -v`, Debian package `time`).
 #
 #   bash bench/compare_memory.sh                     # 1 h at 1 kHz, all 16 compared channels

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Issue 4's speed target: `mpdrig diagnose` on a 120 s, 100 Hz log in <= 30 s on the 2-core
+# diagnose's speed target: `mpdrig diagnose` on a 120 s, 100 Hz log in <= 30 s on the 2-core
 # machine. Makes synthetic logs with a hidden effect (and one without), diagnoses each under
 # /usr/bin/time and prints wall time, CPU time, peak RSS, model runs and the verdict.
 #

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The cost of DDS Security (issue 12): bench/command_latency.sh without and then with security,
+# The cost of DDS Security: bench/command_latency.sh without and then with security,
 # the same run otherwise (1 kHz real-time rig, COUNT pump commands timed to the first sensor
 # sample that shows them). Prints, per run, the latency quantiles, the probe's CPU, the
 # service's CPU (its "s CPU (..% of one core)" line) and ddsperf's plain round trip for scale.

@@ -1,4 +1,4 @@
-// Comparison of the model with a measured rig log (issue 3): replay the log's inputs through the
+// Comparison of the model with a measured rig log: replay the log's inputs through the
 // model, then measure how and where the model departs from every measured channel.
 //
 // Two ways in, one implementation of each metric (compare_accumulator.h):
@@ -10,8 +10,9 @@
 //                     (log_stream.h) and accumulates the metrics.
 //   LoadMeasuredLog   keeps time, the inputs and the compared channels in memory;
 //   ReplayModel       runs the model on them (the same replay as pass 2: the same numbers);
-//   CompareTraces     the same two passes over traces in memory. Issue 4 fits and screens
-//                     effects by calling ReplayModel and CompareTraces many times on one log.
+//   CompareTraces     the same two passes over traces in memory. fit and diagnose call
+//                     ReplayModel and CompareTraces many times on one log to fit and screen
+//                     effects.
 //
 // Metrics per channel y (measured) and yhat (model), over the samples where y is measured:
 //   NRMSE = ||y - yhat|| / ||y - mean(y)||, fit = 100 (1 - NRMSE) %  (System Identification);

@@ -8,6 +8,8 @@
 #include <numeric>
 #include <utility>
 
+#include "model/analysis/window_error.h"
+
 namespace mpdrig {
 namespace {
 
@@ -634,7 +636,7 @@ Result<Comparison> ComparisonAccumulator::Finish(
     metrics.rms_si = std::sqrt(s.sse / count);
     metrics.bias_si = s.sum_e / count;
     // A constant measurement has no variation to explain: NRMSE undefined (NaN).
-    metrics.nrmse = s.sst > 0.0 ? std::sqrt(s.sse / s.sst) : kNaN;
+    metrics.nrmse = Nrmse(s.sse, s.sst);
     metrics.fit_percent = 100.0 * (1.0 - metrics.nrmse);
     if (std::isfinite(metrics.nrmse)) error_sum += metrics.nrmse, ++error_count;
 

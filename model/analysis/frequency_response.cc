@@ -107,7 +107,8 @@ Result<std::vector<FrequencyPoint>> SimulatedFrequencyResponse(
     double pump_flow_m3ps, const std::vector<double>& freqs_hz,
     const SimulatedResponseOptions& options, const std::function<void(int, int)>& progress) {
   if (choke.kind == ChokeSetting::Kind::kClosed && pump_flow_m3ps != 0.0) {
-    return Status::Error("a closed choke with pump flow has no steady state: use --pump-lpm 0");
+    return Status::Error(
+        "a closed choke with pump flow has no steady state: set the pump flow to 0");
   }
   const RigParams rig = WithChoke(params, choke);
   const double decay_rate = 0.5 * rig.friction_f1_per_s;

@@ -11,8 +11,8 @@
 
 #include <vector>
 
+#include "model/core/pipe_law.h"
 #include "model/params/rig_params.h"
-#include "model/pipe/pipe_law.h"
 
 namespace mpdrig {
 

@@ -2,7 +2,6 @@
 
 #include <charconv>
 #include <cmath>
-#include <sstream>
 
 namespace mpdrig {
 
@@ -31,13 +30,8 @@ std::string ParamKeys(const EffectInfo& info) {
 }
 
 Status CheckValue(const EffectInfo& info, const EffectParamInfo& param, double value) {
-  if (!std::isfinite(value) || value < param.min_value || value > param.max_value) {
-    std::ostringstream out;
-    out << info.name << "." << param.key << " = " << value << " " << param.unit << " is outside ["
-        << param.min_value << ", " << param.max_value << "]";
-    return Status::Error(out.str());
-  }
-  return Status::Ok();
+  return CheckInRange(std::string(info.name) + "." + std::string(param.key), value, param.unit,
+                      param.min_value, param.max_value);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
-// Physical effects: named pieces of physics beyond the thesis's model that can be switched on
-// (issue 4). The thesis lists its own suspects (chapters 5, 8, 11); each is an effect here.
+// Physical effects: named pieces of physics beyond the thesis's model that can be switched on,
+// so that a log the base model cannot explain can be tested against each suspect. The thesis lists
+// its own suspects (chapters 5, 8, 11); each is an effect here.
 //
 // An effect has
 //   - an EffectInfo: its name, the physics in one line, the thesis sections, what it explains
@@ -20,7 +21,6 @@
 // catalogue.inc (README: "Add a physical effect").
 #pragma once
 
-#include <array>
 #include <functional>
 #include <memory>
 #include <span>
@@ -29,15 +29,12 @@
 #include <vector>
 
 #include "model/common/status.h"
+#include "model/core/rig_channels.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_extension.h"
 #include "model/pipe/pipe_solver.h"
-#include "model/sim/rig_channels.h"
 
 namespace mpdrig {
-
-// Every channel of a rig sample, SI with absolute pressure, indexed by Index(Channel).
-using ChannelValues = std::array<double, kChannelCount>;
 
 // The boundary inputs of the step just taken (at its end) and its length.
 struct StepRecord {

@@ -28,6 +28,7 @@
 // 2e-11 } }
 #include <cmath>
 
+#include "model/common/root_finding.h"
 #include "model/effects/effect.h"
 
 namespace mpdrig {

@@ -51,6 +51,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "model/common/root_finding.h"
 #include "model/effects/effect.h"
 
 namespace mpdrig {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "model/analysis/window_error.h"
 #include "model/effects/effect.h"
 
 namespace mpdrig {
@@ -12,64 +13,15 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-// Per-channel error statistics on the samples of [t0, t1]: the residual's sum of squares and the
-// measurement's variation about its mean, so NRMSE = sqrt(ss_res / ss_tot).
-struct ChannelSums {
-  double ss_res = 0.0;
-  double ss_tot = 0.0;
-};
-
-std::vector<ChannelSums> WindowSums(const MeasuredLog& log, const ModelTraces& model, double t0,
-                                    double t1, const std::vector<double>* means = nullptr) {
-  const std::vector<double>& t = log.time_s();
-  std::vector<ChannelSums> sums(log.channels.size());
-  for (std::size_t c = 0; c < log.channels.size(); ++c) {
-    const std::vector<double>& y = log.channels[c].values_si;
-    double mean = 0.0;
-    if (means != nullptr) {
-      mean = (*means)[c];
-    } else {
-      long count = 0;
-      for (std::size_t n = 0; n < t.size(); ++n) {
-        if (t[n] >= t0 && t[n] <= t1 && std::isfinite(y[n])) mean += y[n], ++count;
-      }
-      mean = count > 0 ? mean / count : 0.0;
-    }
-    for (std::size_t n = 0; n < t.size(); ++n) {
-      if (!(t[n] >= t0 && t[n] <= t1) || !std::isfinite(y[n])) continue;
-      const double e = model.values_si[c][n] - y[n];
-      sums[c].ss_res += e * e;
-      sums[c].ss_tot += (y[n] - mean) * (y[n] - mean);
-    }
-  }
-  return sums;
-}
-
-std::vector<double> WindowMeans(const MeasuredLog& log, double t0, double t1) {
-  const std::vector<double>& t = log.time_s();
-  std::vector<double> means;
-  for (const MeasuredChannel& channel : log.channels) {
-    double sum = 0.0;
-    long count = 0;
-    for (std::size_t n = 0; n < t.size(); ++n) {
-      if (t[n] >= t0 && t[n] <= t1 && std::isfinite(channel.values_si[n])) {
-        sum += channel.values_si[n], ++count;
-      }
-    }
-    means.push_back(count > 0 ? sum / count : 0.0);
-  }
-  return means;
-}
-
 // Mean NRMSE over channels, with the residual of `block` normalised by the variation of the
-// whole scoring window (`scale`, per channel: ss_tot per sample), so blocks are comparable.
-double BlockError(const std::vector<ChannelSums>& block, const std::vector<long>& counts,
+// whole scoring window (per channel: ss_tot per sample), so blocks are comparable.
+double BlockError(const std::vector<WindowSums>& block,
                   const std::vector<double>& variance_per_sample) {
   double sum = 0.0;
   int used = 0;
   for (std::size_t c = 0; c < block.size(); ++c) {
-    if (counts[c] == 0 || !(variance_per_sample[c] > 0.0)) continue;
-    sum += std::sqrt(block[c].ss_res / (counts[c] * variance_per_sample[c]));
+    if (block[c].count == 0 || !(variance_per_sample[c] > 0.0)) continue;
+    sum += std::sqrt(block[c].ss_res / (block[c].count * variance_per_sample[c]));
     ++used;
   }
   return used > 0 ? sum / used : kNaN;
@@ -84,40 +36,26 @@ struct Scored {
 Scored Score(const MeasuredLog& log, const ModelTraces& model, double t0, double t1) {
   Scored scored;
   const std::vector<double> means = WindowMeans(log, t0, t1);
-  const auto whole = WindowSums(log, model, t0, t1, &means);
-  const std::vector<double>& t = log.time_s();
-  std::vector<long> counts(log.channels.size(), 0);
-  for (std::size_t c = 0; c < log.channels.size(); ++c) {
-    for (std::size_t n = 0; n < t.size(); ++n) {
-      if (t[n] >= t0 && t[n] <= t1 && std::isfinite(log.channels[c].values_si[n])) ++counts[c];
-    }
-  }
+  const std::vector<WindowSums> whole = ChannelWindowSums(log, model, t0, t1, &means);
   std::vector<double> variance(log.channels.size(), 0.0);
   double sum = 0.0;
   int used = 0;
   for (std::size_t c = 0; c < whole.size(); ++c) {
-    if (counts[c] == 0 || !(whole[c].ss_tot > 0.0)) continue;
-    variance[c] = whole[c].ss_tot / counts[c];
-    const double nrmse = std::sqrt(whole[c].ss_res / whole[c].ss_tot);
-    scored.channel_errors.emplace_back(log.channels[c].channel, nrmse);
-    sum += nrmse;
+    if (!(whole[c].ss_tot > 0.0)) continue;
+    variance[c] = whole[c].ss_tot / whole[c].count;
+    scored.channel_errors.emplace_back(log.channels[c].channel, whole[c].nrmse());
+    sum += whole[c].nrmse();
     ++used;
   }
   scored.error = used > 0 ? sum / used : kNaN;
+  // Blocks [b0, b1) of the window, deviations about the whole window's means: their spread
+  // gives the improvement's standard error.
   const double width = (t1 - t0) / kScoreBlocks;
   for (int k = 0; k < kScoreBlocks; ++k) {
     const double b0 = t0 + k * width;
     const double b1 = k + 1 == kScoreBlocks ? t1 : b0 + width;
-    const auto block = WindowSums(log, model, b0, std::nextafter(b1, b0), &means);
-    std::vector<long> block_counts(log.channels.size(), 0);
-    for (std::size_t c = 0; c < log.channels.size(); ++c) {
-      for (std::size_t n = 0; n < t.size(); ++n) {
-        if (t[n] >= b0 && t[n] < b1 && std::isfinite(log.channels[c].values_si[n])) {
-          ++block_counts[c];
-        }
-      }
-    }
-    scored.block_errors.push_back(BlockError(block, block_counts, variance));
+    const auto block = ChannelWindowSums(log, model, b0, std::nextafter(b1, b0), &means);
+    scored.block_errors.push_back(BlockError(block, variance));
   }
   return scored;
 }
@@ -478,6 +416,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   fit_options.replay = replay;
   fit_options.window_end_s = diagnosis.fit_end_s;
   fit_options.max_iterations = options.max_iterations;
+  fit_options.solver_log = options.solver_log;
   const double steps = 1.0 + candidates.size();
   auto report = [&](std::string_view stage, double done) {
     if (options.progress) options.progress(stage, done / steps);

@@ -1,4 +1,4 @@
-// "Which physical effect is missing?" (issue 4): fit the base model to a log, show where it still
+// "Which physical effect is missing?": fit the base model to a log, show where it still
 // fails, try every effect of the catalogue, and rank them on data they were not fitted on.
 //
 // 1. Split the log in time: the first `fit_fraction` is the fitting data, the rest the scoring
@@ -92,6 +92,7 @@ struct DiagnoseOptions {
   std::function<void(const std::vector<std::function<void()>>&)> run_tasks;
   // "baseline", "<effect>", "compare"; fraction of the whole diagnosis done.
   std::function<void(std::string_view stage, double fraction)> progress;
+  bool solver_log = false;  // FitOptions::solver_log for every fit
 };
 
 inline constexpr int kDiagnoseCells = 50;

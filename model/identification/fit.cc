@@ -38,24 +38,6 @@ constexpr double kSingularRatio = 1.0e-12;
 // norm has no influence (bit-identical replays give 0; round-off alone stays far below).
 constexpr double kNoInfluence = 1.0e-9;
 
-struct TuningRange {
-  std::string_view key;
-  double lower;
-  double upper;
-};
-
-// Plausible tuning ranges around the thesis values (Table 9.4.1, 8.2.1, 8.3.2).
-constexpr TuningRange kTuningRanges[] = {
-    {"wave_speed_mps", 300.0, 1500.0},
-    {"friction_f1_per_s", 0.0, 5.0},
-    {"friction_f2_per_m", 0.0, 10.0},
-    {"choke_leak_m2", 0.0, 1.0e-5},
-    {"density_kgpm3", 900.0, 1100.0},
-    {"choke_density_kgpm3", 900.0, 1100.0},
-    {"piston_friction_fd1_pa_s_per_m", -5.0e5, 5.0e5},
-    {"piston_friction_fd2_pa_s2_per_m2", -5.0e6, 5.0e6},
-};
-
 // Splits "EFFECT.KEY"; nullopt-like empty effect name when there is no dot.
 std::pair<std::string_view, std::string_view> SplitEffectKey(std::string_view key) {
   const std::size_t dot = key.find('.');
@@ -360,12 +342,9 @@ Result<FitParameter> DefaultFitParameter(std::string_view key) {
     return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
                          ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
-  double lower = info->min_value, upper = info->max_value;
-  bool tabled = false;
-  for (const TuningRange& range : kTuningRanges) {
-    if (range.key == key) lower = range.lower, upper = range.upper, tabled = true;
-  }
-  if (!tabled) {
+  double lower = info->fit_min, upper = info->fit_max;
+  if (!(info->fit_min < info->fit_max)) {
+    lower = info->min_value, upper = info->max_value;
     // A factor of 3 either way around the thesis value (the sign kept), or the table's bounds.
     const double value = RigParams{}.*(info->member);
     if (value != 0.0) {
@@ -386,7 +365,7 @@ Result<double> GetParamValue(const RigParams& params, std::string_view key) {
     const EffectSetting* setting = params.FindEffect(effect_name);
     if (setting == nullptr) {
       return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on (add --effect " + std::string(effect_name) + ")");
+                           "' is not switched on");
     }
     const double* value = setting->Find(param_key);
     return value != nullptr ? *value : found->second->default_value;
@@ -411,14 +390,9 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
     EffectSetting* setting = params->FindEffect(effect_name);
     if (setting == nullptr) {
       return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on (add --effect " + std::string(effect_name) + ")");
+                           "' is not switched on");
     }
-    if (value < param.min_value || value > param.max_value) {
-      std::ostringstream out;
-      out << key << " = " << value << " " << param.unit << " is outside [" << param.min_value
-          << ", " << param.max_value << "]";
-      return Status::Error(out.str());
-    }
+    MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, param.unit, param.min_value, param.max_value));
     for (auto& [name, existing] : setting->values) {
       if (name == param_key) {
         existing = value;
@@ -433,44 +407,9 @@ Status SetParamValue(RigParams* params, std::string_view key, double value) {
     return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
                          ", or EFFECT.KEY of an effect (`mpdrig effects`)");
   }
-  if (value < info->min_value || value > info->max_value) {
-    std::ostringstream out;
-    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
-        << info->max_value << "]";
-    return Status::Error(out.str());
-  }
+  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
   params->*(info->member) = value;
   return Status::Ok();
-}
-
-double WindowError(const MeasuredLog& log, const ModelTraces& model, double window_begin_s,
-                   double window_end_s) {
-  MPDRIG_CHECK(model.values_si.size() == log.channels.size());
-  const std::vector<double>& time = log.time_s();
-  double total = 0.0;
-  int count = 0;
-  for (std::size_t c = 0; c < log.channels.size(); ++c) {
-    const std::vector<double>& y = log.channels[c].values_si;
-    const std::vector<double>& yhat = model.values_si[c];
-    double sum = 0.0;
-    long samples = 0;
-    for (std::size_t n = 0; n < time.size(); ++n) {
-      if (time[n] < window_begin_s || time[n] > window_end_s || !std::isfinite(y[n])) continue;
-      sum += y[n];
-      ++samples;
-    }
-    if (samples == 0) continue;
-    const double mean = sum / static_cast<double>(samples);
-    double sse = 0.0, sst = 0.0;
-    for (std::size_t n = 0; n < time.size(); ++n) {
-      if (time[n] < window_begin_s || time[n] > window_end_s || !std::isfinite(y[n])) continue;
-      sse += (yhat[n] - y[n]) * (yhat[n] - y[n]);
-      sst += (y[n] - mean) * (y[n] - mean);
-    }
-    const double nrmse = sst > 0.0 ? std::sqrt(sse / sst) : kNaN;
-    if (std::isfinite(nrmse)) total += nrmse, ++count;
-  }
-  return count > 0 ? total / count : kNaN;
 }
 
 Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
@@ -591,11 +530,8 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   solver.line_search_interpolation_type = ceres::QUADRATIC;
   solver.max_num_line_search_step_size_iterations = 4;
   solver.num_threads = 1;
-  // MPDRIG_CERES_LOG=1 in the environment prints Ceres's per-iteration table to stdout (trust
-  // region ratio, step, radius): the way to see why a fit stops.
-  const bool ceres_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;
-  solver.logging_type = ceres_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-  solver.minimizer_progress_to_stdout = ceres_log;
+  solver.logging_type = options.solver_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver.minimizer_progress_to_stdout = options.solver_log;
   ProgressCallback callback(residuals, options.progress);
   solver.callbacks.push_back(&callback);
   std::string options_error;

@@ -1,4 +1,4 @@
-// Parameter identification against a rig log (issue 4; the thesis's chapter 8-9 tuning,
+// Parameter identification against a rig log (the thesis's chapter 8-9 tuning,
 // automated): bounded nonlinear least squares of any base or effect parameter.
 //
 // Residuals: for every compared channel c present in the log (ComparedChannels(), P1 P2
@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "model/analysis/compare.h"
+#include "model/analysis/window_error.h"  // WindowError: the error fit reports
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/sim/rig_simulator.h"
@@ -76,6 +77,10 @@ struct FitOptions {
   bool central_differences = false;
   // Called after each solver iteration: iteration number and current error (mean NRMSE).
   std::function<void(int iteration, double error)> progress;
+  // Prints Ceres's per-iteration table to stdout (trust region ratio, step, radius): the way to
+  // see why a fit stops. The command line sets it from MPDRIG_CERES_LOG; the model reads no
+  // environment.
+  bool solver_log = false;
 };
 
 struct FitResult {
@@ -97,11 +102,6 @@ struct FitResult {
   // FitParametersAndInputLevels: the levels estimated at the first fit's parameters.
   InputLevelCorrection input_levels;
 };
-
-// Mean NRMSE over the compared channels with a defined NRMSE, on the window: the metric of
-// compare's `error` restricted to [window_begin_s, window_end_s].
-double WindowError(const MeasuredLog& log, const ModelTraces& model, double window_begin_s,
-                   double window_end_s);
 
 // Fits `parameters` starting from `start` (its values are the initial guesses, clamped into the
 // bounds). A replay that fails (e.g. leaves the model's range) counts as an infeasible step.

@@ -102,7 +102,7 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
 
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   // Upper bounds: the log, its noise-free twin and the replay grid are held in memory, so an
-  // absurd duration or rate would run out of memory or time instead of failing (issue 15).
+  // absurd duration or rate would run out of memory or time instead of failing.
   if (!(options.duration_s >= 10.0 && options.duration_s <= kMaxSyntheticDurationS) ||
       !(options.rate_hz >= 10.0 && options.rate_hz <= kMaxSyntheticRateHz)) {
     std::ostringstream out;

@@ -1,4 +1,4 @@
-// Synthetic lab logs with a hidden effect (issue 4's test data, and a way for a user to try
+// Synthetic lab logs with a hidden effect (the test data of diagnose, and a way for a user to try
 // `diagnose` on data whose answer is known): the model with one catalogue effect switched on at
 // a random strength, perturbed base parameters, the lab's kind of excitation and sensor noise.
 //

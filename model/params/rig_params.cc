@@ -11,7 +11,8 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Bounds are physical plausibility limits, not tuning ranges: they catch unit mistakes
-// (a wave speed in km/s, a radius in mm) without forbidding experiments.
+// (a wave speed in km/s, a radius in mm) without forbidding experiments. The last two numbers,
+// where given, are the tuning range `fit` searches (ParamInfo::fit_min, fit_max).
 const ParamInfo kParams[] = {
     {"pipe_length_m", "m", "copper pipe length L (Table 8.1.2)", &RigParams::pipe_length_m, 1.0,
      1.0e5},
@@ -21,20 +22,20 @@ const ParamInfo kParams[] = {
      "height of the outlet above the inlet (coil height, Table 8.1.2)",
      &RigParams::pipe_elevation_gain_m, -1.0e4, 1.0e4},
     {"wave_speed_mps", "m/s", "speed of sound c (tuned 850, Table 9.4.1)",
-     &RigParams::wave_speed_mps, 10.0, 5000.0},
+     &RigParams::wave_speed_mps, 10.0, 5000.0, 300.0, 1500.0},
     {"density_kgpm3", "kg/m^3", "water density rho_ref at p_ref (5.2.1)", &RigParams::density_kgpm3,
-     100.0, 5000.0},
+     100.0, 5000.0, 900.0, 1100.0},
     {"reference_pressure_pa", "Pa", "reference pressure p_ref of (5.2.1), absolute",
      &RigParams::reference_pressure_pa, 0.0, 1.0e8},
     {"friction_f1_per_s", "1/s", "linear pipe friction f1 in f(u) = f1 u + f2 u|u| (8.6.8, 9.4.1)",
-     &RigParams::friction_f1_per_s, 0.0, 1.0e3},
+     &RigParams::friction_f1_per_s, 0.0, 1.0e3, 0.0, 5.0},
     {"friction_f2_per_m", "1/m", "quadratic pipe friction f2 in f(u) = f1 u + f2 u|u| (8.6.8)",
-     &RigParams::friction_f2_per_m, 0.0, 1.0e4},
+     &RigParams::friction_f2_per_m, 0.0, 1.0e4, 0.0, 10.0},
     {"gravity_mps2", "m/s^2", "gravitational acceleration g", &RigParams::gravity_mps2, 0.0, 100.0},
     {"choke_leak_m2", "m^2", "choke leak: floor of the characteristic G (Table 9.4.1)",
-     &RigParams::choke_leak_m2, 0.0, 1.0e-2},
+     &RigParams::choke_leak_m2, 0.0, 1.0e-2, 0.0, 1.0e-5},
     {"choke_density_kgpm3", "kg/m^3", "fluid density at the choke rho_L (5.3.2)",
-     &RigParams::choke_density_kgpm3, 100.0, 5000.0},
+     &RigParams::choke_density_kgpm3, 100.0, 5000.0, 900.0, 1100.0},
     {"choke_time_constant_s", "s", "choke actuator first-order time constant (5.3)",
      &RigParams::choke_time_constant_s, 0.0, 100.0},
     {"choke_rate_limit_frac_per_s", "1/s",
@@ -47,10 +48,10 @@ const ParamInfo kParams[] = {
     {"compartment_height_m", "m", "heave generator compartment height h (5.4.2, Table 8.1.1)",
      &RigParams::compartment_height_m, 0.0, 100.0},
     {"piston_friction_fd1_pa_s_per_m", "Pa s/m", "piston pressure drop, linear term f_d1 (8.2.1)",
-     &RigParams::piston_friction_fd1_pa_s_per_m, -1.0e9, 1.0e9},
+     &RigParams::piston_friction_fd1_pa_s_per_m, -1.0e9, 1.0e9, -5.0e5, 5.0e5},
     {"piston_friction_fd2_pa_s2_per_m2", "Pa s^2/m^2",
      "piston pressure drop, quadratic term f_d2 (8.2.1)",
-     &RigParams::piston_friction_fd2_pa_s2_per_m2, -1.0e10, 1.0e10},
+     &RigParams::piston_friction_fd2_pa_s2_per_m2, -1.0e10, 1.0e10, -5.0e6, 5.0e6},
     {"atmospheric_pressure_pa", "Pa", "atmospheric pressure (gauge <-> absolute)",
      &RigParams::atmospheric_pressure_pa, 1.0e4, 2.0e5},
 };
@@ -99,12 +100,8 @@ Status RigParams::Validate() const {
     if (!std::isfinite(value)) {
       return Status::Error(std::string(info.key) + " is not a finite number");
     }
-    if (value < info.min_value || value > info.max_value) {
-      std::ostringstream out;
-      out << info.key << " = " << value << " " << info.unit << " is outside [" << info.min_value
-          << ", " << info.max_value << "]";
-      return Status::Error(out.str());
-    }
+    MPDRIG_RETURN_IF_ERROR(
+        CheckInRange(info.key, value, info.unit, info.min_value, info.max_value));
   }
   // The piston displaces (A_d - A_d2) per metre (5.4.1): an upper rod no thicker than the lower
   // one would make the heave push fluid the wrong way, or not at all.
@@ -203,7 +200,7 @@ Status SetEffectParam(RigParams* params, std::string_view key, std::string_view 
   EffectSetting* effect = params->FindEffect(effect_name);
   if (effect == nullptr) {
     return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                         "' is not switched on (add --effect " + std::string(effect_name) + ")");
+                         "' is not switched on");
   }
   auto value = ParseNumber(key, value_text, "see `mpdrig effects`");
   if (!value.ok()) return value.status();
@@ -219,6 +216,15 @@ Status SetEffectParam(RigParams* params, std::string_view key, std::string_view 
 
 }  // namespace
 
+Status CheckInRange(std::string_view key, double value, std::string_view unit, double min_value,
+                    double max_value) {
+  if (std::isfinite(value) && value >= min_value && value <= max_value) return Status::Ok();
+  std::ostringstream out;
+  out << key << " = " << value << " " << unit << " is outside [" << min_value << ", " << max_value
+      << "]";
+  return Status::Error(out.str());
+}
+
 Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
   if (key.find('.') != std::string_view::npos) return SetEffectParam(params, key, value_text);
   const ParamInfo* info = FindParam(key);
@@ -229,12 +235,7 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
   auto parsed = ParseNumber(key, value_text, info->unit);
   if (!parsed.ok()) return parsed.status();
   const double value = *parsed;
-  if (value < info->min_value || value > info->max_value) {
-    std::ostringstream out;
-    out << key << " = " << value << " " << info->unit << " is outside [" << info->min_value << ", "
-        << info->max_value << "]";
-    return Status::Error(out.str());
-  }
+  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
   params->*info->member = value;
   return Status::Ok();
 }
@@ -242,7 +243,7 @@ Status SetParam(RigParams* params, std::string_view key, std::string_view value_
 Status ApplyOverride(RigParams* params, std::string_view assignment) {
   const std::size_t equals = assignment.find('=');
   if (equals == std::string_view::npos) {
-    return Status::Error("--set expects key=value, got '" + std::string(assignment) + "'");
+    return Status::Error("expected key=value, got '" + std::string(assignment) + "'");
   }
   return SetParam(params, assignment.substr(0, equals), assignment.substr(equals + 1));
 }

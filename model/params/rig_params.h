@@ -25,7 +25,7 @@ struct ChokePoint {
   double g_m2;          // flow coefficient G [m^2]
 };
 
-// A physical effect switched on (model/effects/, issue 4): its registry name and the parameters
+// A physical effect switched on (model/effects/): its registry name and the parameters
 // given explicitly; the others keep the effect's defaults. The effect registry checks names and
 // bounds (ValidateEffects in model/effects/effect.h) before anything is simulated.
 struct EffectSetting {
@@ -96,10 +96,20 @@ struct ParamInfo {
   double RigParams::*member;
   double min_value;  // inclusive
   double max_value;  // inclusive
+  // The range `mpdrig fit` searches by default where the thesis gives a plausible tuning range
+  // (Tables 9.4.1, 8.2.1, 8.3.2); none (fit_min == fit_max): a factor of 3 either way around the
+  // thesis value. Within [min_value, max_value].
+  double fit_min = 0.0;
+  double fit_max = 0.0;
 };
 
 std::span<const ParamInfo> ParamTable();
 const ParamInfo* FindParam(std::string_view key);
+
+// Ok when min_value <= value <= max_value, else "key = value unit is outside [min, max]" (NaN
+// and infinities are outside): the one wording of a bound check, for the table and effects.
+Status CheckInRange(std::string_view key, double value, std::string_view unit, double min_value,
+                    double max_value);
 
 // Sets one parameter from its key and a text value (`--set wave_speed_mps=1100`). An unknown key
 // lists the valid ones; a NaN, an unparsable number or a value outside the bounds is an error.

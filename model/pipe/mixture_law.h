@@ -18,7 +18,7 @@
 #include <functional>
 #include <vector>
 
-#include "model/pipe/pipe_law.h"
+#include "model/core/pipe_law.h"
 
 namespace mpdrig {
 

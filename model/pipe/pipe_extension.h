@@ -1,4 +1,4 @@
-// Hooks through which physics beyond the thesis's pipe model reaches a pipe solver (issue 4).
+// Hooks through which physics beyond the thesis's pipe model reaches a pipe solver.
 //
 // A PipeExtension is what a pipe solver sees of a physical effect (model/effects/effect.h): an
 // extra momentum source along the pipe, or its own closure of an end of the pipe. Every hook has
@@ -9,11 +9,10 @@
 // The pipe layer knows nothing of effects: model/effects depends on this header, not the reverse.
 #pragma once
 
-#include <cmath>
 #include <span>
 
 #include "model/boundary/choke.h"
-#include "model/pipe/pipe_law.h"
+#include "model/core/pipe_law.h"
 
 namespace mpdrig {
 
@@ -31,7 +30,8 @@ struct PipeSnapshot {
 // The pressure at a boundary node as a function of that node's velocity, once the invariant
 // arriving from inside the pipe is known: at x = 0 the beta characteristic,
 // p = P(alpha - beta) with alpha = 2u - beta; at x = L the alpha characteristic. Strictly
-// monotonic in u (the pipe's impedance), so closures can solve for u with a safeguarded Newton.
+// monotonic in u (the pipe's impedance), so closures can solve for u with a safeguarded Newton
+// (SolveDecreasing, model/common/root_finding.h).
 class BoundaryRelation {
  public:
   virtual ~BoundaryRelation() = default;
@@ -95,29 +95,5 @@ class PipeExtension {
     return velocity_guess_mps;
   }
 };
-
-// Solves g(u) = 0 for a strictly decreasing g with derivative dg, starting at `guess`: Newton
-// steps, with bisection once a bracket is known. Boundary closures share it.
-double SolveDecreasing(double guess, double scale, const auto& g, const auto& dg) {
-  double u = guess;
-  double lo = -1e300, hi = 1e300;  // g(lo) > 0 > g(hi)
-  for (int iteration = 0; iteration < 60; ++iteration) {
-    const double value = g(u);
-    if (value == 0.0) return u;
-    if (value > 0.0) {
-      lo = u;
-    } else {
-      hi = u;
-    }
-    const double slope = dg(u);
-    double next = slope < 0.0 ? u - value / slope : u + (value > 0.0 ? scale : -scale);
-    if (!(next > lo && next < hi)) {
-      next = (lo > -1e299 && hi < 1e299) ? 0.5 * (lo + hi) : u + (value > 0.0 ? scale : -scale);
-    }
-    if (std::abs(next - u) <= 1e-13 * (1.0 + std::abs(u))) return next;
-    u = next;
-  }
-  return u;
-}
 
 }  // namespace mpdrig

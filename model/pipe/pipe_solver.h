@@ -18,9 +18,9 @@
 
 #include "model/boundary/choke.h"
 #include "model/common/status.h"
+#include "model/core/pipe_law.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_extension.h"
-#include "model/pipe/pipe_law.h"
 
 namespace mpdrig {
 
@@ -84,7 +84,7 @@ class PipeSolver {
   // profile (6.5.3) for the quasi-linear model, p_l + rho g sin(gamma) (L - x) for the linear one.
   void SetRestState(double outlet_pressure_pa);
 
-  // Physics beyond the thesis's pipe (issue 4), consulted every step; not owned, must outlive
+  // Physics beyond the thesis's pipe (model/effects), consulted every step; not owned, must outlive
   // the solver. Refused when the scheme does not support a hook one of them uses, when two
   // close the same end, or when two set a vapour pressure.
   Status SetExtensions(std::vector<const PipeExtension*> extensions);

@@ -289,8 +289,8 @@ struct RigLogReader::State {
                              FormatNumber(last_time_s) + " (line " +
                              std::to_string(last_time_line) + "), a gap longer than " +
                              FormatGap(options.max_gap_s) +
-                             " s (an interrupted recording or a wrong time; raise the limit "
-                             "with --max-gap-s if it is real)");
+                             " s (an interrupted recording or a wrong time; a longer gap limit "
+                             "admits it if it is real)");
         }
         if (last_time_line != 0 && !(*value - last_time_s >= options.min_step_s)) {
           return ErrorAt(line_number, ColumnOf(line, start),

@@ -46,9 +46,9 @@
 
 namespace mpdrig::riglog {
 
-// Limits on a log's time axis beyond the format (issue 15). Every tool replays the model over a
-// log's whole time span, so one wild time value (1e308, or a clock jump of a day) would make it
-// run for hours; a gap is also where a recording was interrupted, and the replay would hold the
+// Limits on a log's time axis beyond the format, against bad input. Every tool replays the model
+// over a log's whole time span, so one wild time value (1e308, or a clock jump of a day) would make
+// it run for hours; a gap is also where a recording was interrupted, and the replay would hold the
 // inputs across it as if the rig had. Time steps far below any sensor period are a unit slip
 // (ms written as s) or a broken clock, and give empty metrics.
 struct ReadOptions {

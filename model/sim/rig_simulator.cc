@@ -346,9 +346,7 @@ Result<RunResult> Simulate(const RigParams& params, const SimulationOptions& opt
       params, options, inputs, output_times,
       [&result](const RigSample& sample) { result.samples.push_back(sample); }, progress);
   if (!summary.ok()) return summary.status();
-  result.steps = summary->steps;
-  result.time_step_s = summary->time_step_s;
-  result.first_range_event = summary->first_range_event;
+  static_cast<RunSummary&>(result) = *summary;
   return result;
 }
 

@@ -21,10 +21,10 @@
 #include "model/boundary/piston.h"
 #include "model/common/status.h"
 #include "model/common/units.h"
+#include "model/core/rig_channels.h"
 #include "model/effects/effect.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_solver.h"
-#include "model/sim/rig_channels.h"
 
 namespace mpdrig {
 
@@ -187,18 +187,17 @@ struct InputSignals {
   std::optional<PeriodicWarmup> warmup;  // none: the run starts from the steady state at t0
 };
 
-struct RunResult {
-  std::vector<RigSample> samples;  // one per output time
-  std::optional<RangeEvent> first_range_event;
-  long steps = 0;
-  double time_step_s = 0.0;
-};
-
-// What a run did besides its samples.
+// What a run did besides its samples: what SimulateEach returns, which hands the samples to a
+// sink as they come.
 struct RunSummary {
   long steps = 0;
   double time_step_s = 0.0;
   std::optional<RangeEvent> first_range_event;
+};
+
+// The summary and every sample: what Simulate returns, for runs short enough to hold.
+struct RunResult : RunSummary {
+  std::vector<RigSample> samples;  // one per output time
 };
 
 // Runs the rig over [output_times.front(), output_times.back()] and hands every channel at each

@@ -40,7 +40,7 @@
 #include <vector>
 
 #include "model/common/status.h"
-#include "model/sim/rig_channels.h"
+#include "model/core/rig_channels.h"
 
 namespace mpdrig {
 

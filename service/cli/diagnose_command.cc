@@ -1,9 +1,10 @@
-// mpdrig diagnose: which physical effect is the model missing? (issue 4)
+// mpdrig diagnose: which physical effect is the model missing?
 // mpdrig synth: a synthetic lab log with a hidden effect, to try diagnose on a known answer.
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -54,6 +55,7 @@ int RunDiagnose(DiagnoseArgs args) {
   options.fit_fraction = args.fit_fraction;
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
+  options.solver_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;  // Ceres's iteration table
   const Status prepared = PrepareReplay(&*log, *params, options.simulation, &options.replay,
                                         args.quiet, InputLevels::kAfterTheFit);
   if (!prepared.ok()) return Fail(name, prepared);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <memory>
@@ -11,8 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "model/config/rig_config.h"
 #include "model/identification/fit.h"
-#include "model/params/rig_config.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 
@@ -229,6 +230,8 @@ int RunFit(const FitArgs& args) {
       args.weights == "noise" ? ChannelWeighting::kNoise : ChannelWeighting::kVariation;
   options.max_iterations = args.max_iterations;
   options.relative_step = args.relative_step;
+  // The model reads no environment; the command line passes this debugging switch on.
+  options.solver_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;
   if (!args.window.empty()) {
     Status window = ParseWindow(args.window, &options);
     if (!window.ok()) return Fail(name, window);

@@ -3,10 +3,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <regex>
 #include <sstream>
+#include <utility>
 
+#include "model/config/rig_config.h"
 #include "model/effects/effect.h"
-#include "model/params/rig_config.h"
 
 namespace mpdrig::cli {
 
@@ -92,8 +94,22 @@ Status WriteText(const std::string& path, const std::string& text) {
   return Status::Ok();
 }
 
+std::string CommandLineWording(std::string message) {
+  // The model says what is wrong in its own terms; the remedy a user types is a flag.
+  static const std::pair<std::regex, std::string> kRemedies[] = {
+      {std::regex(R"(effect '([A-Za-z0-9_]+)' is not switched on)"), "$& (add --effect $1)"},
+      {std::regex(R"(a longer gap limit admits it)"), "raise the limit with --max-gap-s"},
+      {std::regex(R"(set the pump flow to 0)"), "use --pump-lpm 0"},
+  };
+  for (const auto& [pattern, replacement] : kRemedies) {
+    message = std::regex_replace(message, pattern, replacement);
+  }
+  return message;
+}
+
 int Fail(const std::string& command, const Status& status) {
-  std::fprintf(stderr, "mpdrig %s: %s\n", command.c_str(), status.message().c_str());
+  const std::string message = CommandLineWording(status.message());
+  std::fprintf(stderr, "mpdrig %s: %s\n", command.c_str(), message.c_str());
   return 1;
 }
 

@@ -61,5 +61,8 @@ Status WriteText(const std::string& path, const std::string& text);
 
 // Prints "mpdrig <command>: <message>" to stderr and returns the exit code for a failure.
 int Fail(const std::string& command, const Status& status);
+// A model error message in the command line's words: where the model names a remedy in its own
+// terms ("effect 'x' is not switched on", "a longer gap limit"), the flag that applies it.
+std::string CommandLineWording(std::string message);
 
 }  // namespace mpdrig::cli

@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "model/common/units.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 

@@ -40,8 +40,8 @@ struct SimulateArgs {
 
 // Limits of a profile run: its output times are held in memory (8 B each; the samples stream to
 // the log, about 250 B each on disk) and the solver steps the whole duration, so an absurd value
-// would run out of memory, disk or time instead of failing (issue 15: --duration inf, 1e17,
-// 1e9, --rate-hz inf).
+// would run out of memory, disk or time instead of failing (as --duration inf, 1e17, 1e9 and
+// --rate-hz inf once did).
 constexpr double kMaxDurationS = 86400.0;    // one day of rig time per run
 constexpr double kMaxRateHz = 100000.0;      // far above the lab's 100 Hz and the solver's grid
 constexpr double kMaxOutputSamples = 1.0e7;  // 1 kHz for 2.8 h: 80 MB of times, 2.5 GB of log

@@ -1,4 +1,4 @@
-// The comparison as one self-contained HTML page (issue 3): a summary table on top, then the
+// The comparison as one self-contained HTML page: a summary table on top, then the
 // error along the pipe, measured vs model empirical transfer functions piston -> PT1 and -> C2,
 // per channel the measured and model traces (min/max envelopes per pixel column, so an hour at
 // 1 kHz draws as fast as a minute) with their residual, the bands, and the residual analysis

@@ -1,5 +1,6 @@
-// model/ is pure numerics (style.md, design.md): no DDS, no threads, no wall clock, no sockets,
-// and no dependency on the layers above it (idl/, service/, clients/). Time is an argument.
+// model/ is pure numerics (style.md, design.md): no DDS, no threads, no wall clock, no sockets, no
+// environment variables, and no dependency on the layers above it (idl/, service/, clients/).
+// Time is an argument.
 // This test scans every source and build file under model/ and names each offending line.
 #include <algorithm>
 #include <filesystem>
@@ -35,6 +36,9 @@ const std::vector<Rule>& SourceRules() {
       {"threads", std::regex(R"(std::(thread|jthread|async|this_thread)\b)")},
       {"wall clock", std::regex(R"(\b(system_clock|steady_clock|high_resolution_clock)\b)")},
       {"wall clock", std::regex(R"(\b(gettimeofday|clock_gettime|timespec_get)\s*\()")},
+      // Configuration reaches the model as arguments (options structs); the command line reads
+      // the environment and passes what it found.
+      {"environment variable", std::regex(R"(\b(getenv|secure_getenv|setenv|putenv)\s*\()")},
       {"sockets",
        std::regex(
            R"(^\s*#\s*include\s*<(sys/socket\.h|netinet/[^>]*|arpa/inet\.h|netdb\.h|winsock2?\.h|asio\.hpp|boost/asio[^>]*)>)")},
@@ -101,6 +105,7 @@ TEST(ModelPurity, ScannerCatchesEachForbiddenDependency) {
       "auto t = std::chrono::system_clock::now(); // wall clock",
       "using Clock = std::chrono::high_resolution_clock;",
       "clock_gettime(CLOCK_MONOTONIC, &ts);",
+      "const bool log = std::getenv(\"MPDRIG_CERES_LOG\") != nullptr;",
       "#include <sys/socket.h>",
       "#include <netinet/in.h>",
       "#include <boost/asio.hpp>",
@@ -116,6 +121,7 @@ TEST(ModelPurity, ScannerCatchesEachForbiddenDependency) {
       "double time_s = 0.0;",
       "int threads_per_block = 1;",
       "double steady_state_clock_pa = 0.0;",
+      "bool solver_log = false;  // the command line sets it from MPDRIG_CERES_LOG (getenv)",
   };
   for (const char* line : allowed) {
     EXPECT_TRUE(FindViolations("x.cc", line, false).empty()) << line;
@@ -154,6 +160,115 @@ TEST(ModelPurity, ModelHasNoDdsThreadsWallClockOrSockets) {
   for (const std::string& v : violations) report += "  " + v + "\n";
   EXPECT_TRUE(violations.empty())
       << "model/ is pure numerics (style.md): time is an argument, transport lives in service/.\n"
+      << report;
+}
+
+// model/'s folders form layers (model/CMakeLists.txt lists them lowest first, with what each
+// holds): a file may include its own folder and folders listed before it. model/ compiles as one
+// library, so a cycle between folders links fine and goes unseen until it makes the next change
+// hard (a header of pipe/ that needs boundary/ that needs pipe/). The order is read from the
+// foreach() of model/CMakeLists.txt, so the build and this test cannot disagree.
+std::vector<std::string> ParseFolderOrder(const std::string& cmake_text) {
+  const std::regex foreach_list(R"(foreach\s*\(\s*part\s+([^)]*)\))");
+  std::smatch match;
+  std::vector<std::string> order;
+  if (!std::regex_search(cmake_text, match, foreach_list)) return order;
+  std::istringstream words(match[1].str());
+  for (std::string word; words >> word;) order.push_back(word);
+  return order;
+}
+
+// "name:line: rule: text" for every include of `text` (the file model/<folder>/...) that names a
+// model folder listed after <folder>, or one the order does not list.
+std::vector<std::string> FindLayerViolations(const std::string& name, const std::string& text,
+                                             const std::vector<std::string>& order) {
+  std::vector<std::string> violations;
+  const std::regex own_folder(R"(^model/([^/]+)/)");
+  std::smatch own;
+  if (!std::regex_search(name, own, own_folder)) return violations;
+  const auto rank = [&order](const std::string& folder) {
+    return std::find(order.begin(), order.end(), folder) - order.begin();
+  };
+  const auto own_rank = rank(own[1].str());
+  const std::regex include(R"(^\s*#\s*include\s*"model/([^/"]+)/)");
+  std::istringstream in(text);
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    std::smatch target;
+    if (!std::regex_search(line, target, include)) continue;
+    const std::string folder = target[1].str();
+    const auto target_rank = rank(folder);
+    if (target_rank <= own_rank && target_rank < static_cast<long>(order.size())) continue;
+    const std::string rule =
+        target_rank == static_cast<long>(order.size())
+            ? "model/" + folder + "/ is not in the folder order of model/CMakeLists.txt"
+            : "model/" + own[1].str() + "/ may not include model/" + folder +
+                  "/, which comes after it in the folder order of model/CMakeLists.txt";
+    violations.push_back(name + ":" + std::to_string(number) + ": " + rule + ": " + line);
+  }
+  return violations;
+}
+
+TEST(ModelLayers, ScannerCatchesAnIncludeUpTheOrder) {
+  const std::vector<std::string> order =
+      ParseFolderOrder("foreach(part common core boundary\n    pipe)\n  add_subdirectory()");
+  ASSERT_EQ(order, (std::vector<std::string>{"common", "core", "boundary", "pipe"}));
+  // Down the order and within a folder: allowed.
+  EXPECT_TRUE(FindLayerViolations("model/boundary/choke.h",
+                                  "#include \"model/core/pipe_law.h\"\n"
+                                  "#include \"model/boundary/piston.h\"\n"
+                                  "#include <vector>\n// see model/pipe/pipe_solver.h\n",
+                                  order)
+                  .empty());
+  // Up the order: named with file, line and rule.
+  const std::vector<std::string> up =
+      FindLayerViolations("model/boundary/choke.h",
+                          "#include <vector>\n#include \"model/pipe/pipe_solver.h\"\n", order);
+  ASSERT_EQ(up.size(), 1u);
+  EXPECT_NE(up[0].find("model/boundary/choke.h:2: model/boundary/ may not include model/pipe/"),
+            std::string::npos)
+      << up[0];
+  // An include of a folder the order does not know: refused, so a new folder has to take its
+  // place in the order (EveryIncludeGoesDownTheFolderOrder also refuses the folder itself).
+  EXPECT_EQ(FindLayerViolations("model/pipe/x.cc", "#include \"model/newthing/a.h\"", order).size(),
+            1u);
+}
+
+TEST(ModelLayers, EveryIncludeGoesDownTheFolderOrder) {
+  const fs::path model = fs::path(MPDRIG_SOURCE_DIR) / "model";
+  std::ifstream cmake(model / "CMakeLists.txt");
+  ASSERT_TRUE(cmake) << model / "CMakeLists.txt";
+  std::ostringstream cmake_text;
+  cmake_text << cmake.rdbuf();
+  const std::vector<std::string> order = ParseFolderOrder(cmake_text.str());
+  ASSERT_GT(order.size(), 5u) << "no foreach(part ...) folder list in model/CMakeLists.txt";
+
+  std::string report;
+  int scanned = 0;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(model)) {
+    if (entry.is_directory() && entry.path().parent_path() == model &&
+        std::find(order.begin(), order.end(), entry.path().filename().string()) == order.end()) {
+      report += "  model/" + entry.path().filename().string() +
+                "/ is not in the folder order of model/CMakeLists.txt\n";
+    }
+    if (!entry.is_regular_file() || !IsSource(entry.path())) continue;
+    std::ifstream file(entry.path(), std::ios::binary);
+    ASSERT_TRUE(file) << entry.path();
+    std::ostringstream text;
+    text << file.rdbuf();
+    const std::string name = fs::relative(entry.path(), MPDRIG_SOURCE_DIR).string();
+    for (const std::string& v : FindLayerViolations(name, text.str(), order)) {
+      report += "  " + v + "\n";
+    }
+    ++scanned;
+  }
+  EXPECT_GT(scanned, 10);
+  EXPECT_TRUE(report.empty())
+      << "model/ folders include only themselves and the folders before them (model/CMakeLists.txt"
+         " lists the order and what each holds). Move shared vocabulary down, e.g. to "
+         "model/core/:\n"
       << report;
 }
 

@@ -52,7 +52,7 @@ TEST(BhpController, AttenuatesTheHeaveInducedBottomHolePressureOscillation) {
   // fixed. 60 s: 10 s to learn the set point, about 20 s to converge, the last 20 s measured.
   // Without sensor noise: on the lab's (serve's default) the observer's estimate, with the
   // thesis's poles, is too noisy for this controller (measured: ratio 1.9 and a mean 0.10 bar
-  // off); the observer at lab noise is issue 11's part 5.
+  // off); the observer at lab noise is tested in observer_noise_test.cc.
   const std::string controller = "\"" BHP_CONTROLLER_EXE "\" --lockstep --domain " + domain +
                                  " --duration 60 --measure-last 20 --timeout 30";
   const std::string command =

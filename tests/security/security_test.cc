@@ -1,4 +1,4 @@
-// Who may command which rig (issue 12): a real `mpdrig serve --security` process with a class
+// Who may command which rig: a real `mpdrig serve --security` process with a class
 // made by deploy/security/make-class (students alice and bob, bob may watch alice's rig), and in
 // this process participants of several identities (the instructor, alice, bob, an intruder
 // without security). Each participant has a domain instance of its own that speaks the

@@ -19,7 +19,7 @@
 #include <gtest/gtest.h>
 
 #include "model/common/units.h"
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/rig_log.h"
 #include "tests/support/sanitizer.h"
@@ -397,6 +397,19 @@ TEST_F(CliTest, SimulateNamesABadSensorNoise) {
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 
+// The model names what is wrong; the command line adds the flag that fixes it.
+TEST_F(CliTest, AnEffectParameterOfAnEffectThatIsOffNamesTheFlagThatSwitchesItOn) {
+  const RunResult run =
+      Run("simulate --piston 0 --duration 1 --set unsteady_friction.k=0.02 --out " +
+          Quote(Path("E.csv")));
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_TRUE(Contains(run.err,
+                       "effect 'unsteady_friction' is not switched on (add --effect "
+                       "unsteady_friction)"))
+      << run.err;
+  EXPECT_FALSE(fs::exists(Path("E.csv")));
+}
+
 TEST_F(CliTest, SimulateRequiresOut) {
   const RunResult run = Run("simulate --piston sine:amp_m=0.1,freq_hz=0.2 --duration 1");
   EXPECT_NE(run.exit_code, 0);
@@ -464,7 +477,7 @@ TEST_F(CliTest, SimulateRejectsAnUnknownProfileKind) {
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 
-// Absurd durations and rates (issue 15, item 2): before, inf, 1e308 and 1e17 crashed (the
+// Absurd durations and rates, found by a bad-input probe: before, inf, 1e308 and 1e17 crashed (the
 // output count's std::lround overflowed) and 1e9 allocated until std::bad_alloc. Now each is
 // refused at once, naming the flag and its limit, and nothing is written.
 TEST_F(CliTest, SimulateRefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) {
@@ -490,8 +503,8 @@ TEST_F(CliTest, SimulateRefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) 
   }
 }
 
-// Issue 15, item 2: simulate held its whole output in memory (135 MB for 600 s at 1 kHz, about
-// 230 B a sample). It streams it now: 200 001 samples (45 MB held before) must not raise the
+// Found by a bad-input probe: simulate held its whole output in memory (135 MB for 600 s at 1 kHz,
+// about 230 B a sample). It streams it now: 200 001 samples (45 MB held before) must not raise the
 // process's peak memory by more than 15 MB over a run of 1 001 samples.
 TEST_F(CliTest, SimulateStreamsItsOutputInBoundedMemory) {
   if (testing::kUnderAddressSanitizer) {
@@ -532,8 +545,8 @@ std::string SteadyLogWith(const std::string& last_line) {
   return text + last_line + "\n";
 }
 
-// Issue 15, item 3: one huge time value made compare, simulate --inputs and diagnose run for
-// minutes, and a long gap passed silently. Each log tool now refuses a gap longer than
+// Found by a bad-input probe: one huge time value made compare, simulate --inputs and diagnose run
+// for minutes, and a long gap passed silently. Each log tool now refuses a gap longer than
 // --max-gap-s (default 10 s) with the file, line and column, and takes a wider limit.
 TEST_F(CliTest, LogToolsRefuseAGapInTimeAtItsLineAndTakeAWiderLimit) {
   const std::string gap = Path("gap.csv");
@@ -580,8 +593,8 @@ TEST_F(CliTest, LogToolsRefuseAGapInTimeAtItsLineAndTakeAWiderLimit) {
   EXPECT_TRUE(Contains(bad.err, "--max-gap-s")) << bad.err;
 }
 
-// Issue 15, item 8: time steps of 1e-12 s gave null metrics with exit 0, and a choke opening of
-// -50 deg was replayed. Both are errors at their file, line and column.
+// Found by a bad-input probe: time steps of 1e-12 s gave null metrics with exit 0, and a choke
+// opening of -50 deg was replayed. Both are errors at their file, line and column.
 TEST_F(CliTest, LogToolsRefuseOutOfRangeValuesAndTinyTimeStepsAtTheirPosition) {
   const std::string tiny = Path("tiny.csv");
   WriteFile(tiny, SteadyLogWith("2.000000000001,0,31,5,0,3.9,4.2,5"));
@@ -691,11 +704,11 @@ TEST_F(CliTest, DemoWritesALogAndSummarises) {
 
 TEST_F(CliTest, ObserveEstimatesBottomHolePressureFromTopsideChannels) {
   // The observer sees only C2 and FT1 of a simulated log; after 3 periods (15 s at 0.2 Hz) its
-  // BHP estimate follows PT1 to 2% of the oscillation amplitude (issue 5's bound; the model
-  // tests measure 0.07-0.1% for this case with the quadratic friction included).
+  // BHP estimate follows PT1 to 2% of the oscillation amplitude (the observer's design bound; the
+  // model tests measure 0.07-0.1% for this case with the quadratic friction included).
   const std::string log = Path("in.csv");
   const std::string est = Path("est.csv");
-  // Noise-free channels: the observer at the lab's noise is issue 11's part 5.
+  // Noise-free channels: the observer at the lab's noise is the next test's.
   ASSERT_EQ(Run("simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 45 --pump-lpm 20 "
                 "--outlet-barg 1 --duration 40 --sensor-noise none --out " +
                 Quote(log))
@@ -726,7 +739,7 @@ TEST_F(CliTest, ObserveEstimatesBottomHolePressureFromTopsideChannels) {
   EXPECT_TRUE(Contains(bad.err, "C2")) << bad.err;
 }
 
-// Issue 11, part 5: `observe` at the lab's sensor noise (Table 4.1.1: C2 0.024 bar, FT1 2 % of
+// `observe` at the lab's sensor noise (Table 4.1.1: C2 0.024 bar, FT1 2 % of
 // reading + 0.05 L/min, white per 100 Hz sample), 0.2 Hz heave. With its defaults (noise
 // estimated from the log, Kalman gain, zero-lag prefilter) the BHP fit against the noise-free
 // PT1 after 20 s is >= 90 % (measured 97 %; the model tests cover 0.1-0.33 Hz, two chokes, three

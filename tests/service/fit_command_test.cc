@@ -56,7 +56,7 @@ class FitCommandTest : public ::testing::Test {
     // 60 s at 100 Hz: a piston sweep across the resonances, the choke closing to the leak at
     // 30 s with 1 L/min of pump flow; wave speed 1000 m/s, f1 0.3 1/s, leak 1e-6 m^2. Without
     // sensor noise: at the lab's (simulate's default) the fit is biased (c 851 m/s measured),
-    // which is issue 11's part 3, not this command's plumbing.
+    // which is the fit's statistics (fit_test.cc), not this command's plumbing.
     const RunResult made =
         Run("simulate --piston sweep:amp_m=0.02,f0_hz=0.05,f1_hz=0.8 "
             "--choke-deg step:mean_deg=31,amp_deg=-21,t_s=30 --pump-lpm 1 --duration 60 "

@@ -1,5 +1,6 @@
 // The service's observer (service/rig/rig_observer.h) at the lab's sensor noise: it estimates the
-// noise over its start-up window and designs its gains for it (issue 11, part 5).
+// noise over its start-up window and designs its gains for it (the thesis's gains fail at lab
+// noise).
 #include "service/rig/rig_observer.h"
 
 #include <cstdio>

@@ -287,7 +287,7 @@ TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
   EXPECT_NEAR(after["rig-1"].back()[Channel::kChokePosition], 28.0 / 90.0, 1e-6);
 }
 
-// One huge step request (issue 15, item 1): while rig-1 runs its 2^32 - 1 steps (49 days of
+// One huge step request: while rig-1 runs its 2^32 - 1 steps (49 days of
 // rig time at 100 Hz), rig-2's requests are served, and a stop ends the service at once.
 TEST_F(ServiceTest, HugeStepRequestStarvesNoOtherRigAndAStopEndsTheService) {
   Start();
@@ -364,7 +364,7 @@ TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
       << "last valid command in force";
 }
 
-// Issue 15, item 4 (part): a stranger's 10 MB rig id was copied into every rig's last_rejection,
+// Found by a bad-input probe: a stranger's 10 MB rig id was copied into every rig's last_rejection,
 // so each status carried 10 MB. The status now repeats at most 64 bytes of it, and its length.
 TEST_F(ServiceTest, AHugeUnknownRigIdIsNotCopiedIntoTheStatus) {
   Start();
@@ -544,10 +544,10 @@ TEST_F(ServiceTest, PressureProfileAlongThePipeAtTenHertzMatchesTheTransmitters)
   EXPECT_EQ(profile_counters, (std::vector<std::uint64_t>{0, 10, 20, 30, 40, 50, 60, 70, 80, 90}));
 }
 
-// Issue 15, item 5: a stall of the real-time clock used to count as one deadline miss, whatever
-// its length. A real `mpdrig serve` process is stopped (SIGSTOP) for 1.5 s at 100 Hz: its status
-// must report about 150 lost periods, a longest stall of about 1.5 s, the rig time when it fell
-// behind and a warning that says so; SIGTERM then stops it cleanly.
+// Found by a fault probe: a stall of the real-time clock used to count as one deadline miss,
+// whatever its length. A real `mpdrig serve` process is stopped (SIGSTOP) for 1.5 s at 100 Hz: its
+// status must report about 150 lost periods, a longest stall of about 1.5 s, the rig time when it
+// fell behind and a warning that says so; SIGTERM then stops it cleanly.
 TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTimeClock) {
   const dds_domainid_t domain = TestDomain();
   const std::string log_path =

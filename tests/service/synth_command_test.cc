@@ -44,7 +44,7 @@ using teststats::StdDevTolerance;
 // 30 s at 50 Hz: 1501 samples a channel.
 const char kRun[] = " synth --seed 5 --duration 30 --rate-hz 50";
 
-// Absurd lengths and rates (issue 15, item 2): before, --duration 1e9 allocated until
+// Absurd lengths and rates, found by a bad-input probe: before, --duration 1e9 allocated until
 // std::bad_alloc aborted the process. Now they are refused at once, naming the flag and the limit.
 TEST(SynthCommandTest, RefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) {
   const fs::path dir = TempDir();

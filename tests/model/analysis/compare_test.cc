@@ -353,7 +353,7 @@ Synthetic SyntheticSine() {
   return synthetic;
 }
 
-// CompareTraces on synthetic traces (no file, no simulation: how issue 4 calls it), against
+// CompareTraces on synthetic traces (no file, no simulation: how fit and diagnose call it), against
 // closed forms.
 TEST(CompareTest, SyntheticTracesMatchClosedForms) {
   const double w = 2.0 * std::numbers::pi * kFreqHz;

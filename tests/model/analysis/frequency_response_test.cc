@@ -72,9 +72,10 @@ struct SimulatedCase {
 class SimulatedVsAnalytic : public ::testing::TestWithParam<SimulatedCase> {};
 
 TEST_P(SimulatedVsAnalytic, WithinTwoPercentAndTwoDegrees) {
-  // Issue 2's acceptance: 0.02-0.6 Hz, closed and open choke, within 2% in magnitude and 2 deg in
-  // phase. The simulator runs with the thesis's parameters less the quadratic friction, which
-  // (9.2.13) does not have; a 1 mm piston amplitude keeps it in the linear range.
+  // The simulator's validation against the analytic response: 0.02-0.6 Hz, closed and open choke,
+  // within 2% in magnitude and 2 deg in phase. The simulator runs with the thesis's parameters less
+  // the quadratic friction, which (9.2.13) does not have; a 1 mm piston amplitude keeps it in the
+  // linear range.
   const SimulatedCase& c = GetParam();
   const RigParams params = testing::LinearFrictionParams();
   SimulationOptions options;

@@ -1,8 +1,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "model/config/rig_config.h"
 #include "model/effects/effect.h"
-#include "model/params/rig_config.h"
 #include "model/sim/rig_simulator.h"
 #include "tests/model/rig_test_util.h"
 

@@ -314,7 +314,7 @@ TEST(BacksteppingObserverRobustnessTest, PlantParameterMismatchStaysBounded) {
   }
 }
 
-// Issue 5's robustness row "a plant with a catalogue effect": the plant has one physical effect
+// Robustness to a plant the observer does not model: the plant has one physical effect
 // at its default strength (model/effects), the observer does not know it. Bounded: the last 2 of
 // 20 periods no worse than the whole run after 3 periods, and below the oscillation amplitude.
 TEST(BacksteppingObserverRobustnessTest, PlantWithACatalogueEffectStaysBounded) {

@@ -14,8 +14,8 @@
 
 namespace mpdrig::testing {
 
-// Table 4.1.1 as issue 11 reads it: pressure transmitters 0.15 % of 16 bar, turbine flow meters
-// 2 % of reading + 0.05 L/min (standard deviations, white at the logging rate).
+// Table 4.1.1 as the project reads it (--sensor-noise lab): pressure transmitters 0.15 % of 16 bar,
+// turbine flow meters 2 % of reading + 0.05 L/min (standard deviations, white at the logging rate).
 inline constexpr double kLabPressureNoisePa = 2400.0;
 inline constexpr double kLabFlowNoiseFraction = 0.02;
 inline constexpr double kLabFlowNoiseLpm = 0.05;

@@ -1,5 +1,6 @@
-// The observer at the lab's sensor noise (issue 11, part 5): the noise estimate, the Kalman gain
-// of the heave model, the zero-lag prefilter, and the bottom-hole pressure fit they give.
+// The observer at the lab's sensor noise, where the thesis's own tuning fails: the noise estimate,
+// the Kalman gain of the heave model, the zero-lag prefilter, and the bottom-hole pressure fit they
+// give.
 #include "model/observer/measurement_noise.h"
 
 #include <cmath>

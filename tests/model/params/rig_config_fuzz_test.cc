@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "model/config/rig_config.h"
 #include "model/effects/effect.h"
-#include "model/params/rig_config.h"
 #include "model/params/rig_params.h"
 #include "tests/support/mutator.h"
 

@@ -1,4 +1,4 @@
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 
 #include <filesystem>
 #include <fstream>
@@ -121,7 +121,7 @@ TEST(RigConfig, BadChokeTableIsAnError) {
   const std::string message = ErrorOf(
       "choke_point { opening_deg: 40 g_m2: 1e-5 }\n"
       "choke_point { opening_deg: 30 g_m2: 2e-5 }\n");
-  // Issue 15, item 9 (part): the error names the point's line and column.
+  // A bad characteristic is found in the file: the error names the point's line and column.
   EXPECT_EQ(message.rfind(kSource + ":2:1: ", 0), 0u) << message;
   EXPECT_NE(message.find("increasing"), std::string::npos) << message;
   const std::string range = ErrorOf(

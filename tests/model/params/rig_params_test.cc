@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 
-#include "model/params/rig_config.pb.h"
+#include "model/config/rig_config.pb.h"
 
 namespace mpdrig {
 namespace {
@@ -206,7 +206,7 @@ TEST(RigParams, ApplyOverride) {
   EXPECT_EQ(params.friction_f1_per_s, 0.24);
 }
 
-// Issue 15, item 9 (part): an upper rod no thicker than the lower one (or 0) was accepted and
+// Found by a bad-input probe: an upper rod no thicker than the lower one (or 0) was accepted and
 // reversed (or removed) the piston's effect.
 TEST(RigParams, ValidateCatchesRodsThatReverseThePiston) {
   for (auto [upper, lower] :
@@ -310,6 +310,22 @@ TEST(RigParams, TableAndConfigProtoAreInSync) {
         << "rig_config.proto field " << field->name() << " is not a key of ParamTable()";
   }
   EXPECT_EQ(scalar_fields, static_cast<int>(ParamTable().size()));
+}
+
+// The tuning ranges `fit` searches live in the parameter table beside the bounds: each lies
+// within its parameter's bounds and holds the thesis value it starts from.
+TEST(RigParams, TuningRangesLieWithinTheBoundsAndHoldTheThesisValues) {
+  const RigParams defaults;
+  int ranges = 0;
+  for (const ParamInfo& info : ParamTable()) {
+    if (!(info.fit_min < info.fit_max)) continue;
+    ++ranges;
+    EXPECT_GE(info.fit_min, info.min_value) << info.key;
+    EXPECT_LE(info.fit_max, info.max_value) << info.key;
+    const double value = defaults.*(info.member);
+    EXPECT_TRUE(value >= info.fit_min && value <= info.fit_max) << info.key << " = " << value;
+  }
+  EXPECT_GE(ranges, 3) << "wave speed, pipe friction and choke leak have tuning ranges";
 }
 
 }  // namespace

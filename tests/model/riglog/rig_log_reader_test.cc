@@ -290,8 +290,8 @@ TEST(RigLogReaderErrors, TimeNotStrictlyIncreasing) {
               "_decreasing");
 }
 
-// Issue 15, item 3: one wild time value made every tool replay the model over it for minutes.
-// A gap longer than ReadOptions::max_gap_s (default 10 s) is an error at the later sample.
+// Found by a bad-input probe: one wild time value made every tool replay the model over it for
+// minutes. A gap longer than ReadOptions::max_gap_s (default 10 s) is an error at the later sample.
 TEST(RigLogReaderErrors, GapInTimeLongerThanTheLimit) {
   const std::string path = WriteTestFile("time_s,PT1_barg\n0,1\n0.01,1\n100000.01,1\n");
   Result<RigLog> log = ReadRigLog(path);
@@ -299,8 +299,8 @@ TEST(RigLogReaderErrors, GapInTimeLongerThanTheLimit) {
   EXPECT_EQ(log.status().message(),
             path +
                 ":4:1: time_s: 100000.01 is 100000 s after the previous sample's 0.01 (line 3), "
-                "a gap longer than 10 s (an interrupted recording or a wrong time; raise the "
-                "limit with --max-gap-s if it is real)");
+                "a gap longer than 10 s (an interrupted recording or a wrong time; a longer gap "
+                "limit admits it if it is real)");
   ReadOptions wider;
   wider.max_gap_s = 2.0e5;
   Result<RigLog> accepted = ReadRigLog(path, wider);
@@ -317,7 +317,7 @@ TEST(RigLogReaderErrors, GapInTimeLongerThanTheLimit) {
   ReadOk("time_s,PT1_barg\n0,1\n10,1\n");
 }
 
-// Issue 15, item 8: time steps of 1e-12 s gave null metrics and exit 0.
+// Found by a bad-input probe: time steps of 1e-12 s gave null metrics and exit 0.
 TEST(RigLogReaderErrors, TimeStepShorterThanTheLimit) {
   ExpectError("time_s,PT1_barg\n0,1\n1e-12,1\n",
               ":3:1: time_s: 1e-12 is only 1e-12 s after the previous sample's 0 (line 2); time "
@@ -338,8 +338,9 @@ TEST(RigLogReaderErrors, BadTimeLimitsAreRefused) {
   }
 }
 
-// Issue 15, item 8: values outside their quantity's physical range used to pass: 1e308 barg
-// became infinity ("not measured"), choke openings of -50 deg and 31 (as a fraction) were replayed.
+// Found by a bad-input probe: values outside their quantity's physical range used to pass: 1e308
+// barg became infinity ("not measured"), choke openings of -50 deg and 31 (as a fraction) were
+// replayed.
 TEST(RigLogReaderErrors, ValuesOutsideTheirPhysicalRange) {
   struct Case {
     std::string content;

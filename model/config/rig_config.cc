@@ -1,4 +1,4 @@
-#include "model/params/rig_config.h"
+#include "model/config/rig_config.h"
 
 #include <google/protobuf/descriptor.h>
 #include <google/protobuf/io/tokenizer.h>
@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "model/common/units.h"
+#include "model/config/rig_config.pb.h"
 #include "model/effects/effect.h"
-#include "model/params/rig_config.pb.h"
 
 namespace mpdrig {
 namespace {
@@ -157,7 +157,7 @@ Result<RigParams> LoadRigConfig(const std::string& path, const RigParams& defaul
 std::string FormatRigConfig(const RigParams& params) {
   std::ostringstream out;
   out.precision(10);
-  out << "# mpdrig rig configuration (Protobuf text format, model/params/rig_config.proto).\n"
+  out << "# mpdrig rig configuration (Protobuf text format, model/config/rig_config.proto).\n"
       << "# Defaults are the thesis's tuned values. SI units, absolute pressures.\n";
   for (const ParamInfo& info : ParamTable()) {
     out << "\n# " << info.description << " [" << info.unit << "]\n"

@@ -1,0 +1,67 @@
+#include "model/analysis/window_error.h"
+
+#include <cmath>
+#include <limits>
+
+#include "model/common/status.h"
+
+namespace mpdrig {
+namespace {
+
+bool InWindow(double t, double begin_s, double end_s) { return t >= begin_s && t <= end_s; }
+
+}  // namespace
+
+double Nrmse(double ss_res, double ss_tot) {
+  return ss_tot > 0.0 ? std::sqrt(ss_res / ss_tot) : std::numeric_limits<double>::quiet_NaN();
+}
+
+std::vector<double> WindowMeans(const MeasuredLog& log, double begin_s, double end_s) {
+  const std::vector<double>& t = log.time_s();
+  std::vector<double> means;
+  for (const MeasuredChannel& channel : log.channels) {
+    double sum = 0.0;
+    long count = 0;
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (InWindow(t[n], begin_s, end_s) && std::isfinite(channel.values_si[n])) {
+        sum += channel.values_si[n], ++count;
+      }
+    }
+    means.push_back(count > 0 ? sum / count : 0.0);
+  }
+  return means;
+}
+
+std::vector<WindowSums> ChannelWindowSums(const MeasuredLog& log, const ModelTraces& model,
+                                          double begin_s, double end_s,
+                                          const std::vector<double>* means) {
+  MPDRIG_CHECK(model.values_si.size() == log.channels.size());
+  const std::vector<double> own_means =
+      means != nullptr ? std::vector<double>() : WindowMeans(log, begin_s, end_s);
+  const std::vector<double>& mean = means != nullptr ? *means : own_means;
+  const std::vector<double>& t = log.time_s();
+  std::vector<WindowSums> sums(log.channels.size());
+  for (std::size_t c = 0; c < log.channels.size(); ++c) {
+    const std::vector<double>& y = log.channels[c].values_si;
+    const std::vector<double>& yhat = model.values_si[c];
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (!InWindow(t[n], begin_s, end_s) || !std::isfinite(y[n])) continue;
+      sums[c].ss_res += (yhat[n] - y[n]) * (yhat[n] - y[n]);
+      sums[c].ss_tot += (y[n] - mean[c]) * (y[n] - mean[c]);
+      ++sums[c].count;
+    }
+  }
+  return sums;
+}
+
+double WindowError(const MeasuredLog& log, const ModelTraces& model, double begin_s, double end_s) {
+  double total = 0.0;
+  int count = 0;
+  for (const WindowSums& sums : ChannelWindowSums(log, model, begin_s, end_s)) {
+    const double nrmse = sums.nrmse();
+    if (std::isfinite(nrmse)) total += nrmse, ++count;
+  }
+  return count > 0 ? total / count : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace mpdrig

@@ -1,0 +1,38 @@
+// The compare metric on a time window: per channel y (measured) and yhat (model), over the
+// samples of the window where y is measured,
+//   ss_res = sum (yhat - y)^2,   ss_tot = sum (y - mean(y))^2,   NRMSE = sqrt(ss_res / ss_tot)
+// (compare.h: NRMSE = ||y - yhat|| / ||y - mean(y)||). compare's accumulator, fit's cost report
+// and diagnose's scores all take their NRMSE from here, so a "mean NRMSE" means one thing.
+#pragma once
+
+#include <vector>
+
+#include "model/analysis/compare.h"
+
+namespace mpdrig {
+
+// NRMSE from the two sums; NaN where the measurement is constant (no variation to explain).
+double Nrmse(double ss_res, double ss_tot);
+
+struct WindowSums {
+  double ss_res = 0.0;
+  double ss_tot = 0.0;
+  long count = 0;  // measured samples in the window
+  double nrmse() const { return Nrmse(ss_res, ss_tot); }
+};
+
+// Each channel's mean over the measured samples of [begin_s, end_s] (0 where there is none).
+std::vector<double> WindowMeans(const MeasuredLog& log, double begin_s, double end_s);
+
+// The sums of every channel of `log` over [begin_s, end_s] (both ends included). ss_tot is taken
+// about `means` when given (e.g. a whole window's means, for blocks of it), else about each
+// channel's own mean over the window.
+std::vector<WindowSums> ChannelWindowSums(const MeasuredLog& log, const ModelTraces& model,
+                                          double begin_s, double end_s,
+                                          const std::vector<double>* means = nullptr);
+
+// Mean NRMSE over the channels with a defined NRMSE, on [begin_s, end_s]: compare's `error`
+// restricted to the window. NaN if no channel has one.
+double WindowError(const MeasuredLog& log, const ModelTraces& model, double begin_s, double end_s);
+
+}  // namespace mpdrig
