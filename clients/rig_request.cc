@@ -1,4 +1,4 @@
-// rig_request: a student asks a class's service for private rigs (issue 12), NAME.1 .. NAME.N,
+// rig_request: a student asks a class's service for private rigs, NAME.1 .. NAME.N,
 // which only they may command and read (make-class's permissions: rig.NAME.*). The service must
 // run with `--security ... --private-rigs N`; it makes the rigs within its limits and says on the
 // student's rig's status what it made or refused. A client: it speaks only the DDS topics.
