@@ -1,5 +1,5 @@
 // How a client notices that the rig it talks to is gone or is no longer the same run, and the
-// rule it then follows (README, "When the rig is lost"). The rig is lost when
+// rule it then follows (docs/service.md, "When the rig is lost"). The rig is lost when
 //   - its time or its sample counter goes back: the service restarted and runs a new rig from
 //     t = 0 (a controller's integrator, set point and adaptation, or a recording's time axis,
 //     belong to the old run);

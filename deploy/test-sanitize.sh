@@ -2,8 +2,8 @@
 # The whole test suite built with AddressSanitizer and UndefinedBehaviorSanitizer, in its own build
 # directory (${SANITIZE_BUILD_DIR:-<repo>/build-asan}): memory errors, leaks and undefined
 # behaviour in our code fail the test that hit them. RelWithDebInfo (-O2 -g) keeps it fast enough
-# for CI and gives reports with lines. Run by .ci/run after the Release suite (README, "Sanitizer
-# build"); on its own: deploy/test-sanitize.sh [ctest arguments, e.g. -R riglog].
+# for CI and gives reports with lines. Run by .ci/run after the Release suite (docs/validation.md,
+# "Fuzzing and the sanitizer build"); on its own: deploy/test-sanitize.sh [ctest arguments, e.g. -R riglog].
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${SANITIZE_BUILD_DIR:-$root/build-asan}"

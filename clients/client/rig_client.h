@@ -1,4 +1,4 @@
-// A client library for one rig over the DDS topics (README, "The virtual rig as a DDS service"):
+// A client library for one rig over the DDS topics (docs/service.md):
 // what a controller, a recorder or a plot needs, without DDS in its code. It speaks only the
 // topics of idl/mpdrig.idl with the project's QoS (service/dds), so it talks to the virtual rig
 // and to the lab's rig behind a bridge alike. The Python module (clients/python) is a thin

@@ -3,7 +3,7 @@
 //
 // Two ways in, one implementation of each metric (compare_accumulator.h):
 //   CompareLog        streams the file twice, in memory that does not grow with its length (an
-//                     hour at 1 kHz with all 16 channels: well under 200 MB, README.md):
+//                     hour at 1 kHz with all 16 channels: well under 200 MB, docs/compare.md, "Memory and speed"):
 //                     pass 1 reads it for what the metrics need of the whole log up front (length,
 //                     mean interval, each channel's mean, the inputs' means, the piston's dominant
 //                     frequencies); pass 2 reads it again with the model replay in lock step

@@ -18,7 +18,7 @@
 // "NAME.key" by `--set` and by `mpdrig fit`.
 //
 // Adding one: a source file defining `const EffectInfo& <Name>Effect()` and one line in
-// catalogue.inc (README: "Add a physical effect").
+// catalogue.inc (docs/effects-and-diagnose.md, "Add a physical effect").
 #pragma once
 
 #include <functional>

@@ -69,7 +69,7 @@ struct ObserverOptions {
   // friction_f2_per_m) inside the observer's copy of the pipe, as a nonlinear source on the
   // estimate. The gains stay those of the linear design (f1). With the thesis's f2 = 0.63 1/m and
   // 0.1 m piston strokes, f2 u|u| is comparable to f1 u, and leaving it out is the observer's
-  // largest error on simulated data (README, Observer).
+  // largest error on simulated data (docs/observer.md, "Accuracy on simulated data").
   bool quadratic_friction = false;
   // false: the thesis's approximation of 10.3, p1 = C exp(A h(x)) L and p2 = 0 (no kernels).
   // For tests and comparison only.

@@ -109,7 +109,7 @@ void AddCompareCommand(CLI::App* app, int* exit_code) {
       "Replays the log's inputs (piston_position, choke_position, FT2, C1) through the model and\n"
       "compares every measured channel present (P1 P2 PT1..PT10 C2 FT1 FT3 FT4): fit %, NRMSE,\n"
       "RMS error and bias (in the log's units), lag, error per frequency band, the error along\n"
-      "the pipe and a residual analysis. Field names: README.md, 'Comparing with measurements'.\n"
+      "the pipe and a residual analysis. Field names: docs/compare.md, 'JSON fields'.\n"
       "The log is read twice (a check and a replay pass) in memory that does not grow with it.\n"
       "  mpdrig compare lab.csv --json lab.json --report lab.html\n"
       "  mpdrig compare lab.csv --set wave_speed_mps=1000 --json - | jq .channels.PT1\n"

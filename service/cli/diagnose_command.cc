@@ -246,8 +246,8 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
   synth_command
       ->add_option("--sensor-noise", synth->sensor_noise,
                    "sensor noise: none, lab (thesis Table 4.1.1) or a SPEC such as "
-                   "pressure=0.024bar,flow=2%+0.05lpm,piston=0.5mm,choke=0.1deg (README, "
-                   "Sensor noise)")
+                   "pressure=0.024bar,flow=2%+0.05lpm,piston=0.5mm,choke=0.1deg "
+                   "(docs/sensor-noise.md)")
       ->capture_default_str();
   // The former per-kind flags: each overrides one part of --sensor-noise.
   const auto add_noise = [&](const char* name, std::optional<double>* sigma, const char* what,

@@ -296,7 +296,7 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       "      --bounds sensor_lag.time_constant_s=0:0.5 --window-s 0:60 --json -\n"
       "JSON: params.<key>.{initial, estimate, std_error, held, lower, upper}, correlation.{keys,\n"
       "matrix}, error_before, error_after, iterations, replays, converged, window_s, cells,\n"
-      "solver_report (README.md, 'Fitting parameters'). Progress goes to stderr.");
+      "solver_report (docs/fitting.md, 'Output'). Progress goes to stderr.");
   args->model.AddAll(command);
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
       ->required()

@@ -153,7 +153,7 @@ int RunServe(const ServeArgs& args) {
                                       "private rigs in their own rig's partition)"));
     }
     serve.private_rigs = args.private_rigs;
-    // Measured (README, rigs on one machine): 120 rigs at 100 Hz with the observer took about
+    // Measured (docs/service.md, "Measured timing and capacity"): 120 rigs at 100 Hz with the observer took about
     // 20 % of one core; the default keeps a service below that many rig samples per second.
     constexpr double kRigSamplesPerSecond = 12000.0;
     serve.max_rigs =
@@ -325,7 +325,7 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
                    "place the poles of A - LC at RE +- IM i [rad/s] instead of choosing them from "
                    "the noise (thesis 10.3: -40 20). Default: the steady-state Kalman gain for "
                    "the sensor noise (configured, or estimated over --observer-noise-window-s), "
-                   "the thesis's poles when it is negligible (README, Observer)")
+                   "the thesis's poles when it is negligible (docs/observer.md)")
       ->expected(2)
       ->each([args](const std::string&) { args->observer_pole_given = true; });
   command
@@ -349,7 +349,7 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
   command
       ->add_option("--sensor-noise", args->sensor_noise,
                    "noise of the published sensor channels: none, lab (thesis Table 4.1.1) or "
-                   "a SPEC (README, Sensor noise)")
+                   "a SPEC (docs/sensor-noise.md)")
       ->capture_default_str();
   command
       ->add_option("--noise-seed", args->noise_seed,

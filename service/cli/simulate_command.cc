@@ -246,7 +246,7 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
   command
       ->add_option("--sensor-noise", args->sensor_noise,
                    "noise of the written sensor channels: none, lab (thesis Table 4.1.1) or a "
-                   "SPEC (README, Sensor noise)")
+                   "SPEC (docs/sensor-noise.md)")
       ->capture_default_str();
   command->add_option("--noise-seed", args->noise_seed, "seed of the sensor noise")
       ->capture_default_str();

@@ -75,7 +75,7 @@ class Qos {
   dds_qos_t* qos_;
 };
 
-// The project's QoS choices, one place (README explains them):
+// The project's QoS choices, one place (docs/service.md, "Topics and QoS", explains them):
 //   sensors  - reliable, volatile; keep last 8 (a slow reader must not hold back a real-time rig;
 //              a late joiner wants the present, not history), or keep all in lockstep, where the
 //              client sets the pace and must see every step.

@@ -1,4 +1,4 @@
-// DDS Security for a class (README, "Security for a class"): an identity directory made by
+// DDS Security for a class (docs/service.md, "Security for a class"): an identity directory made by
 // deploy/security/make-class, turned into the participant QoS that loads Cyclone's
 // authentication, access-control and cryptography plugins; and the partition per rig that lets
 // permissions say who may command and read which rig. Transport only: no model types.

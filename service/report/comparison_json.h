@@ -1,5 +1,5 @@
 // The comparison (model/analysis/compare.h) as JSON, in each channel's lab unit. The field
-// names are a stable interface, documented in README.md ("Comparing with measurements"); add
+// names are a stable interface, documented in docs/compare.md ("JSON fields"); add
 // fields, never rename or remove them. Numbers that are undefined (NaN) are written as null.
 #pragma once
 

@@ -1,5 +1,5 @@
 // The diagnosis (model/identification/diagnose.h) as JSON and as one self-contained HTML page.
-// JSON field names are a stable interface (README.md, "Which effect is missing?"):
+// JSON field names are a stable interface (docs/effects-and-diagnose.md, "JSON fields"):
 //   baseline   {error, fit_error, params {key: {value, std_error}}, channels {name: nrmse}}
 //   candidates [ranked best first: {effect, params, error, penalised_error, improvement,
 //               significant, explains, extra_params, fit_error, channels, failure?}]

@@ -40,7 +40,7 @@ namespace mpdrig::service {
 struct RigObserverOptions {
   // cells, poles, friction; disturbance_hz is the starting frequency when no sine is commanded.
   // The service's default runs the plant's quadratic friction in the observer's pipe copy
-  // (README, Observer: 0.07 % instead of 3.6 % BHP error at 0.1 m strokes).
+  // (docs/observer.md: 0.07 % instead of 3.6 % BHP error at 0.1 m strokes).
   observer::ObserverOptions observer;
   double noise_window_s = 5.0;  // start-up window for the noise estimate; 0: configured only
   RigObserverOptions() { observer.quadratic_friction = true; }

@@ -1,4 +1,4 @@
-// The documented wire contract is enough (README, "From MATLAB, ROS 2 or another DDS client"): a
+// The documented wire contract is enough (docs/python.md, "From MATLAB, ROS 2 or another DDS client"): a
 // participant built from only what that section and the QoS table say - the service's domain,
 // the loopback settings, the topic names verbatim, the types of idl/mpdrig.idl compiled afresh
 // by idlc for this test (not the project's build of them), the QoS of the table, the lockstep
@@ -32,7 +32,7 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The README's loopback settings, as a whole document ("with the same loopback settings as a
+// The documented loopback settings, as a whole document ("with the same loopback settings as a
 // document"), and the fragment it says is enough for a Cyclone client.
 const char* const kDocumentConfig =
     "<CycloneDDS><Domain id=\"any\"><General><Interfaces>"
@@ -92,7 +92,7 @@ void TakeAll(dds_entity_t reader, const char* rig_id, const std::function<void(c
   }
 }
 
-// The QoS table of the README, one function per row kind.
+// The QoS table of docs/service.md, one function per row kind.
 dds_qos_t* SensorReaderQos() {  // reliable, volatile, keep all in lockstep
   dds_qos_t* q = dds_create_qos();
   dds_qset_reliability(q, DDS_RELIABILITY_RELIABLE, DDS_SECS(1));
@@ -296,7 +296,7 @@ TEST_P(WireContract, CommandWriterWithoutTheTablesQosDoesNotMatch) {
   EXPECT_EQ(incompatible(right), 0u);
 }
 
-// The whole document of the README, and the fragment it says is enough for a Cyclone client.
+// The whole document of docs/python.md, and the fragment it says is enough for a Cyclone client.
 INSTANTIATE_TEST_SUITE_P(ReadmeLoopbackSettings, WireContract, ::testing::Values(0, 1),
                          [](const ::testing::TestParamInfo<int>& info) {
                            return std::string(info.param == 0 ? "Document" : "Fragment");

@@ -487,7 +487,7 @@ TEST_F(ServiceTest, ObserverEstimatesBottomHolePressureAndHeaveFromTopsideChanne
   ASSERT_GT(swing, 0.5) << "the heave must move the bottom-hole pressure by about a bar";
   // Thesis 10.3's target, 2 % of the BHP swing. The estimate lags the sample by up to one
   // observer step (5.3 ms, about 0.7 % of the swing at 0.2 Hz); the observer itself is within
-  // 0.1 % (README, Observer).
+  // 0.1 % (docs/service.md, "Observer beside each rig").
   EXPECT_LT(max_bhp_error, 0.02 * swing) << "swing " << swing << " bar";
   // Heave velocity amplitude 0.126 m/s; 5 % of it.
   EXPECT_LT(max_velocity_error, 0.05 * 0.1 * 2 * M_PI * 0.2);

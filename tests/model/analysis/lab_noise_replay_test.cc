@@ -206,14 +206,14 @@ class LabNoiseReplay : public ::testing::TestWithParam<Scenario> {};
 TEST_P(LabNoiseReplay, EveryPressureChannelFitsWithinThreePointsOfAPerfectModel) {
   const Scenario& scenario = GetParam();
   const riglog::RigLog truth = TruthLog(scenario);
-  // Three seeds in the suite; MPDRIG_LAB_NOISE_SEEDS=N runs N (the README's measurement).
+  // Three seeds in the suite; MPDRIG_LAB_NOISE_SEEDS=N runs N (docs/compare.md's measurement).
   const char* seeds_env = std::getenv("MPDRIG_LAB_NOISE_SEEDS");
   const std::uint64_t seeds = seeds_env != nullptr ? std::strtoull(seeds_env, nullptr, 10) : 3;
   for (std::uint64_t seed = 1; seed <= seeds; ++seed) {
     SCOPED_TRACE(scenario.name + ", noise seed " + std::to_string(seed));
     const Shortfall worst = ReplayShortfall(truth, LabNoise(truth, seed), ReplayOptions{}, true);
     EXPECT_LE(worst.points, kAllowedFitLossPoints) << "worst channel " << worst.channel;
-    // The measured shortfall, for the README (ctest -V shows it).
+    // The measured shortfall, for docs/compare.md (ctest -V shows it).
     std::printf("%s seed %d: worst shortfall %.2f points (%s)\n", scenario.name.c_str(),
                 static_cast<int>(seed), worst.points, worst.channel.c_str());
   }

@@ -37,7 +37,7 @@ namespace {
 
 // 10 cases per effect are asked for; a full run takes about 40 minutes of CPU per noise level on
 // the 2-core machine, so CI runs the first kCiCases seeds and MPDRIG_DIAGNOSE_CASES=10 runs them
-// all (the README quotes the full run).
+// all (docs/effects-and-diagnose.md quotes the full run).
 constexpr int kCiCases = 3;
 int CasesPerEffect() {
   const char* value = std::getenv("MPDRIG_DIAGNOSE_CASES");

@@ -158,7 +158,7 @@ TEST_P(QuasiLinearPlantTest, BhpErrorBelowTwoPercentAfterThreePeriods) {
 
 INSTANTIATE_TEST_SUITE_P(Frequencies, QuasiLinearPlantTest, ::testing::Values(0.1, 0.2, 0.3));
 
-// Robustness (README table): a wrong assumed frequency (+-10 %) and sensor noise degrade the
+// Robustness (docs/observer.md table): a wrong assumed frequency (+-10 %) and sensor noise degrade the
 // estimate but nothing diverges; the error stays bounded over 20 periods.
 struct Robustness {
   double assumed_factor;     // assumed frequency / true frequency
@@ -267,7 +267,7 @@ TEST(BacksteppingObserverTrackingTest, TrackedFrequencyRecoversKnownFrequencyAcc
 // Thesis 10.3's figure 10.3.2: the choke moved sinusoidally at 0.2 Hz (here +-5 deg around
 // 45 deg) under a 0.25 Hz heave. The observer takes the measured C2 and FT1 as its boundary, so
 // the choke needs no model: the criterion still holds. The frequency tracker, in contrast, sees
-// two oscillations in y; it is not asserted here (README).
+// two oscillations in y; it is not asserted here (docs/observer.md).
 TEST(BacksteppingObserverTest, ChokeMovingDoesNotMatter) {
   const RigParams params;
   const Record r = SimulatePlant(params, PipeModel::kQuasiLinear, 0.25, 0.1, 6.0, 5.0, 0.2);

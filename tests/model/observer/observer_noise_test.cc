@@ -126,7 +126,7 @@ double BhpFit(const TopsideLog& log, const TopsideSeries& measured,
 // 20 s is >= 90 %, for heaves of 0.1, 0.2 and 0.33 Hz, two choke openings, three noise seeds,
 // with the noise estimated from the log, both for `observe`'s default (linear friction only, the
 // thesis's observer) and the service's (quadratic friction in the copy). 60 s logs (40 s scored).
-// Measured 93.9-97.6 % (README, Observer); 90 % leaves 3.9 points for other generators.
+// Measured 93.9-97.6 % (docs/observer.md); 90 % leaves 3.9 points for other generators.
 // The thesis's poles on the same data must fall well short (measured -155 % to 76 %): the check
 // can fail, and what it checks is the gain choice.
 class ObserverAtLabNoiseTest : public ::testing::TestWithParam<std::tuple<double, double>> {};
