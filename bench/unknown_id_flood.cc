@@ -55,9 +55,9 @@ int main(int argc, char** argv) {
   for (long i = 0; i < count; ++i) {
     id = prefix + std::to_string(i);
     mpdrig_PumpCommand command{id.data(), 5.0};
-    const Status written =
-        dispose ? dds::Check(dds_dispose(writer->handle(), &command), "dds_dispose")
-                : writer->Write(command);
+    const Status written = dispose
+                               ? dds::Check(dds_dispose(writer->handle(), &command), "dds_dispose")
+                               : writer->Write(command);
     if (!written.ok()) return fail(written);
   }
   const dds_return_t acked = dds_wait_for_acks(writer->handle(), DDS_SECS(60));

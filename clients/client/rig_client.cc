@@ -612,8 +612,9 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
 }
 
 // The step writer, made on the first Step: a client that only watches a rig needs none (and
-// with security may not have one in another student's partition). docs/service.md's QoS table: reliable,
-// volatile, keep all. The first request must reach the service's reader: it waits for the match.
+// with security may not have one in another student's partition). docs/service.md's QoS table:
+// reliable, volatile, keep all. The first request must reach the service's reader: it waits for the
+// match.
 Status Rig::MakeStepWriter(const Interrupt& interrupt) {
   Dds& d = *dds_;
   if (d.steps) return Status::Ok();

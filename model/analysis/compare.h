@@ -3,11 +3,11 @@
 //
 // Two ways in, one implementation of each metric (compare_accumulator.h):
 //   CompareLog        streams the file twice, in memory that does not grow with its length (an
-//                     hour at 1 kHz with all 16 channels: well under 200 MB, docs/compare.md, "Memory and speed"):
-//                     pass 1 reads it for what the metrics need of the whole log up front (length,
-//                     mean interval, each channel's mean, the inputs' means, the piston's dominant
-//                     frequencies); pass 2 reads it again with the model replay in lock step
-//                     (log_stream.h) and accumulates the metrics.
+//                     hour at 1 kHz with all 16 channels: well under 200 MB, docs/compare.md,
+//                     "Memory and speed"): pass 1 reads it for what the metrics need of the whole
+//                     log up front (length, mean interval, each channel's mean, the inputs' means,
+//                     the piston's dominant frequencies); pass 2 reads it again with the model
+//                     replay in lock step (log_stream.h) and accumulates the metrics.
 //   LoadMeasuredLog   keeps time, the inputs and the compared channels in memory;
 //   ReplayModel       runs the model on them (the same replay as pass 2: the same numbers);
 //   CompareTraces     the same two passes over traces in memory. fit and diagnose call

@@ -153,8 +153,9 @@ int RunServe(const ServeArgs& args) {
                                       "private rigs in their own rig's partition)"));
     }
     serve.private_rigs = args.private_rigs;
-    // Measured (docs/service.md, "Measured timing and capacity"): 120 rigs at 100 Hz with the observer took about
-    // 20 % of one core; the default keeps a service below that many rig samples per second.
+    // Measured (docs/service.md, "Measured timing and capacity"): 120 rigs at 100 Hz with the
+    // observer took about 20 % of one core; the default keeps a service below that many rig samples
+    // per second.
     constexpr double kRigSamplesPerSecond = 12000.0;
     serve.max_rigs =
         args.max_rigs > 0

@@ -75,8 +75,8 @@ TEST(BhpController, AttenuatesTheHeaveInducedBottomHolePressureOscillation) {
       "ratio %.1f\n",
       a_fixed, a_controlled, a_fixed / a_controlled);
   EXPECT_GT(a_fixed, 0.3) << "the heave must move the BHP by tenths of a bar";
-  // Measured: 18.7x (docs/service.md). A factor of 5 leaves room for tuning changes, not for a controller
-  // that merely does no harm.
+  // Measured: 18.7x (docs/service.md). A factor of 5 leaves room for tuning changes, not for a
+  // controller that merely does no harm.
   EXPECT_GT(a_fixed / a_controlled, 5.0);
   // It holds the mean too: the set point learnt over the first 10 s, within 0.05 bar.
   EXPECT_NEAR(std::stod(controlled["PT1_mean_barg"]), std::stod(fixed["PT1_mean_barg"]), 0.05);

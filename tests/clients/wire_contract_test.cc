@@ -1,9 +1,9 @@
-// The documented wire contract is enough (docs/python.md, "From MATLAB, ROS 2 or another DDS client"): a
-// participant built from only what that section and the QoS table say - the service's domain,
-// the loopback settings, the topic names verbatim, the types of idl/mpdrig.idl compiled afresh
-// by idlc for this test (not the project's build of them), the QoS of the table, the lockstep
-// rule (each command acknowledged before the step request) - reads, commands and steps a real
-// `mpdrig serve`. Nothing of service/dds or clients/ is linked: only Cyclone's C API, as a
+// The documented wire contract is enough (docs/python.md, "From MATLAB, ROS 2 or another DDS
+// client"): a participant built from only what that section and the QoS table say - the service's
+// domain, the loopback settings, the topic names verbatim, the types of idl/mpdrig.idl compiled
+// afresh by idlc for this test (not the project's build of them), the QoS of the table, the
+// lockstep rule (each command acknowledged before the step request) - reads, commands and steps a
+// real `mpdrig serve`. Nothing of service/dds or clients/ is linked: only Cyclone's C API, as a
 // foreign client would have it. And the "musts" of that section are real: a command writer with
 // a longer liveliness lease or shared ownership does not match the rig. Loopback, a domain of
 // the test's own.

@@ -200,7 +200,8 @@ TEST(FitTest, RecoversWaveSpeedFrictionAndLeakFromANoisyLog) {
 // thesis tuned them (Table 9.4.1). Replayed as measured, the input noise biases them far more
 // (f1 up to twice its value, c stuck near its start): the reconstruction is what makes this hold.
 TEST(FitTest, WaveSpeedAndFrictionAtLabNoise) {
-  // Seeds 3-8 in the suite; MPDRIG_FIT_SEEDS=FIRST-LAST runs others (docs/fitting.md's measurement).
+  // Seeds 3-8 in the suite; MPDRIG_FIT_SEEDS=FIRST-LAST runs others (docs/fitting.md's
+  // measurement).
   std::uint64_t first = 3, last = 8;
   if (const char* seeds = std::getenv("MPDRIG_FIT_SEEDS")) {
     std::sscanf(seeds, "%lu-%lu", &first, &last);

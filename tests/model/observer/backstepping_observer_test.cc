@@ -158,8 +158,8 @@ TEST_P(QuasiLinearPlantTest, BhpErrorBelowTwoPercentAfterThreePeriods) {
 
 INSTANTIATE_TEST_SUITE_P(Frequencies, QuasiLinearPlantTest, ::testing::Values(0.1, 0.2, 0.3));
 
-// Robustness (docs/observer.md table): a wrong assumed frequency (+-10 %) and sensor noise degrade the
-// estimate but nothing diverges; the error stays bounded over 20 periods.
+// Robustness (docs/observer.md table): a wrong assumed frequency (+-10 %) and sensor noise degrade
+// the estimate but nothing diverges; the error stays bounded over 20 periods.
 struct Robustness {
   double assumed_factor;     // assumed frequency / true frequency
   double noise_pressure_pa;  // standard deviation of white noise on C2

@@ -1,9 +1,10 @@
 // Seeded mutation fuzzing of the rig-log reader (tests/support/mutator.h): thousands of mutated
 // logs, each read to its end. What must hold for every input: no crash (and no sanitizer report
-// in the ASan/UBSan build, docs/validation.md, "Fuzzing and the sanitizer build"), an error is `name:line:column: message`,
-// and what the reader accepts keeps its promises: time strictly increasing by at least the
-// minimum step and at most the maximum gap, every value finite or NaN. A failure prints the seed
-// and the iteration; MPDRIG_FUZZ_SEED and MPDRIG_FUZZ_ITERATIONS rerun or extend it.
+// in the ASan/UBSan build, docs/validation.md, "Fuzzing and the sanitizer build"), an error is
+// `name:line:column: message`, and what the reader accepts keeps its promises: time strictly
+// increasing by at least the minimum step and at most the maximum gap, every value finite or NaN. A
+// failure prints the seed and the iteration; MPDRIG_FUZZ_SEED and MPDRIG_FUZZ_ITERATIONS rerun or
+// extend it.
 #include <cmath>
 #include <cstdio>
 #include <memory>
