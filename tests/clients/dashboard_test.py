@@ -90,7 +90,9 @@ class Processes:
 
     def start(self, args, **kw):
         print("+ " + " ".join(args), flush=True)
-        proc = subprocess.Popen(args, **kw)
+        # The domain's lock goes to the child too: a child left running keeps the domain claimed
+        # (tests/support/test_domain.h).
+        proc = subprocess.Popen(args, pass_fds=tuple(_claims), **kw)
         self.procs.append(proc)
         return proc
 
