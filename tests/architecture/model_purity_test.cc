@@ -1,7 +1,7 @@
 // model/ is pure numerics (style.md, design.md): no DDS, no threads, no wall clock, no sockets, no
-// environment variables, and no dependency on the layers above it (idl/, service/, tools/, clients/).
-// Time is an argument.
-// This test scans every source and build file under model/ and names each offending line.
+// environment variables, and no dependency on the layers above it (idl/, service/, tools/,
+// clients/). Time is an argument. This test scans every source and build file under model/ and
+// names each offending line.
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -51,7 +51,8 @@ const std::vector<Rule>& CMakeRules() {
   static const std::vector<Rule> rules = {
       {"links DDS", std::regex(R"(\b(CycloneDDS|CycloneDDS-CXX|ddsc|ddscxx)\b)")},
       {"links threads", std::regex(R"(Threads::Threads|\bpthread\b)")},
-      {"links an upper layer", std::regex(R"(\bmpdrig_(idl|service|rig|shadow|report|clients?)\w*)")},
+      {"links an upper layer",
+       std::regex(R"(\bmpdrig_(idl|service|rig|shadow|report|clients?)\w*)")},
   };
   return rules;
 }

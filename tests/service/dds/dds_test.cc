@@ -5,9 +5,11 @@
 
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -101,6 +103,42 @@ TEST(Dds, LateJoinerGetsTheCurrentCommand) {
                   .ok());
   ASSERT_EQ(received.size(), 1u);
   EXPECT_DOUBLE_EQ(received[0], 31.0);
+}
+
+// Requests (RequestQos: volatile) are lost if written before the reader matched: AwaitReader
+// says "no reader" at its deadline without one, and returns once one has matched; a request
+// written then arrives, every one of them (keep all).
+TEST(Dds, AwaitReaderWaitsForAMatchAndRequestsAreKeptAll) {
+  Fixture f = Open();
+  auto topic = CreateTopic(f.participant.handle(), &mpdrig_StepRequest_desc, "mpdrig_step_request");
+  ASSERT_TRUE(topic.ok());
+  auto writer =
+      Writer<mpdrig_StepRequest>::Create(f.participant.handle(), topic->handle(), RequestQos());
+  ASSERT_TRUE(writer.ok());
+  const Status alone = AwaitReader(writer->handle(), DeadlineAfter(0.2));
+  EXPECT_FALSE(alone.ok());
+  EXPECT_NE(alone.message().find("no reader of the topic"), std::string::npos) << alone.message();
+
+  auto reader =
+      Reader<mpdrig_StepRequest>::Create(f.participant.handle(), topic->handle(), RequestQos());
+  ASSERT_TRUE(reader.ok());
+  const Status matched = AwaitReader(writer->handle(), DeadlineAfter(5.0));
+  ASSERT_TRUE(matched.ok()) << matched.message();
+  char rig_id[] = "rig-1";
+  for (std::uint64_t id = 1; id <= 20; ++id) {
+    mpdrig_StepRequest request{rig_id, id, 1};
+    ASSERT_TRUE(writer->Write(request).ok());
+  }
+  ASSERT_EQ(dds_wait_for_acks(writer->handle(), DDS_SECS(5)), DDS_RETCODE_OK);
+  std::vector<std::uint64_t> received;
+  ASSERT_TRUE(reader
+                  ->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t&) {
+                    received.push_back(r.request_id);
+                  })
+                  .ok());
+  ASSERT_EQ(received.size(), 20u) << "keep all: no request of the same rig replaces another";
+  EXPECT_EQ(received.front(), 1u);
+  EXPECT_EQ(received.back(), 20u);
 }
 
 TEST(Dds, LoopbackConfigSelectsOnlyTheLoopbackInterface) {

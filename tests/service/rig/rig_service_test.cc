@@ -380,6 +380,21 @@ TEST_F(ServiceTest, AHugeUnknownRigIdIsNotCopiedIntoTheStatus) {
       << reason.substr(0, 300);
 }
 
+// A dispose carries only the key, and the topic filters that drop an unknown rig's samples see
+// only samples with data: a step request's dispose for a rig the service does not run is refused
+// and reported like the command topics' (DisposesOfManyUnknownRigIdsAreRefusedAndReported).
+TEST_F(ServiceTest, ADisposedStepRequestOfAnUnknownRigIsRefusedAndReported) {
+  Start();
+  mpdrig_StepRequest stranger{const_cast<char*>("rig-9"), 1, 10};
+  ASSERT_EQ(dds_dispose(step_->handle(), &stranger), DDS_RETCODE_OK);
+  auto [rejected, reason] = Step("rig-1", 5);  // the same writer: the dispose arrives first
+  EXPECT_EQ(rejected, 1u);
+  EXPECT_NE(reason.find(std::string(kStepRequestTopic) + " for unknown rig 'rig-9' refused"),
+            std::string::npos)
+      << reason;
+  EXPECT_EQ(TakeSensors()["rig-1"].size(), 5u) << "rig-1 stepped as asked, and only rig-1";
+}
+
 TEST_F(ServiceTest, StrongestControllerWinsTheNextTakesOverAndNoneLeftMeansSafeState) {
   Start(/*safe_choke_deg=*/90.0);
   const dds_entity_t p = participant_.handle();
