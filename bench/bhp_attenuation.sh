@@ -7,14 +7,14 @@
 #   bash bench/bhp_attenuation.sh                  # 0.1 m at 0.1, 0.15 and 0.2 Hz, 5 L/min, 31 deg
 #   FREQS="0.2" PUMP_LPM=20 CHOKE_DEG=45 bash bench/bhp_attenuation.sh
 #
-# Environment: BUILD_DIR (default <repo>/build, must hold service/mpdrig and clients/),
+# Environment: BUILD_DIR (default <repo>/build, must hold tools/mpdrig and clients/),
 # DOMAIN (DDS domain, default 77), DURATION (rig time per run [s], default 120),
 # MEASURE_LAST (the window measured [s], default 40), AMP_M (heave amplitude, default 0.1),
 # SENSOR_NOISE (serve's --sensor-noise, default lab: thesis Table 4.1.1; none: noise-free).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$repo/build}"
-mpdrig="$build/service/mpdrig"
+mpdrig="$build/tools/mpdrig"
 controller="$build/clients/bhp_controller"
 for exe in "$mpdrig" "$controller"; do
   [[ -x "$exe" ]] || { echo "error: $exe not built (deploy/build.sh)" >&2; exit 1; }

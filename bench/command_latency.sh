@@ -20,7 +20,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$repo/build}"
-mpdrig="$build/service/mpdrig"
+mpdrig="$build/tools/mpdrig"
 probe="$build/bench/mpdrig_command_latency"
 for exe in "$mpdrig" "$probe"; do
   [[ -x "$exe" ]] || { echo "error: $exe not built (deploy/build.sh -DMPDRIG_BUILD_BENCHMARKS=ON)" >&2; exit 1; }

@@ -9,14 +9,14 @@
 # every lab channel, ~1.2 GB for an hour at 1 kHz) and kept for the next run.
 #
 # Environment:
-#   MPDRIG      the binary (default: <repo>/build/service/mpdrig)
+#   MPDRIG      the binary (default: <repo>/build/tools/mpdrig)
 #   DURATION_S  log length in seconds (default 3600)
 #   RATE_HZ     sample rate (default 1000)
 #   WORK_DIR    where the log and the outputs go (default: /tmp/mpdrig_compare_memory)
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-mpdrig="${MPDRIG:-${repo}/build/service/mpdrig}"
+mpdrig="${MPDRIG:-${repo}/build/tools/mpdrig}"
 duration_s="${DURATION_S:-3600}"
 rate_hz="${RATE_HZ:-1000}"
 work="${WORK_DIR:-/tmp/mpdrig_compare_memory}"

@@ -11,7 +11,7 @@
 # default 1; diagnose itself uses every core).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-mpdrig="${BUILD_DIR:-${repo}/build}/service/mpdrig"
+mpdrig="${BUILD_DIR:-${repo}/build}/tools/mpdrig"
 work="${WORK_DIR:-$(mktemp -d)}"
 noise="${NOISE:-lab}"
 jobs="${JOBS:-1}"

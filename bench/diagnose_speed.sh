@@ -8,7 +8,7 @@
 # Environment: BUILD_DIR (default <repo>/build), WORK_DIR (default a temp dir), SEED (default 1).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-mpdrig="${BUILD_DIR:-${repo}/build}/service/mpdrig"
+mpdrig="${BUILD_DIR:-${repo}/build}/tools/mpdrig"
 work="${WORK_DIR:-$(mktemp -d)}"
 seed="${SEED:-1}"
 effects=("$@")

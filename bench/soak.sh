@@ -14,7 +14,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$repo/build}"
-mpdrig="$build/service/mpdrig"
+mpdrig="$build/tools/mpdrig"
 controller="$build/clients/bhp_controller"
 echo_exe="$build/clients/rig_echo"
 for exe in "$mpdrig" "$controller" "$echo_exe"; do

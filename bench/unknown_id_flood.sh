@@ -15,7 +15,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$repo/build}"
-mpdrig="$build/service/mpdrig"
+mpdrig="$build/tools/mpdrig"
 flood="$build/bench/mpdrig_unknown_id_flood"
 for exe in "$mpdrig" "$flood"; do
   [[ -x "$exe" ]] || { echo "error: $exe not built (deploy/build.sh -DMPDRIG_BUILD_BENCHMARKS=ON)" >&2; exit 1; }

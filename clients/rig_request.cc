@@ -60,10 +60,8 @@ int main(int argc, char** argv) {
   auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, "mpdrig_status");
   if (!request_topic.ok()) return Fail(request_topic.status().message());
   if (!status_topic.ok()) return Fail(status_topic.status().message());
-  dds::Qos qos;  // requests are not state: reliable, keep all, volatile (as the service reads)
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer = dds::Writer<mpdrig_RigRequest>::Create(scope->pub(), request_topic->handle(), qos);
+  auto writer = dds::Writer<mpdrig_RigRequest>::Create(scope->pub(), request_topic->handle(),
+                                                       dds::RequestQos());
   if (!writer.ok()) return Fail(writer.status().message());
   auto status =
       dds::Reader<mpdrig_RigStatus>::Create(scope->sub(), status_topic->handle(), dds::StatusQos());
@@ -72,16 +70,9 @@ int main(int argc, char** argv) {
   // The service's request reader must have matched (authentication, secure discovery) first.
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::duration<double>(timeout_s);
-  dds_publication_matched_status_t matched{};
-  while (matched.current_count == 0) {
-    const dds_return_t rc = dds_get_publication_matched_status(writer->handle(), &matched);
-    if (rc < 0) return Fail(dds::Check(rc, "dds_get_publication_matched_status").message());
-    if (matched.current_count > 0) break;
-    if (Clock::now() > until) {
-      return Fail("no service takes private-rig requests for rig '" + rig_id + "' on domain " +
-                  std::to_string(domain) + " (mpdrig serve --security ... --private-rigs N)");
-    }
-    dds_sleepfor(DDS_MSECS(50));
+  if (!dds::AwaitReader(writer->handle(), dds::DeadlineAfter(timeout_s)).ok()) {
+    return Fail("no service takes private-rig requests for rig '" + rig_id + "' on domain " +
+                std::to_string(domain) + " (mpdrig serve --security ... --private-rigs N)");
   }
   // What the rig's status says before the request, so only news is reported.
   std::string before_event, before_rejection;

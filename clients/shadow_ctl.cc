@@ -13,7 +13,6 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
-#include <thread>
 
 #include <CLI/CLI.hpp>
 
@@ -139,20 +138,13 @@ int main(int argc, char** argv) {
     return 0;
   }
   // Only now: reading the status needs no right to command (a watcher under security has none).
-  dds::Qos qos;  // as the shadow's reader: reliable, keep all
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer =
-      dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(), qos);
+  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(),
+                                                          dds::RequestQos());
   if (!writer.ok()) return Fail(writer.status().message());
   // A command written before the shadow's reader has matched would be lost (volatile).
-  for (dds_publication_matched_status_t matched{};
-       dds_get_publication_matched_status(writer->handle(), &matched) == DDS_RETCODE_OK &&
-       matched.current_count == 0;) {
-    if (std::chrono::steady_clock::now() >= deadline)
-      return Fail("the shadow's command reader did not match within --timeout");
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  }
+  const std::chrono::duration<double> left = deadline - std::chrono::steady_clock::now();
+  if (!dds::AwaitReader(writer->handle(), dds::DeadlineAfter(left.count())).ok())
+    return Fail("the shadow's command reader did not match within --timeout");
 
   mpdrig_ShadowCommand command{};
   command.rig_id = rig_id.data();

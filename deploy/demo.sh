@@ -61,7 +61,7 @@ measure=(--duration "$duration" --measure-last "$window")
   2>/dev/null &
 pids+=($!)
 echo_pid=$!
-"$build/service/mpdrig" serve --clock realtime --rate-hz 100 --domain "$domain" \
+"$build/tools/mpdrig" serve --clock realtime --rate-hz 100 --domain "$domain" \
   --rig rig-1 --rig rig-2 --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 5 --choke-deg 31 \
   --duration "$duration" &
 pids+=($!)
@@ -74,7 +74,7 @@ pids+=($!)
   >>"$summary" 2>/dev/null &
 pids+=($!)
 # The shadow model beside rig-1 and the dashboard; they stop with the service (or at the end).
-"$build/service/mpdrig" shadow --rig rig-1 --domain "$domain" --duration "$duration" \
+"$build/tools/mpdrig" shadow --rig rig-1 --domain "$domain" --duration "$duration" \
   >/dev/null 2>&1 &
 pids+=($!)
 shadow_pid=$!
@@ -96,7 +96,7 @@ The virtual rig runs for ${duration} s of real time (0: until Ctrl-C). In anothe
   $build/clients/rig_echo --rig rig-1 --domain $domain --samples 500 --out -     # rig-1's sensors
   $build/clients/rig_echo --rig rig-2 --domain $domain --samples 500 --out -     # the uncontrolled rig
   $build/clients/bhp_controller --help      # how the controller works
-  $build/service/mpdrig serve --help        # topics: sensors, estimate, pressure profile, status
+  $build/tools/mpdrig serve --help        # topics: sensors, estimate, pressure profile, status
 rig-1's choke is controlled (bhp_controller, on the observer's BHP estimate; it watches 10 s first),
 rig-2's stays at 31 deg. Ctrl-C stops everything.
 
@@ -124,4 +124,4 @@ if [[ -s "$summary" ]]; then
 fi
 rm -f "$summary" "$dashboard_log"
 [[ -s "$root/out/demo.csv" ]] && echo "rig-1 recorded as a rig log: $root/out/demo.csv (mpdrig compare reads it)"
-echo "offline, without DDS: $build/service/mpdrig demo"
+echo "offline, without DDS: $build/tools/mpdrig demo"

@@ -25,7 +25,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libfftw3-dev pkg-config  # spectra for `mpdrig compare` (bands, lag, transfer functions)
   libceres-dev           # `mpdrig fit`: bounded nonlinear least squares and covariance
-  # headless browser for the test that renders the comparison report (tests/service/report_test),
+  # headless browser for the test that renders the comparison report (tests/tools/report/report_test),
   # and its WebDriver with Selenium for the dashboard's test (tests/clients/dashboard_test.py)
   chromium chromium-driver python3-selenium
   # DDS Security for a class (deploy/security/make-class): the CA, identities, signed

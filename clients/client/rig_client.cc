@@ -618,10 +618,8 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
 Status Rig::MakeStepWriter(const Interrupt& interrupt) {
   Dds& d = *dds_;
   if (d.steps) return Status::Ok();
-  dds::Qos qos;
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto steps = dds::Writer<mpdrig_StepRequest>::Create(d.scope.pub(), d.step_topic.handle(), qos);
+  auto steps = dds::Writer<mpdrig_StepRequest>::Create(d.scope.pub(), d.step_topic.handle(),
+                                                       dds::RequestQos());
   if (!steps.ok()) {
     return Fail(Failure::kError, EndpointError(steps.status(), options_, "stepping").message());
   }

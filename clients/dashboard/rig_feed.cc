@@ -280,10 +280,8 @@ Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
                                     "mpdrig_shadow_status", status_qos));
   auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
   if (!command_topic.ok()) return command_topic.status();
-  dds::Qos command_qos;  // as the shadow's reader: a command is not state (reliable, keep all)
-  dds_qset_reliability(command_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(command_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), command_qos);
+  auto writer =
+      dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), dds::RequestQos());
   if (!writer.ok()) return writer.status();
   session->topics.push_back(std::move(command_topic).value());
   session->shadow_command.emplace(std::move(writer).value());

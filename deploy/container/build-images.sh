@@ -22,7 +22,7 @@ source "$here/podman-env.sh"
 dev=0
 [[ "${1:-}" == --dev ]] && dev=1
 
-exes=("$build/service/mpdrig" "$build/clients/bhp_controller" "$build/clients/rig_echo"
+exes=("$build/tools/mpdrig" "$build/clients/bhp_controller" "$build/clients/rig_echo"
       "$build/clients/rig_request")
 for exe in "${exes[@]}"; do
   [[ -x "$exe" ]] || { echo "build-images.sh: $exe not built (deploy/build.sh)" >&2; exit 1; }

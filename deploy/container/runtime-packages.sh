@@ -3,7 +3,7 @@
 # a line: the runtime image installs exactly these (runtime libraries, never -dev packages), so
 # the list follows the build's real dependencies instead of a hand-kept copy.
 #
-#   deploy/container/runtime-packages.sh build/service/mpdrig build/clients/rig_echo ...
+#   deploy/container/runtime-packages.sh build/tools/mpdrig build/clients/rig_echo ...
 set -euo pipefail
 (( $# > 0 )) || { echo "usage: runtime-packages.sh EXECUTABLE..." >&2; exit 2; }
 libs="$(ldd "$@" | awk '/=> not found/ { print "MISSING " $1; next } /=> \// { print $3 }' | sort -u)"

@@ -55,6 +55,34 @@ Qos StatusQos() {
   return qos;
 }
 
+Qos RequestQos() {
+  Qos qos;
+  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
+  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  dds_qset_durability(qos.get(), DDS_DURABILITY_VOLATILE);
+  return qos;
+}
+
+Status AwaitReader(dds_entity_t writer, dds_time_t deadline) {
+  MPDRIG_RETURN_IF_ERROR(
+      Check(dds_set_status_mask(writer, DDS_PUBLICATION_MATCHED_STATUS), "dds_set_status_mask"));
+  const dds_entity_t participant = dds_get_participant(writer);
+  if (participant < 0) return Check(participant, "dds_get_participant");
+  Entity waitset(dds_create_waitset(participant));
+  if (waitset.handle() < 0) return Check(waitset.handle(), "dds_create_waitset");
+  MPDRIG_RETURN_IF_ERROR(
+      Check(dds_waitset_attach(waitset.handle(), writer, 0), "dds_waitset_attach"));
+  for (;;) {
+    dds_publication_matched_status_t matched{};
+    MPDRIG_RETURN_IF_ERROR(Check(dds_get_publication_matched_status(writer, &matched),
+                                 "dds_get_publication_matched_status"));
+    if (matched.current_count > 0) return Status::Ok();
+    const dds_return_t woke = dds_waitset_wait_until(waitset.handle(), nullptr, 0, deadline);
+    if (woke < 0) return Check(woke, "dds_waitset_wait_until");
+    if (woke == 0) return Status::Error("no reader of the topic (is the service running?)");
+  }
+}
+
 Result<Domain> Domain::Create(dds_domainid_t id, const std::string& config_xml) {
   const dds_entity_t handle = dds_create_domain(id, config_xml.c_str());
   if (handle < 0) return Check(handle, "dds_create_domain");

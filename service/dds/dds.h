@@ -86,10 +86,14 @@ class Qos {
 //              writers use the same QoS, so every client must offer a lease of at most 1 s).
 //              Writers unregister (not dispose) their instances when they go.
 //   status   - reliable, keep last 1, transient-local: a late joiner sees the current status.
+//   requests - step requests, private-rig requests, the shadow's commands: reliable, keep all,
+//              volatile. A request is an event, not state: every one counts, a late joiner must
+//              not act on an old one.
 Qos SensorQos(bool keep_all = false);
 inline constexpr dds_duration_t kCommandLivelinessLease = DDS_SECS(1);
 Qos CommandQos(int ownership_strength = 0);
 Qos StatusQos();
+Qos RequestQos();
 
 // A domain with an explicit configuration (created before any participant on that id), and a
 // participant in it.
@@ -127,6 +131,15 @@ class Writer {
   Entity entity_;
 };
 
+// Waits on a waitset until `writer` has matched at least one reader, or until `deadline` (then:
+// "no reader of the topic (is the service running?)"). A sample written before the match reaches
+// no one: a volatile one is lost, and a process that exits takes a transient-local one with it.
+Status AwaitReader(dds_entity_t writer, dds_time_t deadline);
+// The DDS time `seconds` from now (at least now), for AwaitReader and the waitsets' deadlines.
+inline dds_time_t DeadlineAfter(double seconds) {
+  return dds_time() + static_cast<dds_duration_t>(std::max(seconds, 0.0) * 1e9);
+}
+
 // Sends one command (CommandQos, `strength`) from a writer of its own, the way a script or a
 // short-lived process should: it waits until the service's reader has matched (a sample written
 // before that reaches no one once the process is gone), writes, waits for the acknowledgement
@@ -139,22 +152,8 @@ Status SendOnce(dds_entity_t participant, dds_entity_t topic, const T& sample,
                 dds_duration_t timeout, int strength = 0) {
   Entity writer(dds_create_writer(participant, topic, CommandQos(strength).get(), nullptr));
   if (writer.handle() < 0) return Check(writer.handle(), "dds_create_writer");
-  MPDRIG_RETURN_IF_ERROR(Check(dds_set_status_mask(writer.handle(), DDS_PUBLICATION_MATCHED_STATUS),
-                               "dds_set_status_mask"));
-  Entity waitset(dds_create_waitset(participant));
-  if (waitset.handle() < 0) return Check(waitset.handle(), "dds_create_waitset");
-  MPDRIG_RETURN_IF_ERROR(
-      Check(dds_waitset_attach(waitset.handle(), writer.handle(), 0), "dds_waitset_attach"));
   const dds_time_t deadline = dds_time() + timeout;
-  for (;;) {
-    dds_publication_matched_status_t matched{};
-    MPDRIG_RETURN_IF_ERROR(Check(dds_get_publication_matched_status(writer.handle(), &matched),
-                                 "dds_get_publication_matched_status"));
-    if (matched.current_count > 0) break;
-    const dds_return_t woke = dds_waitset_wait_until(waitset.handle(), nullptr, 0, deadline);
-    if (woke < 0) return Check(woke, "dds_waitset_wait_until");
-    if (woke == 0) return Status::Error("no reader of the topic (is the service running?)");
-  }
+  MPDRIG_RETURN_IF_ERROR(AwaitReader(writer.handle(), deadline));
   MPDRIG_RETURN_IF_ERROR(Check(dds_write(writer.handle(), &sample), "dds_write"));
   const dds_duration_t left = std::max<dds_duration_t>(deadline - dds_time(), DDS_MSECS(1));
   MPDRIG_RETURN_IF_ERROR(Check(dds_wait_for_acks(writer.handle(), left), "dds_wait_for_acks"));

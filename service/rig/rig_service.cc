@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <deque>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -188,10 +189,8 @@ struct RigService::Impl {
         CreateEndpoints(pub, sub, options.clock == ClockMode::kLockstep, set.get()));
     std::vector<dds_entity_t> wake = {set->steps->handle()};
     if (options.private_rigs > 0) {
-      dds::Qos qos;  // requests are not state: reliable, keep all, volatile
-      dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-      dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-      auto requests = dds::Reader<mpdrig_RigRequest>::Create(sub, request_topic.handle(), qos);
+      auto requests =
+          dds::Reader<mpdrig_RigRequest>::Create(sub, request_topic.handle(), dds::RequestQos());
       if (!requests.ok()) return requests.status();
       set->requests.emplace(std::move(requests).value());
       wake.push_back(set->requests->handle());
@@ -649,17 +648,25 @@ struct RigService::Impl {
       MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
       queues.resize(rigs.size());
       std::vector<std::pair<std::string, Pending>> requests;
-      bool refused = false;  // a request from another rig's partition (security)
+      bool refused = false;  // from another rig's partition (security), or an unknown rig's dispose
       for (auto& set : endpoints) {
         auto& steps = set->steps;
-        auto taken =
-            steps->TakeEach([&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
+        auto taken = steps->TakeEach(
+            [&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
               if (!FromItsPartition(*set, kStepRequestTopic, r.rig_id, steps->handle(),
                                     info.publication_handle)) {
                 refused = true;
                 return;
               }
               requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
+            },
+            {}, std::numeric_limits<int>::max(),
+            // A dispose of an unknown rig's request (the filter does not see it), as the
+            // command topics refuse theirs.
+            [&](const mpdrig_StepRequest& r) {
+              if (Find(r.rig_id) != nullptr) return;
+              RefuseUnknown(kStepRequestTopic, ReportedId(r.rig_id));
+              refused = true;
             });
         if (!taken.ok()) return taken.status();
       }
@@ -731,11 +738,7 @@ Status RigService::Impl::CreateEndpoints(dds_entity_t pub, dds_entity_t sub, boo
       dds::Reader<mpdrig_OutletCommand>::Create(sub, outlet_topic.handle(), dds::CommandQos());
   if (!outlet.ok()) return outlet.status();
   set->outlet.emplace(std::move(outlet).value());
-  // Step requests are not state: reliable, keep all, volatile.
-  dds::Qos step_qos;
-  dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto steps = dds::Reader<mpdrig_StepRequest>::Create(sub, step_topic.handle(), step_qos);
+  auto steps = dds::Reader<mpdrig_StepRequest>::Create(sub, step_topic.handle(), dds::RequestQos());
   if (!steps.ok()) return steps.status();
   set->steps.emplace(std::move(steps).value());
   return Status::Ok();

@@ -376,11 +376,8 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
       dds::Writer<mpdrig_ShadowStatus>::Create(pub, impl->status_topic.handle(), dds::StatusQos());
   if (!status.ok()) return status.status();
   impl->status.emplace(std::move(status).value());
-  dds::Qos command_qos;  // a command is not state: reliable, keep all, volatile
-  dds_qset_reliability(command_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(command_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
-  auto commands =
-      dds::Reader<mpdrig_ShadowCommand>::Create(sub, impl->command_topic.handle(), command_qos);
+  auto commands = dds::Reader<mpdrig_ShadowCommand>::Create(sub, impl->command_topic.handle(),
+                                                            dds::RequestQos());
   if (!commands.ok()) return commands.status();
   impl->commands.emplace(std::move(commands).value());
   return std::unique_ptr<ShadowService>(new ShadowService(std::move(impl)));

@@ -1,7 +1,7 @@
 // model/ is pure numerics (style.md, design.md): no DDS, no threads, no wall clock, no sockets, no
-// environment variables, and no dependency on the layers above it (idl/, service/, clients/).
-// Time is an argument.
-// This test scans every source and build file under model/ and names each offending line.
+// environment variables, and no dependency on the layers above it (idl/, service/, tools/,
+// clients/). Time is an argument. This test scans every source and build file under model/ and
+// names each offending line.
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -30,8 +30,8 @@ const std::vector<Rule>& SourceRules() {
        std::regex(R"(^\s*#\s*include\s*[<"](dds|ddsc|ddscxx|org/eclipse/cyclonedds)/)")},
       {"DDS header", std::regex(R"(^\s*#\s*include\s*[<"]dds\.h[>"])")},
       {"generated DDS type (idl/)", std::regex(R"(^\s*#\s*include\s*"idl/)")},
-      {"upper layer (service/ or clients/)",
-       std::regex(R"(^\s*#\s*include\s*"(service|clients)/)")},
+      {"upper layer (service/, tools/ or clients/)",
+       std::regex(R"(^\s*#\s*include\s*"(service|tools|clients)/)")},
       {"threads", std::regex(R"(^\s*#\s*include\s*<(thread|future|stop_token|pthread\.h)>)")},
       {"threads", std::regex(R"(std::(thread|jthread|async|this_thread)\b)")},
       {"wall clock", std::regex(R"(\b(system_clock|steady_clock|high_resolution_clock)\b)")},
@@ -51,7 +51,8 @@ const std::vector<Rule>& CMakeRules() {
   static const std::vector<Rule> rules = {
       {"links DDS", std::regex(R"(\b(CycloneDDS|CycloneDDS-CXX|ddsc|ddscxx)\b)")},
       {"links threads", std::regex(R"(Threads::Threads|\bpthread\b)")},
-      {"links an upper layer", std::regex(R"(\bmpdrig_(idl|service|clients?)\w*)")},
+      {"links an upper layer",
+       std::regex(R"(\bmpdrig_(idl|service|rig|shadow|report|clients?)\w*)")},
   };
   return rules;
 }
@@ -96,7 +97,8 @@ TEST(ModelPurity, ScannerCatchesEachForbiddenDependency) {
       "  #  include <ddsc/dds.h>",
       "#include <dds/dds.hpp>",
       "#include \"idl/rig_types.h\"",
-      "#include \"service/cli/commands.h\"",
+      "#include \"service/rig/rig_service.h\"",
+      "#include \"tools/cli/commands.h\"",
       "#include <thread>",
       "#include <future>",
       "std::thread worker([] {});",
@@ -272,19 +274,12 @@ TEST(ModelLayers, EveryIncludeGoesDownTheFolderOrder) {
       << report;
 }
 
-// design.md: clients/ only speak the DDS topics. They may use the transport layer (service/dds)
-// and the generated types, never the model or the service's rigs. The one header of model/ they
-// may name is the project's error type (model/common/status.h: header-only, no model code), which
-// the transport's API returns already; the client library returns it too.
-TEST(ClientPurity, ClientsUseOnlyTheWireAndTheTransport) {
-  const fs::path clients = fs::path(MPDRIG_SOURCE_DIR) / "clients";
-  ASSERT_TRUE(fs::is_directory(clients)) << clients;
-  const std::regex model_include(
-      R"(^\s*#\s*include\s*"(model/(?!common/status\.h")|service/(rig|cli|report)/))");
-  const std::regex model_link(R"(\bmpdrig_(model|rig|report|config_proto)\w*)");
+// "file:line: text" for every line under `folder` that matches `include` (a source file) or
+// `link` (a CMake file, its `#` comment removed).
+std::string FindForbiddenLines(const fs::path& folder, const std::regex& include,
+                               const std::regex& link, int* scanned) {
   std::string report;
-  int scanned = 0;
-  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(clients)) {
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(folder)) {
     if (!entry.is_regular_file()) continue;
     const fs::path& path = entry.path();
     const bool cmake = IsCMake(path);
@@ -295,15 +290,45 @@ TEST(ClientPurity, ClientsUseOnlyTheWireAndTheTransport) {
     while (std::getline(file, line)) {
       ++number;
       const std::string code = line.substr(0, line.find(cmake ? "#" : "//"));
-      if (std::regex_search(cmake ? code : line, cmake ? model_link : model_include)) {
+      if (std::regex_search(cmake ? code : line, cmake ? link : include)) {
         report += "  " + fs::relative(path, MPDRIG_SOURCE_DIR).string() + ":" +
                   std::to_string(number) + ": " + line + "\n";
       }
     }
-    ++scanned;
+    ++*scanned;
   }
+  return report;
+}
+
+// design.md: clients/ only speak the DDS topics. They may use the transport layer (service/dds)
+// and the generated types, never the model, the service's rigs or the command line. The one
+// header of model/ they may name is the project's error type (model/common/status.h: header-only,
+// no model code), which the transport's API returns already; the client library returns it too.
+TEST(ClientPurity, ClientsUseOnlyTheWireAndTheTransport) {
+  const fs::path clients = fs::path(MPDRIG_SOURCE_DIR) / "clients";
+  ASSERT_TRUE(fs::is_directory(clients)) << clients;
+  const std::regex include(
+      R"(^\s*#\s*include\s*"(model/(?!common/status\.h")|service/(rig|shadow)/|tools/))");
+  const std::regex link(R"(\bmpdrig_(model|rig|report|shadow|config_proto)\w*)");
+  int scanned = 0;
+  const std::string report = FindForbiddenLines(clients, include, link, &scanned);
   EXPECT_GT(scanned, 1);
   EXPECT_TRUE(report.empty()) << "clients/ must not use the model or the service's internals:\n"
+                              << report;
+}
+
+// service/ holds what serves (the rig service, the shadow, the transport); tools/ holds the
+// command line that starts them and the offline commands (compare, fit, diagnose, the report).
+// Dependencies point tools/ -> service/ -> model/, so nothing in service/ names tools/.
+TEST(ServicePurity, ServiceDoesNotUseTheCommandLine) {
+  const fs::path service = fs::path(MPDRIG_SOURCE_DIR) / "service";
+  ASSERT_TRUE(fs::is_directory(service)) << service;
+  const std::regex include(R"(^\s*#\s*include\s*"tools/)");
+  const std::regex link(R"(\bmpdrig_report\b|\badd_executable\s*\(\s*mpdrig\b)");
+  int scanned = 0;
+  const std::string report = FindForbiddenLines(service, include, link, &scanned);
+  EXPECT_GT(scanned, 10);
+  EXPECT_TRUE(report.empty()) << "service/ must not use tools/ (the command line, the report):\n"
                               << report;
 }
 

@@ -64,7 +64,7 @@ control=(--lockstep --domain "$domain" --duration 60 --measure-last 20 --timeout
 start=$SECONDS
 if [[ "$mode" != containers ]]; then
   ip netns exec "$ns_a" env MPDRIG_DDS_ADDRESS=$addr_a MPDRIG_RIG_HOST=$addr_a \
-    "$build/service/mpdrig" "${serve_args[@]}" --dds-config "$config_a" >"$work/serve.log" 2>&1 &
+    "$build/tools/mpdrig" "${serve_args[@]}" --dds-config "$config_a" >"$work/serve.log" 2>&1 &
   pids+=($!)
   run_b() {
     ip netns exec "$ns_b" env MPDRIG_DDS_ADDRESS=$addr_b MPDRIG_RIG_HOST=$addr_a \

@@ -1,0 +1,273 @@
+// mpdrig diagnose: which physical effect is the model missing?
+// mpdrig synth: a synthetic lab log with a hidden effect, to try diagnose on a known answer.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include "model/analysis/compare.h"
+#include "model/identification/diagnose.h"
+#include "model/identification/synthetic_log.h"
+#include "model/riglog/rig_log.h"
+#include "model/sim/sensor_noise.h"
+#include "tools/cli/commands.h"
+#include "tools/cli/model_options.h"
+#include "tools/report/diagnosis_report.h"
+
+namespace mpdrig::cli {
+namespace {
+
+struct DiagnoseArgs {
+  ModelOptions model;
+  std::string log_path;
+  std::string json_path;
+  std::string report_path;
+  std::vector<std::string> base_params;
+  std::vector<std::string> candidates;
+  double fit_fraction = 0.6;
+  int max_iterations = 25;
+  InputReplayOptions replay;
+  bool quiet = false;
+  riglog::ReadOptions read;
+};
+
+int RunDiagnose(DiagnoseArgs args) {
+  const std::string name = "diagnose";
+  const auto started = std::chrono::steady_clock::now();
+  auto params = args.model.LoadParams();
+  if (!params.ok()) return Fail(name, params.status());
+  auto simulation = args.model.LoadSimulationOptions();
+  if (!simulation.ok()) return Fail(name, simulation.status());
+  auto log = LoadMeasuredLog(args.log_path, {}, args.read);
+  if (!log.ok()) return Fail(name, log.status());
+
+  DiagnoseOptions options;
+  options.simulation = *simulation;
+  options.simulation.stop_on_range_violation = false;  // a missing effect may be the reason
+  if (!args.base_params.empty()) options.base_params = args.base_params;
+  options.candidates = args.candidates;
+  options.fit_fraction = args.fit_fraction;
+  options.max_iterations = args.max_iterations;
+  options.replay = args.replay;
+  options.solver_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;  // Ceres's iteration table
+  const Status prepared = PrepareReplay(&*log, *params, options.simulation, &options.replay,
+                                        args.quiet, InputLevels::kAfterTheFit);
+  if (!prepared.ok()) return Fail(name, prepared);
+  if (!args.quiet) {
+    options.progress = [](std::string_view stage, double fraction) {
+      std::fprintf(stderr, "diagnose: %3.0f%% %.*s\n", 100.0 * fraction,
+                   static_cast<int>(stage.size()), stage.data());
+    };
+  }
+  // The candidates are independent: one thread per core works through them.
+  options.run_tasks = [quiet = args.quiet](const std::vector<std::function<void()>>& tasks) {
+    std::atomic<std::size_t> next{0}, done{0};
+    const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(),
+                                                             static_cast<unsigned>(tasks.size())));
+    std::vector<std::thread> threads;
+    for (unsigned w = 0; w < workers; ++w) {
+      threads.emplace_back([&] {
+        for (std::size_t i = next++; i < tasks.size(); i = next++) {
+          tasks[i]();
+          const std::size_t finished = ++done;
+          if (!quiet) {
+            std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished, tasks.size());
+          }
+        }
+      });
+    }
+    for (std::thread& thread : threads) thread.join();
+  };
+  auto diagnosis = Diagnose(*log, *params, options);
+  if (!diagnosis.ok()) return Fail(name, diagnosis.status());
+  const Diagnosis& d = *diagnosis;
+  if (!args.quiet && d.input_levels.applied()) {
+    std::fprintf(stderr, "%s (at the fitted base model)\n", d.input_levels.Describe().c_str());
+  }
+
+  if (!args.json_path.empty()) {
+    const Status written = WriteText(args.json_path, report::DiagnosisJson(d, args.log_path));
+    if (!written.ok()) return Fail(name, written);
+  }
+  if (!args.report_path.empty()) {
+    const Status written = WriteText(args.report_path, report::DiagnosisHtml(d, args.log_path));
+    if (!written.ok()) return Fail(name, written);
+  }
+  FILE* summary = args.json_path == "-" || args.report_path == "-" ? stderr : stdout;
+  std::fprintf(summary,
+               "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
+               "(noise floor %.3g%%)\n",
+               d.fit_end_s, 100.0 * d.baseline.error, 100.0 * d.noise_floor);
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    std::fprintf(summary, "%2zu. %s\n", i + 1,
+                 DescribeCandidate(d.candidates[i], d.baseline).c_str());
+  }
+  std::string equivalent;
+  for (const std::string& name : d.equivalent)
+    equivalent += (equivalent.empty() ? "" : ", ") + name;
+  if (!equivalent.empty()) equivalent = "; as good: " + equivalent;
+  std::fprintf(summary, "verdict: %s%s (%d model runs, %.1f s)\n",
+               d.verdict ? d.verdict->c_str() : "no effect is significant", equivalent.c_str(),
+               d.replays,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+  return 0;
+}
+
+struct SynthArgs {
+  SyntheticLogOptions options;
+  std::string effect;
+  std::string sensor_noise = "lab";
+  // Overrides of one part of --sensor-noise (the former per-kind flags).
+  std::optional<double> pressure_noise_pa, flow_noise_m3ps, piston_noise_m, choke_noise_deg;
+  std::string out_path;
+  std::string truth_out_path;
+};
+
+int RunSynth(const SynthArgs& args) {
+  SyntheticLogOptions options = args.options;
+  if (!args.effect.empty() && args.effect != "none") options.hidden_effect = args.effect;
+  auto noise = ParseSensorNoise(args.sensor_noise);
+  if (!noise.ok()) return Fail("synth", noise.status().Within("--sensor-noise"));
+  if (args.pressure_noise_pa) noise->pressure_pa = *args.pressure_noise_pa;
+  if (args.flow_noise_m3ps) noise->flow_m3ps = *args.flow_noise_m3ps;
+  if (args.piston_noise_m) noise->piston_m = *args.piston_noise_m;
+  if (args.choke_noise_deg) noise->choke_deg = *args.choke_noise_deg;
+  options.sensor_noise = *noise;
+  // The flags' limits (synthetic_log.h), named as the user wrote them.
+  auto format = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::string(text);
+  };
+  if (!(options.duration_s >= 10.0 && options.duration_s <= kMaxSyntheticDurationS)) {
+    return Fail("synth",
+                Status::Error("--duration " + format(options.duration_s) + " s must be in [10, " +
+                              format(kMaxSyntheticDurationS) + "] s"));
+  }
+  if (!(options.rate_hz >= 10.0 && options.rate_hz <= kMaxSyntheticRateHz)) {
+    return Fail("synth",
+                Status::Error("--rate-hz " + format(options.rate_hz) + " Hz must be in [10, " +
+                              format(kMaxSyntheticRateHz) + "] Hz"));
+  }
+  if (options.duration_s * options.rate_hz > kMaxSyntheticSamples) {
+    return Fail("synth", Status::Error("--duration x --rate-hz = " +
+                                       format(options.duration_s * options.rate_hz) +
+                                       " samples, at most " + format(kMaxSyntheticSamples) +
+                                       " (held in memory): shorten the log or lower the rate"));
+  }
+  auto made = MakeSyntheticLog(options);
+  if (!made.ok()) return Fail("synth", made.status());
+  made->log.metadata.push_back({"hidden", made->description});
+  made->log.metadata.push_back(
+      {"sensor_noise", noise->ToSpec() + ", seed " + std::to_string(options.seed)});
+  const Status written = riglog::WriteRigLog(made->log, args.out_path);
+  if (!written.ok()) return Fail("synth", written);
+  if (!args.truth_out_path.empty()) {
+    made->truth_log.metadata.push_back({"hidden", made->description});
+    made->truth_log.metadata.push_back(
+        {"sensor_noise", "none (the truth of " + args.out_path + ": the same run without noise)"});
+    const Status truth = riglog::WriteRigLog(made->truth_log, args.truth_out_path);
+    if (!truth.ok()) return Fail("synth", truth.Within("--truth-out"));
+  }
+  std::fprintf(stderr, "synth: %s; sensor noise %s -> %s%s%s\n", made->description.c_str(),
+               noise->ToSpec().c_str(), args.out_path.c_str(),
+               args.truth_out_path.empty() ? "" : ", noise-free truth -> ",
+               args.truth_out_path.c_str());
+  return 0;
+}
+
+}  // namespace
+
+void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
+  auto args = std::make_shared<DiagnoseArgs>();
+  args->model.cells = kDiagnoseCells;
+  CLI::App* command = app->add_subcommand("diagnose",
+                                          "Which physical effect is the model missing? Ranks the "
+                                          "effect catalogue on a measured log");
+  command->footer(
+      "1. fits the base model (wave speed, pipe friction f1, choke leak) on the first part of\n"
+      "   the log, 2. shows where it still fails (compare's metrics), 3. adds each effect of\n"
+      "   `mpdrig effects` in turn, fits it with the base parameters, and scores it on the rest\n"
+      "   of the log (data it was not fitted on), with a price of 1% per extra parameter,\n"
+      "4. ranks them and says what each explains. `significant`: better than the base model by\n"
+      "   more than 10% and two standard errors (over 8 blocks of the scoring data); `as good`\n"
+      "   names significant candidates the verdict does not beat by that 10%.\n"
+      "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
+      "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
+      "Progress on stderr; a summary on stdout.");
+  args->model.AddAll(command);
+  command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command->add_option("--json", args->json_path, "diagnosis as JSON ('-' for stdout)");
+  command->add_option("--report", args->report_path, "self-contained HTML report");
+  command
+      ->add_option("--base-params", args->base_params,
+                   "base parameters to fit (default wave_speed_mps,friction_f1_per_s,"
+                   "choke_leak_m2)")
+      ->delimiter(',');
+  AddLogReadOptions(command, &args->read);
+  command->add_option("--candidates", args->candidates, "effects to try (default: all)")
+      ->delimiter(',');
+  command
+      ->add_option("--fit-fraction", args->fit_fraction,
+                   "share of the log (from its start) used for fitting; the rest scores")
+      ->check(CLI::Range(0.2, 0.9))
+      ->capture_default_str();
+  command->add_option("--max-iterations", args->max_iterations, "solver iterations per fit")
+      ->check(CLI::Range(1, 500))
+      ->capture_default_str();
+  AddInputReplayOptions(command, &args->replay);
+  command->add_flag("--quiet", args->quiet, "no progress on stderr");
+  command->callback([args, exit_code]() { *exit_code = RunDiagnose(*args); });
+
+  auto synth = std::make_shared<SynthArgs>();
+  CLI::App* synth_command = app->add_subcommand(
+      "synth", "Write a synthetic lab log with a hidden effect (to try diagnose on)");
+  synth_command->footer(
+      "The model with one effect switched on at a random strength, perturbed base parameters,\n"
+      "piston sines and a sweep, choke and pump steps, and the lab's sensor noise "
+      "(--sensor-noise).\n"
+      "The truth is written into the log's metadata (# hidden: ...). Same seed, same log.\n"
+      "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv --truth-out lag_truth.csv");
+  synth_command->add_option("--effect", synth->effect, "hidden effect, or none")
+      ->capture_default_str();
+  synth_command->add_option("--seed", synth->options.seed, "random seed")->capture_default_str();
+  synth_command->add_option("--duration", synth->options.duration_s, "length [s]")
+      ->capture_default_str();
+  synth_command->add_option("--rate-hz", synth->options.rate_hz, "sample rate [Hz]")
+      ->capture_default_str();
+  synth_command
+      ->add_option("--sensor-noise", synth->sensor_noise,
+                   "sensor noise: none, lab (thesis Table 4.1.1) or a SPEC such as "
+                   "pressure=0.024bar,flow=2%+0.05lpm,piston=0.5mm,choke=0.1deg "
+                   "(docs/sensor-noise.md)")
+      ->capture_default_str();
+  // The former per-kind flags: each overrides one part of --sensor-noise.
+  const auto add_noise = [&](const char* name, std::optional<double>* sigma, const char* what,
+                             const char* unit) {
+    synth_command
+        ->add_option(
+            name, *sigma,
+            std::string("override --sensor-noise: ") + what + ", standard deviation [" + unit + "]")
+        ->check(CLI::NonNegativeNumber);
+  };
+  add_noise("--pressure-noise-pa", &synth->pressure_noise_pa, "pressure transmitters", "Pa");
+  add_noise("--flow-noise-m3ps", &synth->flow_noise_m3ps,
+            "flow meters, the part independent of the reading", "m^3/s");
+  add_noise("--piston-noise-m", &synth->piston_noise_m, "piston position", "m");
+  add_noise("--choke-noise-deg", &synth->choke_noise_deg, "choke position", "deg");
+  synth_command->add_option("--truth-out", synth->truth_out_path,
+                            "also write the same run without sensor noise (same seed, excitation "
+                            "and parameters): what a perfect model would say");
+  synth_command->add_option("--out", synth->out_path, "rig log to write")->required();
+  synth_command->callback([synth, exit_code]() { *exit_code = RunSynth(*synth); });
+}
+
+}  // namespace mpdrig::cli

@@ -1,0 +1,151 @@
+// mpdrig freqresp: piston position -> bottom-hole pressure p(0), analytic (9.2.13) or simulated.
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+#include "model/analysis/frequency_response.h"
+#include "model/common/units.h"
+#include "tools/cli/commands.h"
+#include "tools/cli/model_options.h"
+
+namespace mpdrig::cli {
+namespace {
+
+struct FreqrespArgs {
+  ModelOptions model;
+  bool analytic = false;
+  bool simulated = false;
+  std::string choke = "closed";
+  double pump_lpm = 0.0;
+  double fmin_hz = 0.02;
+  double fmax_hz = 0.6;
+  int points = 59;
+  bool logarithmic = false;
+  double amplitude_m = 0.001;
+  double outlet_barg = 4.0;
+  std::string out_path;
+};
+
+Result<ChokeSetting> ParseChoke(const std::string& text) {
+  if (text == "closed") return ChokeSetting::Closed();
+  if (text == "open") return ChokeSetting::Open();
+  double deg = 0.0;
+  const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), deg);
+  if (error != std::errc() || end != text.data() + text.size() || !(deg >= 0.0 && deg <= 90.0)) {
+    return Status::Error("--choke takes closed, open, or an opening in degrees 0..90; got '" +
+                         text + "'");
+  }
+  return ChokeSetting::Opening(units::ChokeDegToFrac(deg));
+}
+
+int RunFreqresp(const FreqrespArgs& args) {
+  const std::string name = "freqresp";
+  auto params = args.model.LoadParams();
+  if (!params.ok()) return Fail(name, params.status());
+  auto choke = ParseChoke(args.choke);
+  if (!choke.ok()) return Fail(name, choke.status());
+  if (!(args.fmin_hz > 0.0) || !(args.fmax_hz >= args.fmin_hz) || args.points < 1) {
+    return Fail(name, Status::Error("need 0 < --fmin <= --fmax and --points >= 1"));
+  }
+  const double pump = units::LpmToM3ps(args.pump_lpm);
+  const std::vector<double> freqs =
+      FrequencyGrid(args.fmin_hz, args.fmax_hz, args.points, args.logarithmic);
+
+  std::vector<FrequencyPoint> points;
+  if (args.analytic) {
+    if (choke->kind == ChokeSetting::Kind::kOpening && pump == 0.0) {
+      std::fprintf(stderr,
+                   "mpdrig freqresp: note: without pump flow the linearised orifice (5.3.2) has "
+                   "zero slope, so a partly open choke acts as an open one in (9.2.13)\n");
+    }
+    points = AnalyticFrequencyResponse(*params, *choke, pump, freqs);
+  } else {
+    auto options = args.model.LoadSimulationOptions();
+    if (!options.ok()) return Fail(name, options.status());
+    SimulatedResponseOptions response;
+    response.amplitude_m = args.amplitude_m;
+    response.outlet_pressure_pa =
+        units::BargToPaAbs(args.outlet_barg, params->atmospheric_pressure_pa);
+    auto simulated = SimulatedFrequencyResponse(
+        *params, *options, *choke, pump, freqs, response, [](int done, int total) {
+          std::fprintf(stderr, "\rmpdrig freqresp: %d/%d frequencies", done, total);
+          if (done == total) std::fprintf(stderr, "\n");
+        });
+    if (!simulated.ok()) return Fail(name, simulated.status());
+    points = *simulated;
+  }
+
+  std::ofstream file;
+  std::ostream* out = &std::cout;
+  if (args.out_path != "-") {
+    file.open(args.out_path);
+    if (!file) return Fail(name, Status::Error(args.out_path + ": cannot write"));
+    out = &file;
+  }
+  out->precision(10);
+  *out << "freq_hz,magnitude_pa_per_m,phase_deg\n";
+  const FrequencyPoint* peak = &points.front();
+  for (const FrequencyPoint& p : points) {
+    *out << p.freq_hz << "," << p.magnitude_pa_per_m << "," << p.phase_deg << "\n";
+    if (p.magnitude_pa_per_m > peak->magnitude_pa_per_m) peak = &p;
+  }
+  if (!*out) return Fail(name, Status::Error(args.out_path + ": write failed"));
+  if (args.out_path != "-") {
+    std::printf(
+        "%s response, choke %s, pump %g L/min: %zu frequencies %g..%g Hz written to %s; "
+        "largest |p(0)/x| = %.4g bar/m at %.4g Hz\n",
+        args.analytic ? "analytic (9.2.13)" : "simulated", choke->Describe().c_str(), args.pump_lpm,
+        points.size(), args.fmin_hz, args.fmax_hz, args.out_path.c_str(),
+        peak->magnitude_pa_per_m / 1e5, peak->freq_hz);
+  }
+  return 0;
+}
+
+}  // namespace
+
+void AddFreqrespCommand(CLI::App* app, int* exit_code) {
+  auto args = std::make_shared<FreqrespArgs>();
+  CLI::App* command = app->add_subcommand(
+      "freqresp", "Frequency response piston position -> bottom-hole pressure (thesis 9.2)");
+  command->footer(
+      "Frequency response from piston position to bottom-hole pressure p(0) (thesis 9.2):\n"
+      "columns freq_hz, magnitude_pa_per_m, phase_deg.\n"
+      "  --analytic   the closed form (9.2.13): linear model, linear friction f1, choke "
+      "linearised\n"
+      "  --simulated  the simulator driven by a small piston sine at each frequency\n"
+      "Resonances without friction: open choke (2n+1) c/(4L), closed choke n c/(2L).\n"
+      "  mpdrig freqresp --analytic --choke closed --fmin 0.02 --fmax 0.6 --out fr.csv");
+  args->model.AddAll(command);
+  auto* analytic = command->add_flag("--analytic", args->analytic, "closed form (9.2.13)");
+  auto* simulated = command->add_flag("--simulated", args->simulated, "simulate each frequency");
+  analytic->excludes(simulated);
+  command->add_option("--choke", args->choke, "closed, open, or an opening in degrees")
+      ->capture_default_str();
+  command
+      ->add_option("--pump-lpm", args->pump_lpm,
+                   "back-pressure pump flow [L/min]; sets the linearised choke k = 2 rho A q_b/G^2")
+      ->capture_default_str();
+  command->add_option("--fmin", args->fmin_hz, "lowest frequency [Hz]")->capture_default_str();
+  command->add_option("--fmax", args->fmax_hz, "highest frequency [Hz]")->capture_default_str();
+  command->add_option("--points", args->points, "number of frequencies")->capture_default_str();
+  command->add_flag("--log", args->logarithmic, "space the frequencies geometrically");
+  command->add_option("--amplitude-m", args->amplitude_m, "piston amplitude for --simulated [m]")
+      ->capture_default_str();
+  command
+      ->add_option("--outlet-barg", args->outlet_barg,
+                   "choke outlet pressure for --simulated [bar gauge]")
+      ->capture_default_str();
+  command->add_option("--out", args->out_path, "output CSV ('-' for stdout)")->required();
+  command->callback([args, exit_code]() {
+    if (!args->analytic && !args->simulated) {
+      *exit_code = Fail("freqresp", Status::Error("give --analytic or --simulated"));
+      return;
+    }
+    *exit_code = RunFreqresp(*args);
+  });
+}
+
+}  // namespace mpdrig::cli

@@ -1,0 +1,263 @@
+// mpdrig simulate: drive the rig model with a log's inputs or with profiles; write a rig log.
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "model/analysis/compare.h"
+#include "model/common/units.h"
+#include "model/riglog/rig_log.h"
+#include "model/sim/log_inputs.h"
+#include "model/sim/profile.h"
+#include "model/sim/sensor_noise.h"
+#include "tools/cli/commands.h"
+#include "tools/cli/model_options.h"
+#include "tools/cli/rig_log_output.h"
+
+namespace mpdrig::cli {
+namespace {
+
+struct SimulateArgs {
+  ModelOptions model;
+  std::string inputs_path;
+  std::string piston_spec;
+  std::string choke_spec = "31";
+  double pump_lpm = 0.0;
+  double outlet_barg = 0.0;
+  double duration_s = 20.0;
+  double rate_hz = 100.0;
+  InputReplayOptions replay;
+  riglog::ReadOptions read;
+  bool allow_negative_pressure = false;
+  std::vector<double> pressure_at_m;
+  std::string out_path;
+  std::string sensor_noise = "lab";
+  std::uint64_t noise_seed = 1;
+};
+
+// Limits of a profile run: its output times are held in memory (8 B each; the samples stream to
+// the log, about 250 B each on disk) and the solver steps the whole duration, so an absurd value
+// would run out of memory, disk or time instead of failing (as --duration inf, 1e17, 1e9 and
+// --rate-hz inf once did).
+constexpr double kMaxDurationS = 86400.0;    // one day of rig time per run
+constexpr double kMaxRateHz = 100000.0;      // far above the lab's 100 Hz and the solver's grid
+constexpr double kMaxOutputSamples = 1.0e7;  // 1 kHz for 2.8 h: 80 MB of times, 2.5 GB of log
+
+Status CheckProfileRunLimits(double duration_s, double rate_hz) {
+  auto format = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::string(text);
+  };
+  if (!(duration_s > 0.0 && duration_s <= kMaxDurationS)) {
+    return Status::Error("--duration " + format(duration_s) + " s must be in (0, " +
+                         format(kMaxDurationS) + "] s (one day of rig time; split longer runs)");
+  }
+  if (!(rate_hz > 0.0 && rate_hz <= kMaxRateHz)) {
+    return Status::Error("--rate-hz " + format(rate_hz) + " Hz must be in (0, " +
+                         format(kMaxRateHz) + "] Hz");
+  }
+  if (duration_s * rate_hz > kMaxOutputSamples) {
+    return Status::Error("--duration x --rate-hz = " + format(duration_s * rate_hz) +
+                         " samples, at most " + format(kMaxOutputSamples) +
+                         ": shorten the run or lower the rate");
+  }
+  return Status::Ok();
+}
+
+int RunSimulate(const SimulateArgs& args) {
+  const std::string name = "simulate";
+  auto params = args.model.LoadParams();
+  if (!params.ok()) return Fail(name, params.status());
+  auto options = args.model.LoadSimulationOptions();
+  if (!options.ok()) return Fail(name, options.status());
+  options->stop_on_range_violation = !args.allow_negative_pressure;
+  options->pressure_positions_m = args.pressure_at_m;
+
+  auto noise = ParseSensorNoise(args.sensor_noise);
+  if (!noise.ok()) return Fail(name, noise.status().Within("--sensor-noise"));
+
+  InputSignals signals;
+  std::vector<double> output_times;
+  double atmosphere = params->atmospheric_pressure_pa;
+  std::string drive;
+  if (!args.inputs_path.empty()) {
+    auto log = riglog::ReadRigLog(args.inputs_path, args.read);
+    if (!log.ok()) return Fail(name, log.status());
+    // A log that starts mid-heave starts after a warm-up, where its pressures say so (as compare).
+    // Its choke and FT2 levels are corrected from its pressures, as compare's.
+    InputReplayOptions replay = args.replay;
+    std::optional<InputReconstruction> plan;
+    if (auto measured = MeasuredLogFromRigLog(*log, args.inputs_path); measured.ok()) {
+      const Status prepared = PrepareReplay(&*measured, *params, *options, &replay, false);
+      if (!prepared.ok()) return Fail(name, prepared);
+      plan = measured->reconstruction;
+    }
+    auto columns = InputColumnsFromLog(*log, args.inputs_path);
+    if (!columns.ok()) return Fail(name, columns.status());
+    auto from_log = SignalsFromColumns(std::move(columns).value(), args.inputs_path, replay,
+                                       plan ? &*plan : nullptr);
+    if (!from_log.ok()) return Fail(name, from_log.status());
+    signals = *from_log;
+    output_times = log->time_s;
+    atmosphere = log->atmospheric_pressure_pa;
+    options->choke_input = ChokeInput::kMeasured;
+    drive = "inputs of " + args.inputs_path;
+  } else {
+    Status limits = CheckProfileRunLimits(args.duration_s, args.rate_hz);
+    if (!limits.ok()) return Fail(name, limits);
+    auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
+    if (!piston.ok()) return Fail(name, piston.status().Within("--piston"));
+    auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);
+    if (!choke.ok()) return Fail(name, choke.status().Within("--choke-deg"));
+    std::shared_ptr<Profile> piston_profile = std::move(piston).value();
+    std::shared_ptr<Profile> choke_profile = std::move(choke).value();
+    const double pump = units::LpmToM3ps(args.pump_lpm);
+    const double outlet = units::BargToPaAbs(args.outlet_barg, params->atmospheric_pressure_pa);
+    signals.piston_position_m = [piston_profile](double t) { return piston_profile->ValueAt(t); };
+    signals.rig = [choke_profile, pump, outlet](double t) {
+      RigInputs in;
+      in.choke_opening_frac = units::ChokeDegToFrac(choke_profile->ValueAt(t));
+      in.pump_flow_m3ps = pump;
+      in.outlet_pressure_pa = outlet;
+      return in;
+    };
+    const long count = std::lround(args.duration_s * args.rate_hz);
+    for (long i = 0; i <= count; ++i) output_times.push_back(i / args.rate_hz);
+    options->choke_input = ChokeInput::kReference;
+    drive = "piston " + piston_profile->Describe() + " m, choke " + choke_profile->Describe() +
+            " deg (through the actuator)";
+  }
+
+  const double span_s = output_times.back() - output_times.front();
+  const bool show_progress = span_s > 600.0;
+  riglog::Metadata metadata = {
+      {"source", "mpdrig simulate"},
+      {"model", args.model.Describe(*params)},
+      {"drive", drive},
+  };
+  if (!args.model.config_path.empty()) metadata.emplace_back("config", args.model.config_path);
+  for (const std::string& assignment : args.model.overrides)
+    metadata.emplace_back("set", assignment);
+  // What the lab's sensors would read (sensor_noise.h); the extra --pressure-at outputs are the
+  // model's, not sensors, and stay noise-free. `none` writes the model's output untouched.
+  std::optional<SensorNoiseApplier> sensors;
+  if (!noise->IsNone()) {
+    sensors.emplace(*noise, args.noise_seed);
+    metadata.emplace_back("sensor_noise",
+                          noise->ToSpec() + ", seed " + std::to_string(args.noise_seed));
+  }
+  // The samples go to the log as they come (a long run is not held in memory); a failed run
+  // leaves no log behind (rig_log_output.h).
+  auto out =
+      SampleLogStream::Open(args.out_path, std::move(metadata), atmosphere, args.pressure_at_m);
+  if (!out.ok()) return Fail(name, out.status());
+  Status written = Status::Ok();
+  const auto started = std::chrono::steady_clock::now();
+  auto run = SimulateEach(
+      *params, *options, signals, output_times,
+      [&](const RigSample& sample) {
+        if (!written.ok()) return;
+        RigSample measured = sample;
+        if (sensors) sensors->MeasureSample(&measured);
+        written = out->Write(measured);
+      },
+      [&](double fraction) {
+        if (show_progress) std::fprintf(stderr, "mpdrig simulate: %3.0f%%\n", 100.0 * fraction);
+      });
+  if (!run.ok()) {
+    if (run.status().code() != Status::Code::kModelRange) return Fail(name, run.status());
+    return Fail(name, Status::Error(run.status().message() +
+                                    "\n  (raise the outlet pressure, reduce the piston amplitude, "
+                                    "or pass --allow-negative-pressure to continue anyway)"));
+  }
+  if (!written.ok()) return Fail(name, written);
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  riglog::Metadata warnings;
+  if (run->first_range_event) {
+    warnings.emplace_back("warning", run->first_range_event->Describe());
+    std::fprintf(stderr, "mpdrig simulate: warning: %s\n",
+                 run->first_range_event->Describe().c_str());
+  }
+  written = out->Finish(warnings);
+  if (!written.ok()) return Fail(name, written);
+  if (args.out_path != "-") {
+    std::printf(
+        "simulated %.6g s of the rig (%s) in %.3f s: %ld steps, %zu samples of %zu "
+        "channels written to %s\n",
+        span_s, args.model.Describe(*params).c_str(), elapsed_s, run->steps, out->samples_written(),
+        SimulatedColumns(args.pressure_at_m)->size() + 1, args.out_path.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void AddSimulateCommand(CLI::App* app, int* exit_code) {
+  auto args = std::make_shared<SimulateArgs>();
+  CLI::App* command =
+      app->add_subcommand("simulate", "Run the rig model; write every lab channel as a rig log");
+  command->footer(
+      "Writes a rig log (rig-log-format.md) with every lab channel, as the lab's sensors read\n"
+      "it: with their noise (--sensor-noise, default lab; none: the model's output as is).\n"
+      "Drive it with the inputs of a measured log (--inputs), or with profiles:\n"
+      "  mpdrig simulate --piston sine:amp_m=0.1,freq_hz=0.2 --choke-deg 31 --pump-lpm 5 \\\n"
+      "                  --outlet-barg 0 --duration 60 --out sim.csv\n"
+      "  mpdrig simulate --inputs lab.csv --out replay.csv --set wave_speed_mps=900\n"
+      "Profiles: sine:amp_U=..,freq_hz=..[,mean_U=..][,phase_deg=..]\n"
+      "          sweep:amp_U=..,f0_hz=..,f1_hz=..[,duration_s=..][,mean_U=..]\n"
+      "          step:amp_U=..,t_s=..[,rise_s=..][,mean_U=..]   or a plain number\n"
+      "with U = m for the piston and deg for the choke.");
+  args->model.AddAll(command);
+  auto* inputs = command
+                     ->add_option("--inputs", args->inputs_path,
+                                  "rig log whose piston_position, choke_position (and FT2, C1 "
+                                  "if present) drive the model; outputs at its time stamps")
+                     ->check(CLI::ExistingFile);
+  auto* piston =
+      command->add_option("--piston", args->piston_spec, "piston (BHA) position profile [m]");
+  inputs->excludes(piston);
+  command
+      ->add_option("--choke-deg", args->choke_spec,
+                   "choke opening reference profile [deg], 0 closed .. 90 open")
+      ->capture_default_str();
+  command->add_option("--pump-lpm", args->pump_lpm, "back-pressure pump flow FT2 [L/min]")
+      ->capture_default_str();
+  command->add_option("--outlet-barg", args->outlet_barg, "choke outlet pressure C1 [bar gauge]")
+      ->capture_default_str();
+  command->add_option("--duration", args->duration_s, "simulated time [s] (profiles)")
+      ->capture_default_str();
+  command->add_option("--rate-hz", args->rate_hz, "output sample rate [Hz] (profiles)")
+      ->capture_default_str();
+  AddInputReplayOptions(command, &args->replay);
+  AddLogReadOptions(command, &args->read);
+  command
+      ->add_option("--pressure-at", args->pressure_at_m,
+                   "extra pressure outputs along the pipe, metres from the inlet, e.g. "
+                   "--pressure-at 50,450,850 (columns p_50m_barg, ...; thesis 6.8)")
+      ->delimiter(',');
+  command->add_flag("--allow-negative-pressure", args->allow_negative_pressure,
+                    "keep going when the absolute pressure falls to zero (reported as a warning)");
+  command
+      ->add_option("--sensor-noise", args->sensor_noise,
+                   "noise of the written sensor channels: none, lab (thesis Table 4.1.1) or a "
+                   "SPEC (docs/sensor-noise.md)")
+      ->capture_default_str();
+  command->add_option("--noise-seed", args->noise_seed, "seed of the sensor noise")
+      ->capture_default_str();
+  command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
+  command->callback([args, exit_code, inputs, piston]() {
+    if (inputs->count() == 0 && piston->count() == 0) {
+      *exit_code = Fail("simulate", Status::Error("give --inputs LOG.csv or --piston PROFILE"));
+      return;
+    }
+    *exit_code = RunSimulate(*args);
+  });
+}
+
+}  // namespace mpdrig::cli

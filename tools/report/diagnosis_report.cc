@@ -1,0 +1,270 @@
+#include "tools/report/diagnosis_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "model/common/units.h"
+#include "model/riglog/channels.h"
+#include "tools/report/svg_plot.h"
+
+namespace mpdrig::report {
+namespace {
+
+std::string Num(double value) {
+  if (!std::isfinite(value)) return "null";
+  std::string text;
+  riglog::AppendNumber(value, &text);
+  return text;
+}
+
+std::string Quote(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') {
+      out += '\\', out += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      out += ' ';
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
+}
+
+std::string ParamsJson(const std::vector<NamedValue>& params) {
+  std::string out = "{";
+  for (std::size_t i = 0; i < params.size(); ++i) {
+    if (i) out += ",";
+    out += Quote(params[i].key) + ":{\"value\":" + Num(params[i].value) +
+           ",\"std_error\":" + Num(params[i].standard_error) +
+           ",\"held\":" + (params[i].held ? "true" : "false") + "}";
+  }
+  return out + "}";
+}
+
+std::string ChannelsJson(const std::vector<std::pair<Channel, double>>& errors) {
+  std::string out = "{";
+  for (std::size_t i = 0; i < errors.size(); ++i) {
+    if (i) out += ",";
+    out += Quote(std::string(riglog::ChannelName(errors[i].first))) + ":" + Num(errors[i].second);
+  }
+  return out + "}";
+}
+
+double ErrorOf(const CandidateResult& result, Channel channel) {
+  for (const auto& [c, e] : result.channel_errors) {
+    if (c == channel) return e;
+  }
+  return std::nan("");
+}
+
+}  // namespace
+
+std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
+  std::ostringstream out;
+  const CandidateResult& b = d.baseline;
+  out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
+      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":"
+      << d.replays
+      // The choke's and FT2's levels as estimated at the fitted base model, lab units.
+      << ",\"input_levels\":{\"choke_offset_deg\":"
+      << Num(units::ChokeFracToDeg(d.input_levels.choke_offset_frac))
+      << ",\"choke_trend_deg\":" << Num(units::ChokeFracToDeg(d.input_levels.choke_trend_frac))
+      << ",\"FT2_offset_lpm\":" << Num(units::M3psToLpm(d.input_levels.pump_offset_m3ps))
+      << ",\"FT2_trend_lpm\":" << Num(units::M3psToLpm(d.input_levels.pump_trend_m3ps))
+      << ",\"at_bound\":" << (d.input_levels.at_bound ? "true" : "false") << "}"
+      << ",\"baseline\":{\"error\":" << Num(b.error) << ",\"fit_error\":" << Num(b.fit_error)
+      << ",\"params\":" << ParamsJson(b.params)
+      << ",\"channels\":" << ChannelsJson(b.channel_errors) << "},\"candidates\":[";
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    const CandidateResult& c = d.candidates[i];
+    if (i) out << ",";
+    out << "{\"effect\":" << Quote(c.effect) << ",\"params\":" << ParamsJson(c.params)
+        << ",\"error\":" << Num(c.error) << ",\"penalised_error\":" << Num(c.penalised_error)
+        << ",\"fit_error\":" << Num(c.fit_error) << ",\"improvement\":" << Num(c.improvement)
+        << ",\"improvement_std_error\":" << Num(c.improvement_std_error)
+        << ",\"extra_params\":" << c.extra_params
+        << ",\"significant\":" << (c.significant ? "true" : "false")
+        << ",\"explains\":" << Quote(c.explains)
+        << ",\"description\":" << Quote(DescribeCandidate(c, b))
+        << ",\"channels\":" << ChannelsJson(c.channel_errors);
+    if (!c.failure.empty()) out << ",\"failure\":" << Quote(c.failure);
+    if (!c.strength_key.empty()) {
+      out << ",\"strength_key\":" << Quote(c.strength_key) << ",\"detectable_from\":"
+          << (c.detectable_from ? Num(*c.detectable_from) : std::string("null"))
+          << ",\"strength_inverse\":" << (c.strength_inverse ? "true" : "false")
+          << ",\"strength_scan_limit\":" << Num(c.strength_scan_limit);
+    }
+    out << "}";
+  }
+  out << "],\"verdict\":" << (d.verdict ? Quote(*d.verdict) : std::string("null"));
+  out << ",\"equivalent\":[";
+  for (std::size_t i = 0; i < d.equivalent.size(); ++i)
+    out << (i ? "," : "") << Quote(d.equivalent[i]);
+  out << "]";
+  // Where the fitted base model fails: worst channels, worst bands, lags.
+  const Comparison& cmp = d.baseline_comparison;
+  std::vector<const ChannelMetrics*> channels;
+  for (const ChannelMetrics& m : cmp.channels) channels.push_back(&m);
+  std::sort(channels.begin(), channels.end(), [](auto* a, auto* b) {
+    return (std::isfinite(a->nrmse) ? a->nrmse : -1.0) >
+           (std::isfinite(b->nrmse) ? b->nrmse : -1.0);
+  });
+  out << ",\"where_baseline_fails\":{\"worst_channels\":[";
+  for (std::size_t i = 0; i < channels.size() && i < 5; ++i) {
+    const ChannelMetrics& m = *channels[i];
+    if (i) out << ",";
+    out << "{\"channel\":" << Quote(std::string(riglog::ChannelName(m.channel)))
+        << ",\"nrmse\":" << Num(m.nrmse) << ",\"lag_s\":" << Num(m.lag_s)
+        << ",\"residual_white\":" << (m.residual.white ? "true" : "false")
+        << ",\"residual_independent_of_inputs\":"
+        << (m.residual.independent_of_inputs ? "true" : "false") << ",\"bands\":[";
+    for (std::size_t k = 0; k < m.bands.size(); ++k) {
+      const BandMetrics& band = m.bands[k];
+      if (k) out << ",";
+      out << "{\"freq_hz\":" << Num(band.freq_hz)
+          << ",\"magnitude_ratio\":" << Num(band.magnitude_ratio)
+          << ",\"phase_diff_deg\":" << Num(band.phase_diff_deg)
+          << ",\"band_nrmse\":" << Num(band.band_nrmse) << "}";
+    }
+    out << "]}";
+  }
+  out << "]}}\n";
+  return out.str();
+}
+
+std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
+  std::ostringstream html;
+  const CandidateResult& b = d.baseline;
+  const CandidateResult* winner = nullptr;
+  if (d.verdict) {
+    for (const CandidateResult& c : d.candidates) {
+      if (c.effect == *d.verdict) winner = &c;
+    }
+  }
+  html << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>mpdrig diagnose: "
+       << EscapeHtml(log_path)
+       << "</title><style>body{font-family:sans-serif;max-width:1100px;margin:1em auto;color:#222}"
+          "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:3px "
+          "8px;text-align:right}th{background:#eee}td.l{text-align:left}.yes{color:#080;font-"
+          "weight:bold}.no{color:#888}.verdict{font-size:1.3em;padding:0.5em;background:#eef6ee;"
+          "border-left:5px solid #080}.none{background:#f6f6f6;border-left-color:#888}</style>"
+          "</head><body>\n<h1>Which effect is missing?</h1>\n<p>Log <code>"
+       << EscapeHtml(log_path) << "</code>. Fitted on t &lt; " << FormatValue(d.fit_end_s)
+       << " s, scored on the rest. Noise floor (a perfect model's error): "
+       << FormatValue(100.0 * d.noise_floor) << " %. " << d.replays << " model runs.</p>\n";
+  if (winner != nullptr) {
+    html << "<p class=\"verdict\">Missing effect: <b>" << EscapeHtml(winner->effect) << "</b>. "
+         << EscapeHtml(DescribeCandidate(*winner, b)) << ".</p>\n";
+    if (!d.equivalent.empty()) {
+      std::string names;
+      for (const std::string& name : d.equivalent) names += (names.empty() ? "" : ", ") + name;
+      html << "<p>Explains the log as well (the verdict does not clearly beat it): <b>"
+           << EscapeHtml(names)
+           << "</b>. The log does not excite what tells them apart; see what each explains "
+              "below.</p>\n";
+    }
+  } else {
+    html << "<p class=\"verdict none\">No effect of the catalogue explains the remaining error "
+            "beyond noise and extra freedom. Baseline error "
+         << FormatValue(100.0 * b.error) << " %.</p>\n";
+  }
+
+  // Per channel: error before and after, side by side.
+  html << "<h2>Error per channel, before and after"
+       << (winner ? " adding " + EscapeHtml(winner->effect) : std::string()) << "</h2>\n";
+  {
+    std::vector<double> x, before, after;
+    std::string names;
+    for (std::size_t i = 0; i < b.channel_errors.size(); ++i) {
+      x.push_back(static_cast<double>(i));
+      before.push_back(100.0 * b.channel_errors[i].second);
+      after.push_back(winner ? 100.0 * ErrorOf(*winner, b.channel_errors[i].first) : std::nan(""));
+    }
+    SvgPlot plot(1000, 260, "channel (table below)", "NRMSE on scoring data [%]");
+    plot.Stems(x, before, "#c33");
+    plot.Legend("fitted base model", "#c33");
+    if (winner) {
+      std::vector<double> shifted;
+      for (double v : x) shifted.push_back(v + 0.25);
+      plot.Stems(shifted, after, "#080");
+      plot.Legend("with " + winner->effect, "#080");
+    }
+    plot.HorizontalLine(100.0 * d.noise_floor, "#888");
+    html << plot.Render() << "\n<table><tr><th class=\"l\">channel</th><th>base model [%]</th>"
+         << (winner ? "<th>with " + EscapeHtml(winner->effect) + " [%]</th><th>change</th>" : "")
+         << "</tr>\n";
+    for (const auto& [channel, error] : b.channel_errors) {
+      html << "<tr><td class=\"l\">" << riglog::ChannelName(channel) << "</td><td>"
+           << FormatValue(100.0 * error) << "</td>";
+      if (winner) {
+        const double e = ErrorOf(*winner, channel);
+        html << "<td>" << FormatValue(100.0 * e) << "</td><td>"
+             << FormatValue(100.0 * (e - error) / error, 3) << " %</td>";
+      }
+      html << "</tr>\n";
+    }
+    html << "</table>\n";
+  }
+
+  html << "<h2>Candidates, best first</h2>\n<table><tr><th>#</th><th class=\"l\">effect</th>"
+          "<th>error [%]</th><th>penalised [%]</th><th>improvement</th><th>significant</th>"
+          "<th class=\"l\">fitted effect parameters</th><th class=\"l\">what it "
+          "explains</th></tr>\n";
+  html << "<tr><td></td><td class=\"l\">(base model)</td><td>" << FormatValue(100.0 * b.error)
+       << "</td><td></td><td></td><td></td><td class=\"l\"></td><td class=\"l\"></td></tr>\n";
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    const CandidateResult& c = d.candidates[i];
+    std::string params;
+    for (const NamedValue& p : c.params) {
+      if (p.key.find('.') == std::string::npos) continue;
+      params += p.key + " = " + FormatValue(p.value) + " &plusmn; " +
+                FormatValue(p.standard_error, 2) + " ";
+    }
+    html << "<tr><td>" << i + 1 << "</td><td class=\"l\">" << EscapeHtml(c.effect) << "</td><td>"
+         << FormatValue(100.0 * c.error) << "</td><td>" << FormatValue(100.0 * c.penalised_error)
+         << "</td><td>" << FormatValue(100.0 * c.improvement, 3) << " %</td><td class=\""
+         << (c.significant ? "yes\">yes" : "no\">no") << "</td><td class=\"l\">" << params
+         << "</td><td class=\"l\">"
+         << EscapeHtml(c.failure.empty() ? c.explains : "not fitted: " + c.failure)
+         << (c.significant || c.strength_key.empty()
+                 ? std::string()
+                 : "<br><small>" + EscapeHtml(DescribeDetectability(c)) + "</small>")
+         << "</td></tr>\n";
+  }
+  html << "</table>\n";
+
+  // Where the fitted base model fails.
+  const Comparison& cmp = d.baseline_comparison;
+  html << "<h2>Where the fitted base model fails</h2>\n";
+  if (!cmp.profile.empty()) {
+    std::vector<double> x, y;
+    for (const ProfilePoint& p : cmp.profile) x.push_back(p.x_m), y.push_back(100.0 * p.nrmse);
+    SvgPlot plot(1000, 220, "position along the pipe [m]", "NRMSE [%]");
+    plot.Line(x, y, "#c33", 1.5);
+    plot.Markers(x, y, "#c33");
+    html << plot.Render() << "\n";
+  }
+  html << "<table><tr><th class=\"l\">channel</th><th>NRMSE [%]</th><th>lag [s]</th>"
+          "<th class=\"l\">bands (f: model/measured, phase)</th><th>residual white</th>"
+          "<th>independent of inputs</th></tr>\n";
+  for (const ChannelMetrics& m : cmp.channels) {
+    std::string bands;
+    for (const BandMetrics& band : m.bands) {
+      bands += FormatValue(band.freq_hz, 3) + " Hz: " + FormatValue(band.magnitude_ratio, 3) +
+               ", " + FormatValue(band.phase_diff_deg, 3) + "&deg;; ";
+    }
+    html << "<tr><td class=\"l\">" << riglog::ChannelName(m.channel) << "</td><td>"
+         << FormatValue(100.0 * m.nrmse) << "</td><td>" << FormatValue(m.lag_s, 3)
+         << "</td><td class=\"l\">" << bands << "</td><td>" << (m.residual.white ? "yes" : "no")
+         << "</td><td>" << (m.residual.independent_of_inputs ? "yes" : "no") << "</td></tr>\n";
+  }
+  html << "</table>\n<p>Made by <code>mpdrig diagnose</code>. Ranking: compare's error on the "
+          "scoring data times (1 + 1% per extra parameter); significant: better than the base "
+          "model by more than 5% and more than three standard errors over 8 blocks of the "
+          "scoring data.</p>\n</body></html>\n";
+  return html.str();
+}
+
+}  // namespace mpdrig::report
