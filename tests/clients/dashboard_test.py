@@ -17,7 +17,6 @@ Exit 77 (ctest: skipped) with the reason when Chromium, its driver or Selenium i
 
   dashboard_test.py MPDRIG_EXE DASHBOARD_EXE [SCREENSHOT.png]
 """
-import fcntl
 import json
 import math
 import os
@@ -25,9 +24,11 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
 import time
 import urllib.request
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, "support"))
+from test_domain import claim_test_domain, claims  # noqa: E402 (tests/support is not a package)
 
 SKIP = 77
 RIG = "mystery"
@@ -41,28 +42,6 @@ IDLE_S = 3.0  # the dashboard's idle time before it closes DDS
 # asked (docs/live.md, "Which effects the lab's noise lets you see"). DASHBOARD_TEST_NOISE=none
 # runs it noise-free.
 NOISE = os.environ.get("DASHBOARD_TEST_NOISE", "lab")
-
-_claims = []  # the domain's lock file stays open (claimed) while the test runs
-
-
-def claim_domain():
-    """A DDS domain no other test uses now: tests/support/test_domain.h, in Python."""
-    tmp = tempfile.gettempdir()
-    for domain in range(1, 233):
-        path = os.path.join(tmp, f"mpdrig-test-dds-domain-{domain}.lock")
-        try:
-            fd = os.open(path, os.O_CREAT | os.O_RDWR | os.O_CLOEXEC, 0o666)
-        except OSError:
-            continue
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(fd)
-            continue
-        _claims.append(fd)
-        return domain
-    raise RuntimeError("every test DDS domain is taken")
-
 
 def skip(reason):
     print(f"SKIPPED: {reason}")
@@ -92,7 +71,7 @@ class Processes:
         print("+ " + " ".join(args), flush=True)
         # The domain's lock goes to the child too: a child left running keeps the domain claimed
         # (tests/support/test_domain.h).
-        proc = subprocess.Popen(args, pass_fds=tuple(_claims), **kw)
+        proc = subprocess.Popen(args, pass_fds=tuple(claims), **kw)
         self.procs.append(proc)
         return proc
 
@@ -145,7 +124,7 @@ def main():
     mpdrig_exe, dashboard_exe = sys.argv[1], sys.argv[2]
     screenshot = sys.argv[3] if len(sys.argv) > 3 else None
     browser = open_browser()  # first: skips before anything starts when it cannot run
-    domain = claim_domain()
+    domain = claim_test_domain()
     procs = Processes()
     try:
         procs.start([mpdrig_exe, "serve", "--clock", "realtime", "--rate-hz", "100",

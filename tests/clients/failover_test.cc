@@ -2,11 +2,6 @@
 // thread, real-time clock) must hand the choke to the next-strongest live controller, and with
 // none left take the safe state, each within one liveliness lease (dds::kCommandLivelinessLease,
 // 1 s) plus a margin. Loopback only, a domain of the test's own.
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <chrono>
 #include <cstdio>
 #include <functional>
@@ -19,40 +14,19 @@
 #include "mpdrig.h"
 #include "service/rig/rig_service.h"
 #include "service/rig/wire.h"
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig::service {
 namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A choke_writer process; killed with SIGKILL at the latest when this goes.
-class WriterProcess {
- public:
-  WriterProcess(int domain, int strength, double opening_deg) {
-    std::vector<std::string> args = {CHOKE_WRITER_EXE, std::to_string(domain), "rig-1",
-                                     std::to_string(strength), std::to_string(opening_deg)};
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    if (posix_spawn(&pid_, CHOKE_WRITER_EXE, nullptr, nullptr, argv.data(), environ) != 0) {
-      pid_ = -1;
-    }
-  }
-  ~WriterProcess() { Kill(); }
-  bool started() const { return pid_ > 0; }
-  void Kill() {
-    if (pid_ <= 0) return;
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, nullptr, 0);
-    pid_ = -1;
-  }
-
- private:
-  pid_t pid_ = -1;
-};
+// A choke_writer process (stopped when this goes).
+testing::ChildProcess ChokeWriter(int domain, int strength, double opening_deg) {
+  return testing::ChildProcess({CHOKE_WRITER_EXE, std::to_string(domain), "rig-1",
+                                std::to_string(strength), std::to_string(opening_deg)});
+}
 
 class Failover : public ::testing::Test {
  protected:
@@ -129,8 +103,8 @@ class Failover : public ::testing::Test {
 };
 
 TEST_F(Failover, CrashedControllerIsReplacedByTheNextAndNoneLeftMeansSafeStateWithinTheLease) {
-  WriterProcess weak(domain_, 10, 40.0);
-  WriterProcess strong(domain_, 20, 50.0);
+  testing::ChildProcess weak = ChokeWriter(domain_, 10, 40.0);
+  testing::ChildProcess strong = ChokeWriter(domain_, 20, 50.0);
   ASSERT_TRUE(weak.started() && strong.started());
   // Discovery across processes, then the actuator (lag 0.1 s, 90 deg/s) moves from 31 deg.
   ASSERT_GE(SecondsUntil([](double deg) { return std::fabs(deg - 50.0) < 0.05; }, 20.0), 0.0)

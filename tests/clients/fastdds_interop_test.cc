@@ -5,18 +5,12 @@
 // CDR (XCDR1, @final: plain CDR, as fastddsgen would generate them). Fast DDS is ROS 2's default
 // middleware and one of the two that MATLAB's DDS Blockset supports, so this is what a MATLAB or
 // ROS 2 client does on the wire. Loopback, a domain of the test's own.
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <functional>
 #include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <fastcdr/Cdr.h>
@@ -34,9 +28,9 @@
 #include <fastdds/dds/subscriber/Subscriber.hpp>
 #include <fastdds/dds/topic/TopicDataType.hpp>
 
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
+#include "tests/support/within.h"
 
 namespace {
 
@@ -44,7 +38,9 @@ namespace dds = eprosima::fastdds::dds;
 namespace rtps = eprosima::fastrtps::rtps;
 using eprosima::fastcdr::Cdr;
 using eprosima::fastcdr::FastBuffer;
-using Clock = std::chrono::steady_clock;
+using mpdrig::testing::ChildOptions;
+using mpdrig::testing::ChildProcess;
+using mpdrig::testing::Within;
 
 // The IDL's structs, as far as this test reads or writes them (field order of idl/mpdrig.idl).
 struct StepRequest {
@@ -141,36 +137,6 @@ class Type : public dds::TopicDataType {
   }
 };
 
-struct Service {
-  explicit Service(std::vector<std::string> args) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-    if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Service() {
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  }
-  pid_t pid = -1;
-};
-
-bool Within(double seconds, const std::function<bool()>& done) {
-  const auto until = Clock::now() + std::chrono::duration<double>(seconds);
-  while (Clock::now() < until) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return done();
-}
-
 // Takes every sample of `reader` for rig `rig`.
 template <typename T>
 void TakeAll(dds::DataReader* reader, const std::string& rig,
@@ -192,10 +158,11 @@ TEST(FastDdsInterop, ReadsCommandsAndStepsTheRig) {
   const int domain = mpdrig::testing::ClaimTestDomain();
   ASSERT_GT(domain, 0);
   const std::string rig = "fastdds-1";
-  Service serve({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--pump-lpm", "5",
-                 "--choke-deg", "31", "--sensor-noise", "none", "--rig", rig, "--domain",
-                 std::to_string(domain)});
-  ASSERT_GT(serve.pid, 0);
+  ChildProcess serve({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--pump-lpm",
+                      "5", "--choke-deg", "31", "--sensor-noise", "none", "--rig", rig, "--domain",
+                      std::to_string(domain)},
+                     ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
 
   // Loopback only, UDP (the service's Cyclone has no shared-memory transport), and the unicast
   // initial peer 127.0.0.1 (the service does not use multicast).

@@ -7,11 +7,6 @@
 // first (6-7 of 20 lost). dds::SendOnce waits for the match and the acknowledgement and deletes
 // its writer (unregister), and so does the client library when a Rig leaves; this test holds
 // both to every command applied. Processes over loopback.
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -22,24 +17,16 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/rig/wire.h"
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig {
 namespace {
 
-pid_t Spawn(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  pid_t pid = -1;
-  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-  posix_spawn_file_actions_destroy(&actions);
-  return pid;
+// A program with `args`, its stderr discarded.
+testing::ChildProcess Spawn(std::vector<std::string> args) {
+  return testing::ChildProcess(std::move(args),
+                               testing::ChildOptions::Stderr(testing::Output::Discard()));
 }
 
 // `mode` of tests/clients/one_shot_command: "reliable" (dds::SendOnce) or "library".
@@ -49,17 +36,10 @@ TEST_P(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   const int claimed = testing::ClaimTestDomain();
   ASSERT_GT(claimed, 0);
   const std::string domain = std::to_string(claimed);
-  const pid_t serve =
+  testing::ChildProcess serve =
       Spawn({MPDRIG_EXE, "serve", "--clock", "realtime", "--rate-hz", "100", "--rig", "rig-1",
              "--domain", domain, "--sensor-noise", "none", "--no-observer", "--pump-lpm", "0"});
-  ASSERT_GT(serve, 0);
-  struct Reaper {
-    pid_t pid;
-    ~Reaper() {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  } reaper{serve};
+  ASSERT_TRUE(serve.started()) << serve.error();
 
   auto dds_domain = dds::Domain::Create(claimed, dds::LoopbackConfig());
   ASSERT_TRUE(dds_domain.ok());
@@ -91,12 +71,10 @@ TEST_P(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   std::string missed;
   for (int i = 0; i < kCommands; ++i) {
     const double flow_lpm = 1.5 + i;  // each distinct from the one before
-    const pid_t sender =
+    testing::ChildProcess sender =
         Spawn({ONE_SHOT_COMMAND_EXE, domain, "rig-1", std::to_string(flow_lpm), GetParam()});
-    ASSERT_GT(sender, 0);
-    int status = 0;
-    ASSERT_EQ(::waitpid(sender, &status, 0), sender);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "command " << i << " not sent";
+    ASSERT_TRUE(sender.started()) << sender.error();
+    EXPECT_EQ(sender.Wait(), 0) << "command " << i << " not sent";
     // The command was acknowledged before the sender exited: the next tick (10 ms) applies it.
     // One second covers a loaded machine; the next sender starts right after, well within the
     // previous writer's 1 s lease, where a stale owner would win.

@@ -2,10 +2,7 @@
 // every row, in order, the same times, every value to far below the log's precision, and the
 // channels the log lacks recorded as not measured. Three processes over loopback DDS; the test
 // is the lockstep clock, so no row goes out before the recorder is there.
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -22,51 +19,13 @@
 #include "model/riglog/rig_log.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig {
 namespace {
 
 constexpr int kRows = 500;
-
-struct Child {
-  pid_t pid = -1;
-  ~Child() {  // a test that leaves early leaves no process behind
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  }
-  // Waits up to `timeout_s` for the process to exit; its exit status, or -1 if it did not.
-  int Wait(double timeout_s) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-    while (std::chrono::steady_clock::now() < end) {
-      int status = 0;
-      if (::waitpid(pid, &status, WNOHANG) == pid) {
-        pid = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return -1;
-  }
-};
-
-void Spawn(const char* exe, std::vector<std::string> args, const std::string& stderr_path,
-           Child* child) {
-  args.insert(args.begin(), exe);
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
-  ASSERT_EQ(posix_spawn(&child->pid, exe, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-}
 
 TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
   const std::string dir = ::testing::TempDir();
@@ -96,15 +55,16 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
   ASSERT_GT(claimed, 0);
   const std::string domain = std::to_string(claimed);
 
-  Child echo, serve;
-  Spawn(RIG_ECHO_EXE,
-        {"--rig", "lab-1", "--domain", domain, "--samples", std::to_string(kRows), "--timeout",
-         "30", "--out", recorded},
-        dir + "playback_echo_" + tag + ".err", &echo);
-  Spawn(MPDRIG_EXE,
-        {"serve", "--playback", original, "--rig", "lab-1", "--clock", "lockstep", "--domain",
-         domain},
-        dir + "playback_serve_" + tag + ".err", &serve);
+  testing::ChildProcess echo(
+      {RIG_ECHO_EXE, "--rig", "lab-1", "--domain", domain, "--samples", std::to_string(kRows),
+       "--timeout", "30", "--out", recorded},
+      testing::ChildOptions::Stderr(testing::Output::File(dir + "playback_echo_" + tag + ".err")));
+  ASSERT_TRUE(echo.started()) << echo.error();
+  testing::ChildProcess serve(
+      {MPDRIG_EXE, "serve", "--playback", original, "--rig", "lab-1", "--clock", "lockstep",
+       "--domain", domain},
+      testing::ChildOptions::Stderr(testing::Output::File(dir + "playback_serve_" + tag + ".err")));
+  ASSERT_TRUE(serve.started()) << serve.error();
 
   auto dds_domain = dds::Domain::Create(claimed, dds::LoopbackConfig());
   ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
@@ -132,7 +92,7 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
   char rig_id[] = "lab-1";
   ASSERT_TRUE(steps->Write(mpdrig_StepRequest{rig_id, 1, kRows}).ok());
   ASSERT_EQ(echo.Wait(60.0), 0) << "rig_echo did not record " << kRows << " samples";
-  ::kill(serve.pid, SIGTERM);
+  serve.Signal(SIGTERM);
   EXPECT_EQ(serve.Wait(10.0), 0);
 
   auto a = riglog::ReadRigLog(original);

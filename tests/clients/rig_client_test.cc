@@ -1,10 +1,8 @@
 // The C++ client library (clients/client/rig_client.h) against a lockstep `mpdrig serve` process
 // over loopback, in a domain of the test's own: what the Python module relies on, tested without
 // Python (tests/clients/python tests the module on top).
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -15,44 +13,20 @@
 #include <gtest/gtest.h>
 
 #include "clients/client/rig_client.h"
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig {
 namespace {
 
-pid_t Spawn(std::vector<std::string> args) {
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-  pid_t pid = -1;
-  if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-  posix_spawn_file_actions_destroy(&actions);
-  return pid;
-}
-
-struct Reaper {
-  pid_t pid;
-  ~Reaper() {
-    if (pid <= 0) return;  // already reaped (kill(-1) would signal every process)
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, nullptr, 0);
-  }
-};
-
 TEST(RigClient, StepsReadsCommandsAndReportsRefusalsOfALockstepRig) {
   const int domain = testing::ClaimTestDomain();
   ASSERT_GT(domain, 0);
-  const pid_t serve = Spawn({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100",
-                             "--rig", "r1", "--domain", std::to_string(domain), "--sensor-noise",
-                             "none", "--pump-lpm", "5", "--choke-deg", "31"});
-  ASSERT_GT(serve, 0);
-  Reaper reaper{serve};
+  testing::ChildProcess serve(
+      {MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--rig", "r1", "--domain",
+       std::to_string(domain), "--sensor-noise", "none", "--pump-lpm", "5", "--choke-deg", "31"},
+      testing::ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
 
   client::RigOptions options;
   options.rig_id = "r1";
@@ -111,9 +85,8 @@ TEST(RigClient, StepsReadsCommandsAndReportsRefusalsOfALockstepRig) {
   EXPECT_FALSE(client::Rig::Connect(missing).ok());
 
   // The service stops: the rig is lost (its sensor writer left), and every call says so.
-  ::kill(serve, SIGTERM);
-  ::waitpid(serve, nullptr, 0);
-  reaper.pid = -1;
+  serve.Signal(SIGTERM);
+  serve.Wait();
   auto after = r.Step(1);
   ASSERT_FALSE(after.ok());
   EXPECT_EQ(r.last_failure(), client::Failure::kLost) << after.status().message();
@@ -129,11 +102,11 @@ TEST(RigClient, StepsReadsCommandsAndReportsRefusalsOfALockstepRig) {
 TEST(RigClient, ConfigurationFileAndRecorderOptions) {
   const int domain = testing::ClaimTestDomain();
   ASSERT_GT(domain, 0);
-  const pid_t serve =
-      Spawn({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--rig", "r1",
-             "--domain", std::to_string(domain), "--sensor-noise", "none"});
-  ASSERT_GT(serve, 0);
-  Reaper reaper{serve};
+  testing::ChildProcess serve(
+      {MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--rig", "r1", "--domain",
+       std::to_string(domain), "--sensor-noise", "none"},
+      testing::ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
   const std::filesystem::path file = std::filesystem::temp_directory_path() /
                                      ("rig_client_test_" + std::to_string(::getpid()) + ".xml");
   {

@@ -2,11 +2,7 @@
 // real `mpdrig serve` that is killed, restarted or stopped under them. Each must say why and exit
 // with status 3 (kExitRigLost), never 0 with its normal summary and never carry on across a
 // restart. Processes over loopback DDS, a domain of the test's own.
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -17,58 +13,14 @@
 #include <gtest/gtest.h>
 
 #include "model/riglog/rig_log.h"
+#include "tests/support/process.h"
 #include "tests/support/shell.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// A child process with stdout and stderr in a file; SIGKILLed at the latest when this goes.
-class Child {
- public:
-  Child(std::vector<std::string> args, const std::string& output) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, output.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Child() {
-    if (pid_ > 0) {
-      ::kill(pid_, SIGKILL);
-      ::waitpid(pid_, nullptr, 0);
-    }
-  }
-  bool started() const { return pid_ > 0; }
-  void Signal(int signal) const { ::kill(pid_, signal); }
-  // Its exit code once it exits within `timeout_s`; -1 if it does not (or died of a signal).
-  int Wait(double timeout_s) {
-    const auto until = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (pid_ > 0) {
-      int status = 0;
-      const pid_t done = ::waitpid(pid_, &status, WNOHANG);
-      if (done == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-      }
-      if (Clock::now() > until) return -1;
-      std::this_thread::sleep_for(std::chrono::milliseconds(20));
-    }
-    return -1;
-  }
-
- private:
-  pid_t pid_ = -1;
-};
 
 class RigLost : public ::testing::Test {
  protected:
@@ -90,6 +42,11 @@ class RigLost : public ::testing::Test {
             "--domain",   domain_, "--timeout",
             timeout_s,    "--out", (dir_ / "echo.csv").string()};
   }
+  // stdout and stderr of a process into the file `name` of the test's directory, which
+  // Output(name) reads.
+  testing::ChildOptions Log(const char* name) const {
+    return testing::ChildOptions::Log((dir_ / name).string());
+  }
   std::string Output(const char* name) const { return testing::ReadFile(dir_ / name); }
   // The recording up to the loss is a rig log the model reads, ending on a whole row.
   void ExpectReadableRecording() const {
@@ -105,10 +62,10 @@ class RigLost : public ::testing::Test {
 // kill -9 of the service: both clients notice within their --timeout (1 s) plus the 100 ms of
 // their wait, and exit 3. Before: bhp_controller waited its timeout and exited 0 with its summary.
 TEST_F(RigLost, KilledServiceMakesTheClientsExitWithRigLost) {
-  Child serve(Serve(), (dir_ / "serve.txt").string());
+  testing::ChildProcess serve(Serve(), Log("serve.txt"));
   ASSERT_TRUE(serve.started());
-  Child controller(Controller("1"), (dir_ / "controller.txt").string());
-  Child echo(Echo("1"), (dir_ / "echo.txt").string());
+  testing::ChildProcess controller(Controller("1"), Log("controller.txt"));
+  testing::ChildProcess echo(Echo("1"), Log("echo.txt"));
   std::this_thread::sleep_for(std::chrono::seconds(3));
   serve.Signal(SIGKILL);
   const auto killed = Clock::now();
@@ -132,14 +89,14 @@ TEST_F(RigLost, KilledServiceMakesTheClientsExitWithRigLost) {
 // say so and exit 3 instead of going on with the old run's state. Before: the controller went on
 // without noticing.
 TEST_F(RigLost, RestartedServiceIsNoticedByTheRigTimeGoingBack) {
-  auto serve = std::make_unique<Child>(Serve(), (dir_ / "serve.txt").string());
+  auto serve = std::make_unique<testing::ChildProcess>(Serve(), Log("serve.txt"));
   ASSERT_TRUE(serve->started());
-  Child controller(Controller("8"), (dir_ / "controller.txt").string());
-  Child echo(Echo("8"), (dir_ / "echo.txt").string());
+  testing::ChildProcess controller(Controller("8"), Log("controller.txt"));
+  testing::ChildProcess echo(Echo("8"), Log("echo.txt"));
   std::this_thread::sleep_for(std::chrono::seconds(3));
   serve->Signal(SIGKILL);
   serve.reset();
-  Child again(Serve(), (dir_ / "serve2.txt").string());
+  testing::ChildProcess again(Serve(), Log("serve2.txt"));
   ASSERT_TRUE(again.started());
   EXPECT_EQ(controller.Wait(15.0), 3) << Output("controller.txt");
   EXPECT_NE(Output("controller.txt").find("rig time went back from"), std::string::npos)
@@ -153,10 +110,10 @@ TEST_F(RigLost, RestartedServiceIsNoticedByTheRigTimeGoingBack) {
 // A service that stops cleanly (SIGTERM) takes its sensor writer with it: the clients notice at
 // once, long before their --timeout of 30 s.
 TEST_F(RigLost, StoppedServiceIsNoticedByItsWriterLeaving) {
-  Child serve(Serve(), (dir_ / "serve.txt").string());
+  testing::ChildProcess serve(Serve(), Log("serve.txt"));
   ASSERT_TRUE(serve.started());
-  Child controller(Controller("30"), (dir_ / "controller.txt").string());
-  Child echo(Echo("30"), (dir_ / "echo.txt").string());
+  testing::ChildProcess controller(Controller("30"), Log("controller.txt"));
+  testing::ChildProcess echo(Echo("30"), Log("echo.txt"));
   std::this_thread::sleep_for(std::chrono::seconds(3));
   serve.Signal(SIGTERM);
   const auto stopped = Clock::now();

@@ -8,29 +8,26 @@
 // a longer liveliness lease or shared ownership does not match the rig. Loopback, a domain of
 // the test's own.
 #include <dds/dds.h>
-#include <fcntl.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "mpdrig.h"  // idlc's output for this test alone (tests/clients/CMakeLists.txt)
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
+#include "tests/support/within.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using mpdrig::testing::ChildOptions;
+using mpdrig::testing::ChildProcess;
+using mpdrig::testing::Within;
 
 // The documented loopback settings, as a whole document ("with the same loopback settings as a
 // document"), and the fragment it says is enough for a Cyclone client.
@@ -42,38 +39,6 @@ const char* const kDocumentConfig =
     "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery></Domain></CycloneDDS>";
 const char* const kFragmentConfig =
     "<General><Interfaces><NetworkInterface address=\"127.0.0.1\"/></Interfaces></General>";
-
-// `mpdrig serve` as a process; SIGKILLed when this goes.
-struct Service {
-  explicit Service(std::vector<std::string> args) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-    if (posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Service() {
-    if (pid > 0) {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  }
-  pid_t pid = -1;
-};
-
-// Polls `done` for up to `seconds`.
-bool Within(double seconds, const std::function<bool()>& done) {
-  const auto until = Clock::now() + std::chrono::duration<double>(seconds);
-  while (Clock::now() < until) {
-    if (done()) return true;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
-  }
-  return done();
-}
 
 // Takes every valid sample of `reader` for rig `rig_id` and hands it to `visit`.
 template <typename T>
@@ -151,11 +116,12 @@ class WireContract : public ::testing::TestWithParam<int> {  // 0: the document,
   void SetUp() override {
     domain_ = mpdrig::testing::ClaimTestDomain();
     ASSERT_GT(domain_, 0);
-    service_ = std::make_unique<Service>(
+    service_ = std::make_unique<ChildProcess>(
         std::vector<std::string>{MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100",
                                  "--pump-lpm", "5", "--choke-deg", "31", "--sensor-noise", "none",
-                                 "--rig", kRig, "--domain", std::to_string(domain_)});
-    ASSERT_GT(service_->pid, 0);
+                                 "--rig", kRig, "--domain", std::to_string(domain_)},
+        ChildOptions::Quiet());
+    ASSERT_TRUE(service_->started()) << service_->error();
     domain_entity_ = dds_create_domain(static_cast<dds_domainid_t>(domain_),
                                        GetParam() == 0 ? kDocumentConfig : kFragmentConfig);
     ASSERT_GT(domain_entity_, 0) << dds_strretcode(domain_entity_);
@@ -186,7 +152,7 @@ class WireContract : public ::testing::TestWithParam<int> {  // 0: the document,
 
   static constexpr const char* kRig = "contract-1";
   int domain_ = 0;
-  std::unique_ptr<Service> service_;
+  std::unique_ptr<ChildProcess> service_;  // `mpdrig serve`
   dds_entity_t domain_entity_ = 0, participant_ = 0;
 };
 

@@ -5,10 +5,7 @@
 // service's domain on the wire (Cyclone's Discovery/ExternalDomainId), so every pair talks over
 // loopback RTPS through the security plugins, as separate hosts would; nothing is delivered
 // in-process. Loopback only, a domain of the test's own.
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -17,9 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <functional>
-#include <iterator>
 #include <memory>
 #include <optional>
 #include <string>
@@ -31,77 +26,27 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "tests/support/process.h"
+#include "tests/support/shell.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig {
 namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+using testing::ReadFile;
 
 constexpr double kInitialChokeDeg = 31.0;    // serve's default
 constexpr double kChokeToleranceDeg = 0.01;  // noise-free sensors: the position is exact
 
-// A process; SIGINT, then SIGKILL after 5 s, when this goes.
-class Process {
- public:
-  Process(std::vector<std::string> args, const std::string& log_path) {
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, 1, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    if (posix_spawn(&pid_, argv[0], &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
-    posix_spawn_file_actions_destroy(&actions);
-  }
-  ~Process() { Stop(); }
-  bool started() const { return pid_ > 0; }
-  // Waits up to `timeout_s` for the process to exit by itself: its exit code, or -1 (still
-  // running; then it is stopped).
-  int Wait(double timeout_s) {
-    if (pid_ <= 0) return -1;
-    int status = 0;
-    const auto until = Clock::now() + std::chrono::duration<double>(timeout_s);
-    while (Clock::now() < until) {
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    }
-    Stop();
-    return -1;
-  }
-  // Exit code (128 + signal if killed).
-  int Stop() {
-    if (pid_ <= 0) return -1;
-    ::kill(pid_, SIGINT);
-    int status = 0;
-    for (int i = 0; i < 50; ++i) {
-      if (::waitpid(pid_, &status, WNOHANG) == pid_) {
-        pid_ = -1;
-        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    }
-    ::kill(pid_, SIGKILL);
-    ::waitpid(pid_, &status, 0);
-    pid_ = -1;
-    return 128 + SIGKILL;
-  }
-
- private:
-  pid_t pid_ = -1;
-};
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream file(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+// A process's options: stdout and stderr into `log_path`; stopped with SIGINT (tshark then
+// finishes its capture file), SIGKILL 5 s later.
+testing::ChildOptions Logged(const std::string& log_path) {
+  testing::ChildOptions options = testing::ChildOptions::Log(log_path);
+  options.stop_signal = SIGINT;
+  options.stop_grace_s = 5.0;
+  return options;
 }
 
 // A participant with a domain instance of its own that is `wire_domain` on the wire.
@@ -320,7 +265,7 @@ class SecureClass : public ::testing::Test {
                                   "--sensor-noise", "none",
                                   "--duration",     "120"};
     args.insert(args.end(), extra.begin(), extra.end());
-    service_.emplace(args, service_log_);
+    service_.emplace(args, Logged(service_log_));
     ASSERT_TRUE(service_->started());
     instructor_ = Peer::Create(domain_, (dir_ / "instructor").string());
     ASSERT_NE(instructor_, nullptr);
@@ -336,7 +281,7 @@ class SecureClass : public ::testing::Test {
   fs::path dir_;
   int domain_ = 0;
   std::string service_log_;
-  std::optional<Process> service_;
+  std::optional<testing::ChildProcess> service_;
   std::unique_ptr<Peer> instructor_;
   std::unique_ptr<RigWatch> watch_alice_, watch_bob_;
 };
@@ -374,9 +319,9 @@ TEST_F(SecureClass, ServiceRefusesAnInvalidSecurityDirectorySayingWhy) {
   };
   for (const Case& c : cases) {
     const std::string log = dir_.string() + "/refused.log";
-    Process serve({MPDRIG_EXE, "serve", "--security", c.dir, "--domain", std::to_string(domain_),
-                   "--rig", "alice", "--duration", "1"},
-                  log);
+    testing::ChildProcess serve({MPDRIG_EXE, "serve", "--security", c.dir, "--domain",
+                                 std::to_string(domain_), "--rig", "alice", "--duration", "1"},
+                                Logged(log));
     ASSERT_TRUE(serve.started());
     // It must exit by itself with an error (refused), not run.
     const int status = serve.Wait(20.0);
@@ -388,17 +333,19 @@ TEST_F(SecureClass, ServiceRefusesAnInvalidSecurityDirectorySayingWhy) {
   // A client too, and a rig id that would be a wildcard in a permission.
   const std::string log = dir_.string() + "/client.log";
   {
-    Process echo({RIG_ECHO_EXE, "--security", (dir_ / "swapped").string(), "--rig", "alice",
-                  "--domain", std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
-                 log);
+    testing::ChildProcess echo(
+        {RIG_ECHO_EXE, "--security", (dir_ / "swapped").string(), "--rig", "alice", "--domain",
+         std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
+        Logged(log));
     EXPECT_GT(echo.Wait(20.0), 0);
   }
   EXPECT_NE(ReadFile(log).find("is not signed DDS Security permissions"), std::string::npos)
       << ReadFile(log);
   {
-    Process echo({RIG_ECHO_EXE, "--security", (dir_ / "alice").string(), "--rig", "al*", "--domain",
-                  std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
-                 log);
+    testing::ChildProcess echo(
+        {RIG_ECHO_EXE, "--security", (dir_ / "alice").string(), "--rig", "al*", "--domain",
+         std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
+        Logged(log));
     EXPECT_GT(echo.Wait(20.0), 0);
   }
   EXPECT_NE(ReadFile(log).find("rig id 'al*'"), std::string::npos) << ReadFile(log);
@@ -596,10 +543,10 @@ TEST_F(SecureClass, StudentGetsAPrivateRigWithinTheServicesLimits) {
 TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
   StartService();
   const std::string shadow_log = Dir("shadow.log");
-  Process shadow(
+  testing::ChildProcess shadow(
       {MPDRIG_EXE, "shadow", "--security", Dir("alice"), "--rig", "alice", "--domain",
        std::to_string(domain_), "--warmup-s", "1", "--window-s", "2", "--duration", "60"},
-      shadow_log);
+      Logged(shadow_log));
   ASSERT_TRUE(shadow.started());
   auto ctl = [&](const std::string& who, const std::vector<std::string>& extra,
                  const std::string& out) {
@@ -607,7 +554,7 @@ TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
                                   std::to_string(domain_), "--timeout", "20"};
     if (!who.empty()) args.insert(args.end(), {"--security", Dir(who.c_str())});
     args.insert(args.end(), extra.begin(), extra.end());
-    Process process(args, out);
+    testing::ChildProcess process(args, Logged(out));
     return process.Wait(30.0);
   };
   const std::string alice_out = Dir("ctl-alice.txt");
@@ -627,7 +574,7 @@ TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
   const std::string intruder = Dir("ctl-intruder.txt");
   std::vector<std::string> args{SHADOW_CTL_EXE,          "--rig",     "alice", "--domain",
                                 std::to_string(domain_), "--timeout", "3"};
-  Process open(args, intruder);
+  testing::ChildProcess open(args, Logged(intruder));
   EXPECT_EQ(open.Wait(15.0), 1) << ReadFile(intruder);
   // Alice's shadow still has its effect: bob's command never reached it.
   const std::string alice_again = Dir("ctl-alice-again.txt");
@@ -657,7 +604,8 @@ TEST_F(SecureClass, PayloadsAreNotReadableOnTheWire) {
   }
   const std::string capture = dir_.string() + "/wire.pcapng";
   const std::string tshark_log = dir_.string() + "/tshark.log";
-  Process tshark({"/usr/bin/tshark", "-i", "lo", "-f", "udp", "-w", capture}, tshark_log);
+  testing::ChildProcess tshark({"/usr/bin/tshark", "-i", "lo", "-f", "udp", "-w", capture},
+                               Logged(tshark_log));
   ASSERT_TRUE(tshark.started());
   for (int i = 0; i < 100 && ReadFile(tshark_log).find("Capturing on") == std::string::npos; ++i)
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

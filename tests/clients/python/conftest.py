@@ -4,30 +4,16 @@ ctest sets MPDRIG_EXE (the service) and PYTHONPATH (the build tree's package).""
 
 from __future__ import annotations
 
-import fcntl
 import os
 import subprocess
-import tempfile
+import sys
 import time
 
 import pytest
 
-_claims = []  # open lock files: a claim holds while the process lives
-
-
-def claim_test_domain() -> int:
-    for domain in range(1, 233):
-        path = os.path.join(tempfile.gettempdir(), f"mpdrig-test-dds-domain-{domain}.lock")
-        fd = os.open(path, os.O_CREAT | os.O_RDWR | os.O_CLOEXEC, 0o666)
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            os.close(fd)
-            continue
-        _claims.append(fd)
-        return domain
-    raise RuntimeError("no free DDS test domain")
-
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), os.pardir, os.pardir,
+                                "support"))
+from test_domain import claim_test_domain, claims  # noqa: E402 (tests/support is not a package)
 
 class Service:
     """`mpdrig serve` in a process of its own; stopped with SIGTERM at the end of the test."""
@@ -37,8 +23,10 @@ class Service:
         if not exe:
             pytest.skip("MPDRIG_EXE is not set (run through ctest)")
         self.domain = claim_test_domain()
+        # The domain's lock goes to the service too: one left running keeps the domain claimed.
         self.process = subprocess.Popen([exe, "serve", "--domain", str(self.domain), *args],
-                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                                        pass_fds=tuple(claims))
 
     def stop(self) -> None:
         if self.process.poll() is None:

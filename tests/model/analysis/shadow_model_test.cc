@@ -5,15 +5,13 @@
 #include "model/analysis/shadow_model.h"
 
 #include <cmath>
-#include <numbers>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "model/common/units.h"
 #include "model/effects/effect.h"
-#include "model/sim/sensor_noise.h"
+#include "tests/model/rig_test_util.h"
 
 namespace mpdrig {
 namespace {
@@ -27,55 +25,12 @@ SimulationOptions Grid() {
   return options;
 }
 
-// A heaving rig as the service runs it (RigHost::Tick): a 0.1 m, 0.25 Hz sine on the piston,
-// choke commanded at 31 deg through its actuator, 10 L/min of pump; noise-free channels.
-struct Excitation {
-  double amplitude_m = 0.1, frequency_hz = 0.25, choke_deg = 31.0, pump_lpm = 10.0;
-};
+using testing::LabNoise;
+using Excitation = testing::SineHeave;
 
 std::vector<RigSample> RigRun(const RigParams& params, double duration_s,
                               const Excitation& e = {}) {
-  RigInputs inputs;
-  inputs.choke_opening_frac = units::ChokeDegToFrac(e.choke_deg);
-  inputs.pump_flow_m3ps = units::LpmToM3ps(e.pump_lpm);
-  inputs.outlet_pressure_pa = params.atmospheric_pressure_pa;
-  auto simulator = RigSimulator::Create(params, Grid(), inputs);
-  EXPECT_TRUE(simulator.ok()) << simulator.status().message();
-  RigSampler sampler(std::move(simulator).value());
-  auto x = [&e](double t) {
-    return e.amplitude_m * std::sin(2.0 * std::numbers::pi * e.frequency_hz * t);
-  };
-  std::vector<RigSample> out;
-  for (int i = 1; i <= static_cast<int>(duration_s * kRateHz); ++i) {
-    auto sample = sampler.SampleAt(i / kRateHz, [&](double t_b, double dt) {
-      StepInputs step;
-      step.piston_velocity_mps = (x(t_b + 0.5 * dt) - x(t_b - 0.5 * dt)) / dt;
-      step.piston_position_m = x(t_b);
-      step.rig = inputs;
-      return step;
-    });
-    EXPECT_TRUE(sample.ok());
-    if (!sample.ok()) break;
-    out.push_back(std::move(sample).value());
-  }
-  return out;
-}
-
-// The rig's samples as the lab reads them: thesis Table 4.1.1 on every channel (inputs too), or
-// on the outputs only (the inputs as they truly were: what a perfect reconstruction would feed).
-std::vector<RigSample> LabNoise(std::vector<RigSample> rig, std::uint64_t seed,
-                                bool inputs_too = true) {
-  SensorNoiseApplier noise(SensorNoise::Lab(), seed);
-  for (RigSample& s : rig) {
-    const RigSample truth = s;
-    noise.MeasureSample(&s);
-    if (!inputs_too) {
-      for (Channel c :
-           {Channel::kPistonPosition, Channel::kChokePosition, Channel::kFT2, Channel::kC1})
-        s.values[Index(c)] = truth.values[Index(c)];
-    }
-  }
-  return rig;
+  return testing::HeavingRig(params, Grid(), kRateHz, duration_s, e);
 }
 
 ShadowOptions Options() {

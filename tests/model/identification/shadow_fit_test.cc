@@ -7,16 +7,14 @@
 
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "model/analysis/shadow_model.h"
-#include "model/common/units.h"
 #include "model/effects/effect.h"
-#include "model/sim/sensor_noise.h"
+#include "tests/model/rig_test_util.h"
 
 namespace mpdrig {
 namespace {
@@ -24,41 +22,14 @@ namespace {
 constexpr double kRateHz = 100.0;
 constexpr int kCells = 50;  // rig and shadow on the same grid; a finer one only costs time
 
-struct Excitation {
-  double amplitude_m, frequency_hz, choke_deg, pump_lpm;
-};
+using Excitation = testing::SineHeave;
 
 // A heaving rig (sine on the piston, choke and pump held) read through the lab's noise.
 std::vector<RigSample> NoisyRig(const RigParams& params, double duration_s, const Excitation& e,
                                 std::uint64_t seed) {
-  RigInputs inputs;
-  inputs.choke_opening_frac = units::ChokeDegToFrac(e.choke_deg);
-  inputs.pump_flow_m3ps = units::LpmToM3ps(e.pump_lpm);
-  inputs.outlet_pressure_pa = params.atmospheric_pressure_pa;
   SimulationOptions grid;
   grid.cells = kCells;
-  auto simulator = RigSimulator::Create(params, grid, inputs);
-  EXPECT_TRUE(simulator.ok()) << simulator.status().message();
-  RigSampler sampler(std::move(simulator).value());
-  SensorNoiseApplier noise(SensorNoise::Lab(), seed);
-  auto x = [&e](double t) {
-    return e.amplitude_m * std::sin(2.0 * std::numbers::pi * e.frequency_hz * t);
-  };
-  std::vector<RigSample> out;
-  for (int i = 1; i <= static_cast<int>(duration_s * kRateHz); ++i) {
-    auto sample = sampler.SampleAt(i / kRateHz, [&](double t_b, double dt) {
-      StepInputs step;
-      step.piston_velocity_mps = (x(t_b + 0.5 * dt) - x(t_b - 0.5 * dt)) / dt;
-      step.piston_position_m = x(t_b);
-      step.rig = inputs;
-      return step;
-    });
-    EXPECT_TRUE(sample.ok());
-    if (!sample.ok()) break;
-    noise.MeasureSample(&*sample);
-    out.push_back(std::move(sample).value());
-  }
-  return out;
+  return testing::LabNoise(testing::HeavingRig(params, grid, kRateHz, duration_s, e), seed);
 }
 
 struct Case {

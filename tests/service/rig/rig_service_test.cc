@@ -3,10 +3,7 @@
 // service in its own DDS domain.
 #include "service/rig/rig_service.h"
 
-#include <fcntl.h>
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -27,10 +24,9 @@
 #include "model/common/units.h"
 #include "mpdrig.h"
 #include "service/rig/wire.h"
+#include "tests/support/process.h"
 #include "tests/support/sanitizer.h"
 #include "tests/support/test_domain.h"
-
-extern char** environ;
 
 namespace mpdrig::service {
 namespace {
@@ -571,25 +567,8 @@ TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTime
       MPDRIG_EXE,     "serve", "--clock", "realtime", "--rate-hz",
       "100",          "--rig", "rig-1",   "--domain", std::to_string(domain),
       "--no-observer"};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, log_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                   0644);
-  pid_t pid = -1;
-  ASSERT_EQ(posix_spawn(&pid, MPDRIG_EXE, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  struct Reaper {  // kill -9 if the test leaves early
-    pid_t pid;
-    ~Reaper() {
-      if (pid > 0) {
-        ::kill(pid, SIGKILL);
-        ::waitpid(pid, nullptr, 0);
-      }
-    }
-  } reaper{pid};
+  testing::ChildProcess serve(args, testing::ChildOptions::Stderr(testing::Output::File(log_path)));
+  ASSERT_TRUE(serve.started()) << serve.error();
 
   auto dds_domain = dds::Domain::Create(domain, dds::LoopbackConfig());  // as the service's
   ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
@@ -630,9 +609,9 @@ TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTime
   EXPECT_EQ(seen.lost_periods, 0u) << "no stall yet";
   const double stopped_at_s = seen.sim_time_s;
 
-  ASSERT_EQ(::kill(pid, SIGSTOP), 0);
+  ASSERT_TRUE(serve.Signal(SIGSTOP));
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  ASSERT_EQ(::kill(pid, SIGCONT), 0);
+  ASSERT_TRUE(serve.Signal(SIGCONT));
   ASSERT_TRUE(wait_for([](const Seen& s) { return s.lost_periods > 0; }))
       << "no status reported the stall; last: " << seen.warnings;
   EXPECT_GE(seen.lost_periods, 120u) << "1.5 s at 100 Hz";
@@ -643,11 +622,8 @@ TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTime
   EXPECT_NE(seen.warnings.find("fell behind real time at rig time"), std::string::npos)
       << seen.warnings;
 
-  ASSERT_EQ(::kill(pid, SIGTERM), 0);
-  int wait_status = 0;
-  ASSERT_EQ(::waitpid(pid, &wait_status, 0), pid);
-  reaper.pid = -1;
-  EXPECT_TRUE(WIFEXITED(wait_status) && WEXITSTATUS(wait_status) == 0);
+  ASSERT_TRUE(serve.Signal(SIGTERM));
+  EXPECT_EQ(serve.Wait(), 0);
   std::ifstream log(log_path);
   const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("periods lost, longest stall"), std::string::npos) << text;
@@ -689,22 +665,8 @@ void ExpectAFloodOfUnknownRigIdsHoldsNoMemory(Stranger stranger) {
       MPDRIG_EXE,     "serve", "--clock", "realtime", "--rate-hz",
       "100",          "--rig", "rig-1",   "--domain", std::to_string(domain),
       "--no-observer"};
-  std::vector<char*> argv;
-  for (std::string& a : args) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 2, "/dev/null", O_WRONLY, 0);
-  pid_t pid = -1;
-  ASSERT_EQ(posix_spawn(&pid, MPDRIG_EXE, &actions, nullptr, argv.data(), environ), 0);
-  posix_spawn_file_actions_destroy(&actions);
-  struct Reaper {
-    pid_t pid;
-    ~Reaper() {
-      ::kill(pid, SIGKILL);
-      ::waitpid(pid, nullptr, 0);
-    }
-  } reaper{pid};
+  testing::ChildProcess serve(args, testing::ChildOptions::Stderr(testing::Output::Discard()));
+  ASSERT_TRUE(serve.started()) << serve.error();
 
   auto dds_domain = dds::Domain::Create(domain, dds::LoopbackConfig());
   ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
@@ -759,7 +721,7 @@ void ExpectAFloodOfUnknownRigIdsHoldsNoMemory(Stranger stranger) {
   ASSERT_TRUE(controller->Write(own).ok());
   EXPECT_NEAR(measured_pump_lpm(3.0), 3.0, 0.15) << "rig-1's controller commands its pump";
   dds_sleepfor(DDS_SECS(1));  // the service settles (its buffers, the first statuses)
-  const std::uint64_t rss_before = ResidentBytes(pid);
+  const std::uint64_t rss_before = ResidentBytes(serve.pid());
   ASSERT_GT(rss_before, 0u);
 
   constexpr int kIds = 40000;
@@ -777,7 +739,7 @@ void ExpectAFloodOfUnknownRigIdsHoldsNoMemory(Stranger stranger) {
   ASSERT_TRUE(wait_for_rejected(kIds)) << "refused so far: " << rejected;
   EXPECT_EQ(rejected, static_cast<std::uint64_t>(kIds)) << "each unknown id counted once";
   EXPECT_NE(last_rejection.find("unknown rig 'stranger-"), std::string::npos) << last_rejection;
-  const std::uint64_t rss_held = ResidentBytes(pid);
+  const std::uint64_t rss_held = ResidentBytes(serve.pid());
   const double grown_mb = (static_cast<double>(rss_held) - static_cast<double>(rss_before)) / 1e6;
   std::printf("service RSS %.1f MB before, %.1f MB with %d unknown ids %s (+%.1f MB)\n",
               rss_before / 1e6, rss_held / 1e6, kIds,
