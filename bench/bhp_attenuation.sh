@@ -32,7 +32,7 @@ serve_pid=""
 cleanup() { [[ -n "$serve_pid" ]] && kill "$serve_pid" 2>/dev/null && wait "$serve_pid" 2>/dev/null; true; }
 trap cleanup EXIT INT TERM
 
-printf '%-6s %-16s %12s %12s %10s %s\n' "f [Hz]" "mode" "PT1 amp [bar]" "mean [barg]" "vs fixed" "choke range [deg]"
+printf '%-6s %-16s %10s %12s %10s %12s %9s %s\n' "f [Hz]" "mode" "p2p/2 [bar]" "periodic rms" "vs fixed" "at f [bar]" "mean" "choke range [deg]"
 for f in $freqs; do
   "$mpdrig" serve --clock lockstep --rate-hz 100 --heave-amp-m "$amp" --heave-hz "$f" \
     --pump-lpm "$pump" --choke-deg "$choke" --domain "$domain" --sensor-noise "$noise" \
@@ -48,13 +48,14 @@ for f in $freqs; do
     wait
   )"
   kill "$serve_pid"; wait "$serve_pid" 2>/dev/null || true; serve_pid=""
-  fixed_amp="$(sed -n 's/^rig=fixed .*PT1_amplitude_bar=\([^ ]*\).*/\1/p' <<<"$out")"
+  fixed_rms="$(sed -n 's/^rig=fixed .*PT1_periodic_rms_bar=\([^ ]*\).*/\1/p' <<<"$out")"
   for rig in fixed pi pi-ff pi-ff-est; do
     line="$(grep "^rig=$rig " <<<"$out")"
     get() { sed -n "s/.* $1=\([^ ]*\).*/\1/p" <<<"$line"; }
-    printf '%-6s %-16s %12s %12s %10s %s..%s\n' "$f" "$(get mode)" "$(get PT1_amplitude_bar)" \
-      "$(get PT1_mean_barg)" "$(awk -v a="$fixed_amp" -v b="$(get PT1_amplitude_bar)" 'BEGIN{printf "%.1fx", a/b}')" \
-      "$(get choke_min_deg)" "$(get choke_max_deg)"
+    printf '%-6s %-16s %10s %12s %10s %12s %9s %s..%s\n' "$f" "$(get mode)" \
+      "$(get PT1_amplitude_bar)" "$(get PT1_periodic_rms_bar)" \
+      "$(awk -v a="$fixed_rms" -v b="$(get PT1_periodic_rms_bar)" 'BEGIN{printf "%.1fx", a/b}')" \
+      "$(get PT1_heave_bar)" "$(get PT1_mean_barg)" "$(get choke_min_deg)" "$(get choke_max_deg)"
   done
 done
-echo "(0.1 m heave, ${pump} L/min through a ${choke} deg choke; PT1 half peak-to-peak over the last ${window} s of ${duration} s; lockstep, 100 Hz)"
+echo "(${amp} m heave, ${pump} L/min through a ${choke} deg choke, sensor noise ${noise}; PT1 over the last ${window} s of ${duration} s: half peak-to-peak, the RMS of its periodic part (harmonics 1-3 of the heave, least squares; the noise is not in it) and the ratio of that to the fixed choke's, the amplitude at the heave frequency, the mean; lockstep, 100 Hz)"

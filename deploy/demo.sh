@@ -97,7 +97,7 @@ The virtual rig runs for ${duration} s of real time (0: until Ctrl-C). In anothe
   $build/clients/rig_echo --rig rig-2 --domain $domain --samples 500 --out -     # the uncontrolled rig
   $build/clients/bhp_controller --help      # how the controller works
   $build/tools/mpdrig serve --help        # topics: sensors, estimate, pressure profile, status
-rig-1's choke is controlled (bhp_controller, on the observer's BHP estimate; it watches 10 s first),
+rig-1's choke is controlled (bhp_controller, on the observer's BHP estimate; it watches 20 s first),
 rig-2's stays at 31 deg. Ctrl-C stops everything.
 
 EOF
@@ -114,12 +114,13 @@ kill "$echo_pid" "$shadow_pid" "$dashboard_pid" 2>/dev/null || true
 for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
 pids=()
 if [[ -s "$summary" ]]; then
-  echo "bottom-hole pressure PT1, half peak-to-peak over the last ${window} s:"
+  echo "bottom-hole pressure PT1 over the last ${window} s: the heave's swing (RMS of PT1's periodic"
+  echo "part, the sensors' noise left out) and half peak-to-peak (the noise alone reads about 0.07 bar):"
   while read -r line; do
+    get() { sed -n "s/.* $1=\([^ ]*\).*/\1/p" <<<"$line"; }
     rig="$(sed -n 's/^rig=\([^ ]*\) .*/\1/p' <<<"$line")"
-    amp="$(sed -n 's/.*PT1_amplitude_bar=\([^ ]*\).*/\1/p' <<<"$line")"
-    mode="$(sed -n 's/.*mode=\([^ ]*\).*/\1/p' <<<"$line")"
-    printf '  %s (%s): %s bar\n' "$rig" "$mode" "$amp"
+    printf '  %s (%s): %s bar RMS, %s bar half peak-to-peak\n' "$rig" "$(get mode)" \
+      "$(get PT1_periodic_rms_bar)" "$(get PT1_amplitude_bar)"
   done <"$summary"
 fi
 rm -f "$summary" "$dashboard_log"

@@ -2,16 +2,18 @@
 // rig's channels in lab units. Two processes, DDS on loopback, a domain of the test's own.
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
 #include "model/boundary/choke.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
 
 namespace mpdrig {
@@ -26,14 +28,20 @@ TEST(RigEcho, RecordsARunningRigAsARigLog) {
   // The recorder starts first and waits (up to 20 s) for 150 samples; the service runs 4 s of
   // real time at 100 Hz with 5 L/min through the choke at 31 deg, without sensor noise (the
   // check below is the model's steady state to round-off).
-  const std::string command =
-      "bash -c '\"" RIG_ECHO_EXE "\" --rig rig-1 --domain " + domain +
-      " --samples 150 --timeout 20 --out \"" + log +
-      "\" 2>/dev/null & sleep 0.5; \"" MPDRIG_EXE
-      "\" serve --clock realtime --duration 4 --pump-lpm 5 --choke-deg 31 --sensor-noise none "
-      "--domain " +
-      domain + " 2>/dev/null; wait $!'";
-  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  testing::ChildProcess echo({RIG_ECHO_EXE, "--rig", "rig-1", "--domain", domain, "--samples",
+                              "150", "--timeout", "20", "--out", log},
+                             testing::ChildOptions::Stderr(testing::Output::Discard()));
+  ASSERT_TRUE(echo.started()) << echo.error();
+  // Sensor samples are volatile: the recorder's reader matches the rig first (half a second is
+  // ample on loopback; a later match only shifts which 150 of the 400 samples it records).
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  testing::ChildProcess serve(
+      {MPDRIG_EXE, "serve", "--clock", "realtime", "--duration", "4", "--pump-lpm", "5",
+       "--choke-deg", "31", "--sensor-noise", "none", "--domain", domain},
+      testing::ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
+  EXPECT_EQ(serve.Wait(30.0), 0) << "mpdrig serve";
+  ASSERT_EQ(echo.Wait(30.0), 0) << "rig_echo";
 
   auto read = riglog::ReadRigLog(log);
   ASSERT_TRUE(read.ok()) << read.status().message();
