@@ -7,6 +7,7 @@
 
 #include "model/analysis/window_error.h"
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 
 namespace mpdrig {
 namespace {
@@ -110,17 +111,11 @@ struct SearchContext {
 // The catalogue's entry for an effect parameter key ("effect.param") if it has a plausible
 // range (EffectParamInfo::plausible_min/max), else null.
 const EffectParamInfo* PlausibleRange(const std::string& key) {
-  const std::size_t dot = key.find('.');
-  if (dot == std::string::npos) return nullptr;
-  const EffectInfo* effect = FindEffectInfo(key.substr(0, dot));
-  if (effect == nullptr) return nullptr;
-  for (const EffectParamInfo& param : effect->params) {
-    if (param.key == key.substr(dot + 1) && param.plausible_min > 0.0 &&
-        param.plausible_min < param.plausible_max) {
-      return &param;
-    }
-  }
-  return nullptr;
+  auto found = FindParamByKey(key);
+  if (!found.ok() || found->effect_param == nullptr) return nullptr;
+  const EffectParamInfo* param = found->effect_param;
+  return param->plausible_min > 0.0 && param->plausible_min < param->plausible_max ? param
+                                                                                   : nullptr;
 }
 
 // Local fit of `parameters` (the base ones, then the effect's) from the fitted baseline `params`
@@ -565,12 +560,9 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
       candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
       if (candidate_parameters[i].size() > base_parameters.size()) {
         const FitParameter& strength = candidate_parameters[i][base_parameters.size()];
-        double default_value = 0.0;
-        for (const EffectParamInfo& param : info.params) {
-          if (strength.key == candidate.effect + "." + std::string(param.key)) {
-            default_value = param.default_value;
-          }
-        }
+        auto found = FindParamByKey(strength.key);
+        const double default_value =
+            found.ok() && found->effect_param != nullptr ? found->effect_param->default_value : 0.0;
         EstimateDetectability(log, base_fit->params, *base_traces, baseline.error, simulation,
                               replay, strength, default_value, score_begin, t_end, &candidate,
                               &replays[i]);

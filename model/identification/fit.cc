@@ -26,6 +26,7 @@
 #include <Eigen/Dense>
 
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 #include "model/signal/input_reconstruction.h"
 
 namespace mpdrig {
@@ -37,47 +38,6 @@ constexpr double kSingularRatio = 1.0e-12;
 // A parameter whose difference step changes the residual vector by less than this share of its
 // norm has no influence (bit-identical replays give 0; round-off alone stays far below).
 constexpr double kNoInfluence = 1.0e-9;
-
-// Splits "EFFECT.KEY"; nullopt-like empty effect name when there is no dot.
-std::pair<std::string_view, std::string_view> SplitEffectKey(std::string_view key) {
-  const std::size_t dot = key.find('.');
-  if (dot == std::string_view::npos) return {{}, key};
-  return {key.substr(0, dot), key.substr(dot + 1)};
-}
-
-std::string BaseKeys() {
-  std::string keys;
-  for (const ParamInfo& info : ParamTable()) {
-    if (!keys.empty()) keys += ", ";
-    keys += info.key;
-  }
-  return keys;
-}
-
-std::string EffectKeys(const EffectInfo& info) {
-  std::string keys;
-  for (const EffectParamInfo& param : info.params) {
-    if (!keys.empty()) keys += ", ";
-    keys += std::string(info.name) + "." + std::string(param.key);
-  }
-  return keys;
-}
-
-// The effect's info and parameter info for "EFFECT.KEY", or an error listing the valid ones.
-Result<std::pair<const EffectInfo*, const EffectParamInfo*>> FindEffectParam(std::string_view key) {
-  const auto [effect_name, param_key] = SplitEffectKey(key);
-  const EffectInfo* info = FindEffectInfo(effect_name);
-  if (info == nullptr) {
-    return Status::Error("unknown effect '" + std::string(effect_name) + "' in '" +
-                         std::string(key) + "'; effects: " + EffectNames());
-  }
-  const EffectParamInfo* param = info->FindParam(param_key);
-  if (param == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) +
-                         "'; valid keys: " + EffectKeys(*info));
-  }
-  return std::make_pair(info, param);
-}
 
 // One compared channel's samples inside the window and its normalisation.
 struct WindowChannel {
@@ -331,85 +291,9 @@ class ProgressCallback final : public ceres::IterationCallback {
 }  // namespace
 
 Result<FitParameter> DefaultFitParameter(std::string_view key) {
-  if (key.find('.') != std::string_view::npos) {
-    auto found = FindEffectParam(key);
-    if (!found.ok()) return found.status();
-    const EffectParamInfo& param = *found->second;
-    return FitParameter{std::string(key), param.min_value, param.max_value};
-  }
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
-                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
-  }
-  double lower = info->fit_min, upper = info->fit_max;
-  if (!(info->fit_min < info->fit_max)) {
-    lower = info->min_value, upper = info->max_value;
-    // A factor of 3 either way around the thesis value (the sign kept), or the table's bounds.
-    const double value = RigParams{}.*(info->member);
-    if (value != 0.0) {
-      lower = value > 0.0 ? value / 3.0 : value * 3.0;
-      upper = value > 0.0 ? value * 3.0 : value / 3.0;
-    }
-  }
-  lower = std::max(lower, info->min_value);
-  upper = std::min(upper, info->max_value);
-  return FitParameter{std::string(key), lower, upper};
-}
-
-Result<double> GetParamValue(const RigParams& params, std::string_view key) {
-  if (key.find('.') != std::string_view::npos) {
-    auto found = FindEffectParam(key);
-    if (!found.ok()) return found.status();
-    const auto [effect_name, param_key] = SplitEffectKey(key);
-    const EffectSetting* setting = params.FindEffect(effect_name);
-    if (setting == nullptr) {
-      return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on");
-    }
-    const double* value = setting->Find(param_key);
-    return value != nullptr ? *value : found->second->default_value;
-  }
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
-                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
-  }
-  return params.*(info->member);
-}
-
-Status SetParamValue(RigParams* params, std::string_view key, double value) {
-  if (!std::isfinite(value)) {
-    return Status::Error(std::string(key) + ": value must be finite");
-  }
-  if (key.find('.') != std::string_view::npos) {
-    auto found = FindEffectParam(key);
-    if (!found.ok()) return found.status();
-    const EffectParamInfo& param = *found->second;
-    const auto [effect_name, param_key] = SplitEffectKey(key);
-    EffectSetting* setting = params->FindEffect(effect_name);
-    if (setting == nullptr) {
-      return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on");
-    }
-    MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, param.unit, param.min_value, param.max_value));
-    for (auto& [name, existing] : setting->values) {
-      if (name == param_key) {
-        existing = value;
-        return Status::Ok();
-      }
-    }
-    setting->values.emplace_back(std::string(param_key), value);
-    return Status::Ok();
-  }
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
-                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
-  }
-  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
-  params->*(info->member) = value;
-  return Status::Ok();
+  auto found = FindParamByKey(key);
+  if (!found.ok()) return found.status();
+  return FitParameter{std::string(key), found->fit_min, found->fit_max};
 }
 
 Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,

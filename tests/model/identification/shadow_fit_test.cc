@@ -16,6 +16,7 @@
 #include "model/analysis/shadow_model.h"
 #include "model/common/units.h"
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 #include "model/sim/sensor_noise.h"
 
 namespace mpdrig {
