@@ -361,27 +361,38 @@ Result<ModelTraces> ReplayWithOwnLevels(const MeasuredLog& reconstructed, const 
   return ReplayModel(reconstructed, params, simulation, replay);
 }
 
+// The effects to try: none for the baseline alone, else options.candidates (checked by
+// DiagnoseOptions::Validate), or the whole catalogue where it is empty.
+std::vector<const EffectInfo*> CandidateEffects(const DiagnoseOptions& options) {
+  std::vector<const EffectInfo*> candidates;
+  if (options.baseline_only) return candidates;
+  if (options.candidates.empty()) {
+    for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
+    return candidates;
+  }
+  for (const std::string& name : options.candidates) candidates.push_back(FindEffectInfo(name));
+  return candidates;
+}
+
 }  // namespace
+
+Status DiagnoseOptions::Validate() const {
+  if (!(fit_fraction > 0.1 && fit_fraction < 0.95)) {
+    return Status::Error("fit fraction must be in (0.1, 0.95)");
+  }
+  if (baseline_only) return Status::Ok();  // the candidates are not tried
+  for (const std::string& name : candidates) {
+    if (FindEffectInfo(name) == nullptr) {
+      return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
+    }
+  }
+  return Status::Ok();
+}
 
 Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
                            const DiagnoseOptions& options) {
-  if (!(options.fit_fraction > 0.1 && options.fit_fraction < 0.95)) {
-    return Status::Error("fit fraction must be in (0.1, 0.95)");
-  }
-  std::vector<const EffectInfo*> candidates;
-  if (options.baseline_only) {
-    // none
-  } else if (options.candidates.empty()) {
-    for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
-  } else {
-    for (const std::string& name : options.candidates) {
-      const EffectInfo* info = FindEffectInfo(name);
-      if (info == nullptr) {
-        return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
-      }
-      candidates.push_back(info);
-    }
-  }
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  const std::vector<const EffectInfo*> candidates = CandidateEffects(options);
   if (!start.effects.empty()) {
     return Status::Error(
         "diagnose starts from the base model: remove the effects from the configuration (it "

@@ -290,6 +290,17 @@ class ProgressCallback final : public ceres::IterationCallback {
 
 }  // namespace
 
+Status FitOptions::Validate() const {
+  if (!(window_begin_s < window_end_s)) {
+    return Status::Error("fit window is empty: begin must be before end");
+  }
+  if (max_iterations < 0) return Status::Error("max_iterations must be >= 0");
+  if (!(relative_step > 0.0 && relative_step < 0.1)) {
+    return Status::Error("relative_step must be in (0, 0.1)");
+  }
+  return simulation.Validate();
+}
+
 Result<FitParameter> DefaultFitParameter(std::string_view key) {
   auto found = FindParamByKey(key);
   if (!found.ok()) return found.status();
@@ -300,14 +311,7 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
                                 const std::vector<FitParameter>& parameters,
                                 const FitOptions& options) {
   if (parameters.empty()) return Status::Error("no parameter to fit");
-  if (!(options.window_begin_s < options.window_end_s)) {
-    return Status::Error("fit window is empty: begin must be before end");
-  }
-  if (options.max_iterations < 0) return Status::Error("max_iterations must be >= 0");
-  if (!(options.relative_step > 0.0 && options.relative_step < 0.1)) {
-    return Status::Error("relative_step must be in (0, 0.1)");
-  }
-  MPDRIG_RETURN_IF_ERROR(options.simulation.Validate());
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
   MPDRIG_RETURN_IF_ERROR(ValidateEffects(start));
 
   const std::size_t p = parameters.size();

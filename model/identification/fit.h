@@ -79,6 +79,10 @@ struct FitOptions {
   // see why a fit stops. The command line sets it from MPDRIG_CERES_LOG; the model reads no
   // environment.
   bool solver_log = false;
+
+  // The window is not empty, max_iterations >= 0, relative_step in (0, 0.1), the simulation
+  // options valid; else an error that says which.
+  [[nodiscard]] Status Validate() const;
 };
 
 struct FitResult {
