@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <deque>
+#include <optional>
 #include <sstream>
 
 #include <ceres/ceres.h>
@@ -288,6 +289,229 @@ class ProgressCallback final : public ceres::IterationCallback {
   const std::function<void(int, double)>& progress_;
 };
 
+// --- FitParameters's steps ------------------------------------------------------------------
+
+// The parameters as the solver sees them: z = x / scale, with the bounds in the same form.
+struct ScaledParameters {
+  std::vector<double> scale, z, lower, upper;
+  std::size_t size() const { return z.size(); }
+};
+
+// Checks each parameter (given once, known, bounds finite, ordered and settable) and scales it:
+// its value in `start` clamped into the bounds is written into result->params (which starts as
+// `start`) and result->initial, its key into result->keys. The scale is |initial|, or the bound
+// range when the start is 0.
+Result<ScaledParameters> ScaleParameters(const RigParams& start,
+                                         const std::vector<FitParameter>& parameters,
+                                         FitResult* result) {
+  const std::size_t p = parameters.size();
+  ScaledParameters x{std::vector<double>(p), std::vector<double>(p), std::vector<double>(p),
+                     std::vector<double>(p)};
+  for (std::size_t j = 0; j < p; ++j) {
+    const FitParameter& parameter = parameters[j];
+    for (std::size_t k = 0; k < j; ++k) {
+      if (parameters[k].key == parameter.key) {
+        return Status::Error("parameter '" + parameter.key + "' is given twice");
+      }
+    }
+    auto value = GetParamValue(start, parameter.key);
+    if (!value.ok()) return value.status();
+    if (!std::isfinite(parameter.lower) || !std::isfinite(parameter.upper) ||
+        !(parameter.lower < parameter.upper)) {
+      std::ostringstream out;
+      out << parameter.key << ": bounds [" << parameter.lower << ", " << parameter.upper
+          << "] must be finite with lower < upper";
+      return Status::Error(out.str());
+    }
+    // The bounds must be settable: inside the parameter tables' bounds.
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result->params, parameter.key, parameter.lower));
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result->params, parameter.key, parameter.upper));
+    const double initial = std::clamp(*value, parameter.lower, parameter.upper);
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result->params, parameter.key, initial));
+    result->keys.push_back(parameter.key);
+    result->initial.push_back(initial);
+    x.scale[j] = initial != 0.0 ? std::abs(initial) : parameter.upper - parameter.lower;
+    x.z[j] = initial / x.scale[j];
+    x.lower[j] = parameter.lower / x.scale[j];
+    x.upper[j] = parameter.upper / x.scale[j];
+  }
+  return x;
+}
+
+// Which parameters to hold: those whose difference step at the start moves the residuals `r0`
+// by less than kNoInfluence of their norm. Such a parameter is held at its start value and
+// reported so (FitResult::held), rather than returned as if it had been estimated. E.g. the
+// choke leak is the floor of the choke characteristic (G = max(G_table, leak), 9.4): with the
+// choke open it changes nothing, and its estimate would only be its start value. Holding it also
+// keeps the Levenberg-Marquardt step away from a zero Jacobian column, which only Ceres's tiny
+// minimum diagonal regularises. The probes use ReplayCost's forward steps, so Ceres's first
+// Jacobian finds them in the cache.
+std::vector<bool> HeldParameters(ReplayResiduals* residuals, const ScaledParameters& x,
+                                 const std::vector<double>& r0, double relative_step) {
+  const std::size_t p = x.size();
+  const int m = static_cast<int>(r0.size());
+  std::vector<bool> held(p, false);
+  const double reference = Eigen::Map<const Eigen::VectorXd>(r0.data(), m).norm();
+  std::vector<double> shifted = x.z, probe(m);
+  for (std::size_t j = 0; j < p; ++j) {
+    shifted[j] = x.z[j] + Step(relative_step, x.z[j], x.lower[j], x.upper[j]);
+    if (residuals->Evaluate(shifted.data(), probe.data())) {
+      double change = 0.0;
+      for (int i = 0; i < m; ++i) change += (probe[i] - r0[i]) * (probe[i] - r0[i]);
+      held[j] = std::sqrt(change) <= kNoInfluence * reference;
+    }
+    shifted[j] = x.z[j];
+  }
+  return held;
+}
+
+// Trust region, Levenberg-Marquardt, dense QR, one thread, silent unless options.solver_log.
+ceres::Solver::Options SolverOptions(const FitOptions& options) {
+  ceres::Solver::Options solver;
+  solver.minimizer_type = ceres::TRUST_REGION;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  // Steps below a tenth of the difference step are below what the derivatives resolve.
+  solver.parameter_tolerance = 0.1 * options.relative_step;
+  // With bounds, Ceres runs a projected Armijo line search on every step. Its default cubic
+  // interpolation asks for the gradient at each trial point, a whole Jacobian (p replays) here;
+  // quadratic interpolation needs only costs, and a few contractions are enough (measured: about
+  // half the replays per fit).
+  solver.line_search_interpolation_type = ceres::QUADRATIC;
+  solver.max_num_line_search_step_size_iterations = 4;
+  solver.num_threads = 1;
+  solver.logging_type = options.solver_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver.minimizer_progress_to_stdout = options.solver_log;
+  return solver;
+}
+
+// Runs Ceres from x->z, which it moves in place, with the parameters of result->held fixed at
+// their start; the solver's report, iterations and convergence into *result. Where every
+// parameter is held there is nothing to solve.
+Status RunSolver(ReplayResiduals* residuals, const FitOptions& options, ScaledParameters* x,
+                 FitResult* result) {
+  const std::size_t p = x->size();
+  std::vector<int> held_indices;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (result->held[j]) held_indices.push_back(static_cast<int>(j));
+  }
+  // Ceres owns the cost function (default ownership) and reads/writes z in place.
+  ceres::Problem problem;
+  problem.AddResidualBlock(new ReplayCost(residuals, x->lower, x->upper, options.relative_step,
+                                          options.central_differences),
+                           nullptr, x->z.data());
+  if (!held_indices.empty() && held_indices.size() < p) {
+    problem.SetManifold(x->z.data(), new ceres::SubsetManifold(static_cast<int>(p), held_indices));
+  }
+  for (std::size_t j = 0; j < p; ++j) {
+    problem.SetParameterLowerBound(x->z.data(), static_cast<int>(j), x->lower[j]);
+    problem.SetParameterUpperBound(x->z.data(), static_cast<int>(j), x->upper[j]);
+  }
+  ceres::Solver::Options solver = SolverOptions(options);
+  ProgressCallback callback(*residuals, options.progress);
+  solver.callbacks.push_back(&callback);
+  std::string options_error;
+  if (!solver.IsValid(&options_error)) return Status::Error("solver options: " + options_error);
+  ceres::Solver::Summary summary;
+  if (held_indices.size() < p) {
+    ceres::Solve(solver, &problem, &summary);
+    result->solver_report = summary.BriefReport();
+  } else {
+    summary.termination_type = ceres::CONVERGENCE;
+    result->solver_report = "no parameter moves the residuals: all held at their start values";
+  }
+  if (summary.termination_type == ceres::FAILURE) {
+    return Status::Error("the solver failed: " + summary.message +
+                         (residuals->last_failure().empty()
+                              ? std::string()
+                              : " (last model failure: " + residuals->last_failure() + ")"));
+  }
+  result->iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  result->converged = summary.termination_type == ceres::CONVERGENCE;
+  return Status::Ok();
+}
+
+// The central-difference Jacobian of the residuals at x.z (scaled parameters; one-sided where
+// a bound is within the step), or nullopt where a replay fails.
+std::optional<Eigen::MatrixXd> CentralJacobian(ReplayResiduals* residuals,
+                                               const ScaledParameters& x, double relative_step) {
+  const std::size_t p = x.size();
+  const int m = residuals->residual_count();
+  Eigen::MatrixXd jacobian(m, p);
+  std::vector<double> plus(m), minus(m);
+  for (std::size_t j = 0; j < p; ++j) {
+    const double h = std::abs(Step(relative_step, x.z[j], x.lower[j], x.upper[j]));
+    std::vector<double> z_plus = x.z, z_minus = x.z;
+    z_plus[j] = std::min(x.z[j] + h, x.upper[j]);
+    z_minus[j] = std::max(x.z[j] - h, x.lower[j]);
+    if (!residuals->Evaluate(z_plus.data(), plus.data()) ||
+        !residuals->Evaluate(z_minus.data(), minus.data())) {
+      return std::nullopt;
+    }
+    const double width = z_plus[j] - z_minus[j];
+    for (int i = 0; i < m; ++i) jacobian(i, j) = (plus[i] - minus[i]) / width;
+  }
+  return jacobian;
+}
+
+// Standard errors and correlations from the Jacobian at the optimum (scaled parameters) and the
+// residuals r there: cov_z = s^2 (J^T J)^-1, s^2 = ||r||^2 / (m - p); cov_x = S cov_z S,
+// S = diag(scales). A parameter in a null direction of J^T J keeps NaN.
+void StandardErrors(const Eigen::MatrixXd& jacobian, const std::vector<double>& r,
+                    const std::vector<double>& scales, FitResult* result) {
+  const std::size_t p = scales.size();
+  const int m = static_cast<int>(r.size());
+  const double s2 = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm() /
+                    static_cast<double>(m - static_cast<int>(p));
+  const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
+  // Column scaling to unit diagonal, so the condition test sees the shape, not the units.
+  Eigen::VectorXd d = jtj.diagonal().cwiseSqrt();
+  std::vector<bool> identifiable(p, true);
+  for (std::size_t j = 0; j < p; ++j) identifiable[j] = d(j) > 0.0;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (!identifiable[j]) d(j) = 1.0;
+  }
+  const Eigen::MatrixXd normalised = d.asDiagonal().inverse() * jtj * d.asDiagonal().inverse();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalised);
+  const Eigen::VectorXd& values = eigen.eigenvalues();
+  const double largest = values.maxCoeff();
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
+  for (std::size_t k = 0; k < p; ++k) {
+    const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+    if (values(k) > kSingularRatio * largest) {
+      inverse += v * v.transpose() / values(k);
+    } else {
+      // A null direction: every parameter it involves is not identifiable on its own.
+      for (std::size_t j = 0; j < p; ++j) {
+        if (std::abs(v(j)) > 1.0e-3) identifiable[j] = false;
+      }
+    }
+  }
+  const Eigen::MatrixXd cov_z = s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
+  for (std::size_t i = 0; i < p; ++i) {
+    if (!identifiable[i]) continue;
+    result->standard_errors[i] = std::sqrt(cov_z(i, i)) * scales[i];
+    for (std::size_t j = 0; j < p; ++j) {
+      if (i == j || !identifiable[j]) continue;
+      result->correlation[i][j] = cov_z(i, j) / std::sqrt(cov_z(i, i) * cov_z(j, j));
+    }
+  }
+}
+
+// Covariance from the central-difference Jacobian at the optimum x.z, residuals r there: the
+// standard errors and correlations into *result, NaN where the Jacobian's replays fail.
+void EstimateCovariance(ReplayResiduals* residuals, const ScaledParameters& x,
+                        const std::vector<double>& r, double relative_step, FitResult* result) {
+  const std::size_t p = x.size();
+  const std::optional<Eigen::MatrixXd> jacobian = CentralJacobian(residuals, x, relative_step);
+  result->standard_errors.assign(p, kNaN);
+  result->correlation.assign(p, std::vector<double>(p, kNaN));
+  for (std::size_t j = 0; j < p; ++j) result->correlation[j][j] = 1.0;
+  if (jacobian) StandardErrors(*jacobian, r, x.scale, result);
+}
+
 }  // namespace
 
 Status FitOptions::Validate() const {
@@ -314,200 +538,45 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   MPDRIG_RETURN_IF_ERROR(options.Validate());
   MPDRIG_RETURN_IF_ERROR(ValidateEffects(start));
 
-  const std::size_t p = parameters.size();
   FitResult result;
   result.params = start;
-  std::vector<double> scales(p), z(p), lower_z(p), upper_z(p);
-  for (std::size_t j = 0; j < p; ++j) {
-    const FitParameter& parameter = parameters[j];
-    for (std::size_t k = 0; k < j; ++k) {
-      if (parameters[k].key == parameter.key) {
-        return Status::Error("parameter '" + parameter.key + "' is given twice");
-      }
-    }
-    auto value = GetParamValue(start, parameter.key);
-    if (!value.ok()) return value.status();
-    if (!std::isfinite(parameter.lower) || !std::isfinite(parameter.upper) ||
-        !(parameter.lower < parameter.upper)) {
-      std::ostringstream out;
-      out << parameter.key << ": bounds [" << parameter.lower << ", " << parameter.upper
-          << "] must be finite with lower < upper";
-      return Status::Error(out.str());
-    }
-    // The bounds must be settable: inside the parameter tables' bounds.
-    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, parameter.lower));
-    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, parameter.upper));
-    const double initial = std::clamp(*value, parameter.lower, parameter.upper);
-    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, initial));
-    result.keys.push_back(parameter.key);
-    result.initial.push_back(initial);
-    scales[j] = initial != 0.0 ? std::abs(initial) : parameter.upper - parameter.lower;
-    z[j] = initial / scales[j];
-    lower_z[j] = parameter.lower / scales[j];
-    upper_z[j] = parameter.upper / scales[j];
-  }
+  auto scaled = ScaleParameters(start, parameters, &result);
+  if (!scaled.ok()) return scaled.status();
+  ScaledParameters& x = *scaled;
+  const std::size_t p = x.size();
 
   std::vector<WindowChannel> channels =
       WindowChannels(log, options.window_begin_s, options.window_end_s, options.weighting);
   if (channels.empty()) {
     return Status::Error("no measured channel varies inside the fit window: nothing to fit");
   }
-  ReplayResiduals residuals(log, result.params, result.keys, scales, options, std::move(channels));
+  ReplayResiduals residuals(log, result.params, result.keys, x.scale, options, std::move(channels));
   const int m = residuals.residual_count();
   if (m <= static_cast<int>(p)) {
     return Status::Error("the fit window has " + std::to_string(m) + " measured samples for " +
                          std::to_string(p) + " parameters");
   }
-
   std::vector<double> r0(m);
-  if (!residuals.Evaluate(z.data(), r0.data())) {
+  if (!residuals.Evaluate(x.z.data(), r0.data())) {
     return Status::Error("the model fails at the start values: " + residuals.last_failure());
   }
   result.error_before = residuals.Error(r0.data());
 
-  // A parameter that does not move the residuals at the start is held there and reported so
-  // (`held`), rather than returned as if it had been estimated. E.g. the choke leak is the floor
-  // of the choke characteristic (G = max(G_table, leak), 9.4): with the choke open it changes
-  // nothing, and its estimate would only be its start value. Holding it also keeps the
-  // Levenberg-Marquardt step away from a zero Jacobian column, which only Ceres's tiny minimum
-  // diagonal regularises. The probes use ReplayCost's forward steps, so Ceres's first Jacobian
-  // finds them in the cache.
-  result.held.assign(p, false);
-  {
-    const double reference = Eigen::Map<const Eigen::VectorXd>(r0.data(), m).norm();
-    std::vector<double> shifted = z, probe(m);
-    for (std::size_t j = 0; j < p; ++j) {
-      shifted[j] = z[j] + Step(options.relative_step, z[j], lower_z[j], upper_z[j]);
-      if (residuals.Evaluate(shifted.data(), probe.data())) {
-        double change = 0.0;
-        for (int i = 0; i < m; ++i) change += (probe[i] - r0[i]) * (probe[i] - r0[i]);
-        result.held[j] = std::sqrt(change) <= kNoInfluence * reference;
-      }
-      shifted[j] = z[j];
-    }
-  }
-  std::vector<int> held_indices;
-  for (std::size_t j = 0; j < p; ++j) {
-    if (result.held[j]) held_indices.push_back(static_cast<int>(j));
-  }
-
-  // Ceres owns the cost function (default ownership) and reads/writes z in place.
-  ceres::Problem problem;
-  problem.AddResidualBlock(new ReplayCost(&residuals, lower_z, upper_z, options.relative_step,
-                                          options.central_differences),
-                           nullptr, z.data());
-  if (!held_indices.empty() && held_indices.size() < p) {
-    problem.SetManifold(z.data(), new ceres::SubsetManifold(static_cast<int>(p), held_indices));
-  }
-  for (std::size_t j = 0; j < p; ++j) {
-    problem.SetParameterLowerBound(z.data(), static_cast<int>(j), lower_z[j]);
-    problem.SetParameterUpperBound(z.data(), static_cast<int>(j), upper_z[j]);
-  }
-  ceres::Solver::Options solver;
-  solver.minimizer_type = ceres::TRUST_REGION;
-  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver.linear_solver_type = ceres::DENSE_QR;
-  solver.max_num_iterations = options.max_iterations;
-  solver.function_tolerance = options.function_tolerance;
-  // Steps below a tenth of the difference step are below what the derivatives resolve.
-  solver.parameter_tolerance = 0.1 * options.relative_step;
-  // With bounds, Ceres runs a projected Armijo line search on every step. Its default cubic
-  // interpolation asks for the gradient at each trial point, a whole Jacobian (p replays) here;
-  // quadratic interpolation needs only costs, and a few contractions are enough (measured: about
-  // half the replays per fit).
-  solver.line_search_interpolation_type = ceres::QUADRATIC;
-  solver.max_num_line_search_step_size_iterations = 4;
-  solver.num_threads = 1;
-  solver.logging_type = options.solver_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
-  solver.minimizer_progress_to_stdout = options.solver_log;
-  ProgressCallback callback(residuals, options.progress);
-  solver.callbacks.push_back(&callback);
-  std::string options_error;
-  if (!solver.IsValid(&options_error)) return Status::Error("solver options: " + options_error);
-  ceres::Solver::Summary summary;
-  if (held_indices.size() < p) {
-    ceres::Solve(solver, &problem, &summary);
-    result.solver_report = summary.BriefReport();
-  } else {
-    summary.termination_type = ceres::CONVERGENCE;
-    result.solver_report = "no parameter moves the residuals: all held at their start values";
-  }
-  if (summary.termination_type == ceres::FAILURE) {
-    return Status::Error("the solver failed: " + summary.message +
-                         (residuals.last_failure().empty()
-                              ? std::string()
-                              : " (last model failure: " + residuals.last_failure() + ")"));
-  }
-  result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
-  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.held = HeldParameters(&residuals, x, r0, options.relative_step);
+  MPDRIG_RETURN_IF_ERROR(RunSolver(&residuals, options, &x, &result));
 
   std::vector<double> r(m);
-  if (!residuals.Evaluate(z.data(), r.data())) {
+  if (!residuals.Evaluate(x.z.data(), r.data())) {
     return Status::Error("the model fails at the estimate: " + residuals.last_failure());
   }
   result.error_after = residuals.Error(r.data());
   for (std::size_t j = 0; j < p; ++j) {
-    const double estimate = std::clamp(z[j] * scales[j], parameters[j].lower, parameters[j].upper);
+    const double estimate =
+        std::clamp(x.z[j] * x.scale[j], parameters[j].lower, parameters[j].upper);
     result.estimates.push_back(estimate);
     MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, result.keys[j], estimate));
   }
-
-  // Covariance from the central-difference Jacobian at the optimum (scaled parameters):
-  // cov_z = s^2 (J^T J)^-1, s^2 = ||r||^2 / (m - p); cov_x = S cov_z S, S = diag(scales).
-  Eigen::MatrixXd jacobian(m, p);
-  bool jacobian_ok = true;
-  std::vector<double> plus(m), minus(m);
-  for (std::size_t j = 0; j < p && jacobian_ok; ++j) {
-    double h = std::abs(Step(options.relative_step, z[j], lower_z[j], upper_z[j]));
-    std::vector<double> z_plus = z, z_minus = z;
-    z_plus[j] = std::min(z[j] + h, upper_z[j]);
-    z_minus[j] = std::max(z[j] - h, lower_z[j]);
-    jacobian_ok = residuals.Evaluate(z_plus.data(), plus.data()) &&
-                  residuals.Evaluate(z_minus.data(), minus.data());
-    const double width = z_plus[j] - z_minus[j];
-    for (int i = 0; i < m && jacobian_ok; ++i) jacobian(i, j) = (plus[i] - minus[i]) / width;
-  }
-  result.standard_errors.assign(p, kNaN);
-  result.correlation.assign(p, std::vector<double>(p, kNaN));
-  for (std::size_t j = 0; j < p; ++j) result.correlation[j][j] = 1.0;
-  if (jacobian_ok) {
-    const double s2 = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm() /
-                      static_cast<double>(m - static_cast<int>(p));
-    const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
-    // Column scaling to unit diagonal, so the condition test sees the shape, not the units.
-    Eigen::VectorXd d = jtj.diagonal().cwiseSqrt();
-    std::vector<bool> identifiable(p, true);
-    for (std::size_t j = 0; j < p; ++j) identifiable[j] = d(j) > 0.0;
-    for (std::size_t j = 0; j < p; ++j) {
-      if (!identifiable[j]) d(j) = 1.0;
-    }
-    const Eigen::MatrixXd normalised = d.asDiagonal().inverse() * jtj * d.asDiagonal().inverse();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalised);
-    const Eigen::VectorXd& values = eigen.eigenvalues();
-    const double largest = values.maxCoeff();
-    Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
-    for (std::size_t k = 0; k < p; ++k) {
-      const Eigen::VectorXd v = eigen.eigenvectors().col(k);
-      if (values(k) > kSingularRatio * largest) {
-        inverse += v * v.transpose() / values(k);
-      } else {
-        // A null direction: every parameter it involves is not identifiable on its own.
-        for (std::size_t j = 0; j < p; ++j) {
-          if (std::abs(v(j)) > 1.0e-3) identifiable[j] = false;
-        }
-      }
-    }
-    const Eigen::MatrixXd cov_z =
-        s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
-    for (std::size_t i = 0; i < p; ++i) {
-      if (!identifiable[i]) continue;
-      result.standard_errors[i] = std::sqrt(cov_z(i, i)) * scales[i];
-      for (std::size_t j = 0; j < p; ++j) {
-        if (i == j || !identifiable[j]) continue;
-        result.correlation[i][j] = cov_z(i, j) / std::sqrt(cov_z(i, i) * cov_z(j, j));
-      }
-    }
-  }
+  EstimateCovariance(&residuals, x, r, options.relative_step, &result);
   result.replays = residuals.replays();
   return result;
 }
