@@ -43,11 +43,11 @@ TEST(ParamByKey, ABaseKeyIsItsFieldOfRigParams) {
   // The thesis's tuning range (ParamInfo::fit_min, fit_max).
   EXPECT_EQ(found->fit_min, 300.0);
   EXPECT_EQ(found->fit_max, 1500.0);
-  // No tuning range given: a factor of 3 either way around the thesis value, f2 = 0.63 1/m.
-  auto f2 = FindParamByKey("friction_f2_per_m");
-  ASSERT_TRUE(f2.ok());
-  EXPECT_DOUBLE_EQ(f2->fit_min, 0.63 / 3.0);
-  EXPECT_DOUBLE_EQ(f2->fit_max, 0.63 * 3.0);
+  // No tuning range given: a factor of 3 either way around the thesis value, 0.1 s (5.3).
+  auto lag = FindParamByKey("choke_time_constant_s");
+  ASSERT_TRUE(lag.ok());
+  EXPECT_DOUBLE_EQ(lag->fit_min, 0.1 / 3.0);
+  EXPECT_DOUBLE_EQ(lag->fit_max, 0.1 * 3.0);
 }
 
 TEST(ParamByKey, AnEffectKeyIsItsSettingWithTheCataloguesDefault) {
@@ -95,7 +95,7 @@ TEST(ParamByKey, AnUnknownKeyListsTheValidOnes) {
   // A base key: every key of the table, and the effects' form.
   auto base = GetParamValue(params, "wave_speed");
   ASSERT_FALSE(base.ok());
-  const std::string& message = base.status().message();
+  const std::string message = base.status().message();
   EXPECT_THAT(message, HasSubstr("unknown parameter 'wave_speed'; valid keys: "));
   for (const ParamInfo& info : ParamTable()) {
     EXPECT_THAT(message, HasSubstr(std::string(info.key)));
