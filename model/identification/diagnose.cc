@@ -2,11 +2,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "model/analysis/window_error.h"
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 
 namespace mpdrig {
 namespace {
@@ -110,17 +115,89 @@ struct SearchContext {
 // The catalogue's entry for an effect parameter key ("effect.param") if it has a plausible
 // range (EffectParamInfo::plausible_min/max), else null.
 const EffectParamInfo* PlausibleRange(const std::string& key) {
-  const std::size_t dot = key.find('.');
-  if (dot == std::string::npos) return nullptr;
-  const EffectInfo* effect = FindEffectInfo(key.substr(0, dot));
-  if (effect == nullptr) return nullptr;
-  for (const EffectParamInfo& param : effect->params) {
-    if (param.key == key.substr(dot + 1) && param.plausible_min > 0.0 &&
-        param.plausible_min < param.plausible_max) {
-      return &param;
+  auto found = FindParamByKey(key);
+  if (!found.ok() || found->effect_param == nullptr) return nullptr;
+  const EffectParamInfo* param = found->effect_param;
+  return param->plausible_min > 0.0 && param->plausible_min < param->plausible_max ? param
+                                                                                   : nullptr;
+}
+
+// The replays of a search's scans on the fitting data: every point (for a second start) and the
+// best.
+struct ScanPoints {
+  struct Point {
+    double error;
+    RigParams params;
+  };
+  std::vector<Point> points;
+  double best_error = std::numeric_limits<double>::infinity();
+  RigParams best;  // the search's start until a scan point fits better
+};
+
+void Consider(const SearchContext& context, const RigParams& trial, ScanPoints* scan,
+              int* replays) {
+  auto traces =
+      ReplayModel(*context.fit_log, trial, context.simulation, context.fit_options.replay);
+  ++*replays;
+  if (!traces.ok()) return;
+  const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
+  scan->points.push_back({error, trial});
+  if (error < scan->best_error) scan->best_error = error, scan->best = trial;
+}
+
+// `strength` with the effect's parameters (parameters[base_count...]) at `factor` of their
+// values there (of 5% of their range where the value is 0) or, where the catalogue gives a
+// plausible range, at the same relative place in it, log-spaced; none where one cannot be set.
+std::optional<RigParams> AtStrength(RigParams strength, const std::vector<FitParameter>& parameters,
+                                    std::size_t base_count, double factor,
+                                    const std::vector<double>& factors) {
+  for (std::size_t j = base_count; j < parameters.size(); ++j) {
+    const FitParameter& parameter = parameters[j];
+    auto value = GetParamValue(strength, parameter.key);
+    if (!value.ok()) return std::nullopt;
+    double scaled = *value != 0.0
+                        ? *value * factor
+                        : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
+    // A strength whose plausible range spans decades (trapped air in the compartment, free
+    // gas) is scanned over that range, log-spaced, as the factors span theirs.
+    if (const EffectParamInfo* info = PlausibleRange(parameter.key)) {
+      const double position =
+          std::log(factor / factors.front()) / std::log(factors.back() / factors.front());
+      scaled = info->plausible_min * std::pow(info->plausible_max / info->plausible_min, position);
+    }
+    if (!SetParamValue(&strength, parameter.key,
+                       std::clamp(scaled, parameter.lower, parameter.upper))
+             .ok()) {
+      return std::nullopt;
     }
   }
-  return nullptr;
+  return strength;
+}
+
+// Two local fits: from the best scan point, and from the best one in another valley of the
+// wave speed (more than kSecondStartSpan away); the better one. The effect's strength and the
+// wave speed trade against each other (a compliance or a lag lowers the resonances as a lower c
+// does), and the scan's best point can sit in the wrong valley of that trade: measured on a
+// hidden hose_compliance (seed 2), the fit from the best point ended 0.9% high in c with 4% more
+// error on the fitting data than the fit from the second start, 0.4% from the true c.
+Result<FitResult> FitFromTwoStarts(const SearchContext& context, const ScanPoints& scan,
+                                   const std::vector<FitParameter>& parameters, int* replays) {
+  const ScanPoints::Point* second = nullptr;
+  for (const ScanPoints::Point& point : scan.points) {
+    const bool elsewhere =
+        std::fabs(point.params.wave_speed_mps / scan.best.wave_speed_mps - 1.0) > kSecondStartSpan;
+    if (elsewhere && (second == nullptr || point.error < second->error)) second = &point;
+  }
+  auto fit = FitParameters(*context.fit_log, scan.best, parameters, context.fit_options);
+  if (fit.ok()) *replays += fit->replays;
+  if (second != nullptr) {
+    auto other = FitParameters(*context.fit_log, second->params, parameters, context.fit_options);
+    if (other.ok()) {
+      *replays += other->replays;
+      if (!fit.ok() || other->error_after < fit->error_after) return other;
+    }
+  }
+  return fit;
 }
 
 // Local fit of `parameters` (the base ones, then the effect's) from the fitted baseline `params`
@@ -138,98 +215,40 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
   RigParams from_start = *context.start;
   from_start.wave_speed_mps = params.wave_speed_mps;
   from_start.effects = params.effects;
-  double best_error = std::numeric_limits<double>::infinity();
-  RigParams best = params;
+  ScanPoints scan;
+  scan.best = params;
   const double centre = params.wave_speed_mps;
   const bool has_effect = parameters.size() > context.base_count;
   const std::vector<double> factors =
       has_effect ? std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0} : std::vector<double>{1.0};
-  // Every scan point, for the second start below.
-  struct Point {
-    double error;
-    RigParams params;
-  };
-  std::vector<Point> points;
-  auto consider = [&](const RigParams& trial) {
-    auto traces =
-        ReplayModel(*context.fit_log, trial, context.simulation, context.fit_options.replay);
-    ++*replays;
-    if (!traces.ok()) return;
-    const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
-    points.push_back({error, trial});
-    if (error < best_error) best_error = error, best = trial;
-  };
   for (int origin = 0; origin < 2; ++origin) {
     for (double factor : factors) {
-      RigParams strength = origin == 0 ? params : from_start;
-      bool valid = true;
-      for (std::size_t j = context.base_count; j < parameters.size() && valid; ++j) {
-        const FitParameter& parameter = parameters[j];
-        auto value = GetParamValue(strength, parameter.key);
-        if (!value.ok()) {
-          valid = false;
-          break;
-        }
-        double scaled = *value != 0.0
-                            ? *value * factor
-                            : parameter.lower + 0.05 * factor * (parameter.upper - parameter.lower);
-        // A strength whose plausible range spans decades (trapped air in the compartment, free
-        // gas) is scanned over that range, log-spaced, as the factors span theirs.
-        if (const EffectParamInfo* info = PlausibleRange(parameter.key)) {
-          const double position =
-              std::log(factor / factors.front()) / std::log(factors.back() / factors.front());
-          scaled =
-              info->plausible_min * std::pow(info->plausible_max / info->plausible_min, position);
-        }
-        valid = SetParamValue(&strength, parameter.key,
-                              std::clamp(scaled, parameter.lower, parameter.upper))
-                    .ok();
-      }
-      if (!valid) continue;
+      const std::optional<RigParams> strength = AtStrength(
+          origin == 0 ? params : from_start, parameters, context.base_count, factor, factors);
+      if (!strength) continue;
       const int speeds = context.fits_wave_speed ? kFineScanPoints : 1;
       for (int k = 0; k < speeds; ++k) {
-        RigParams trial = strength;
+        RigParams trial = *strength;
         if (context.fits_wave_speed) {
           trial.wave_speed_mps =
               centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (speeds - 1));
         }
-        consider(trial);
+        Consider(context, trial, &scan, replays);
       }
     }
   }
   // The finest wave-speed step around the best point.
   if (context.fits_wave_speed) {
-    const RigParams around = best;
+    const RigParams around = scan.best;
     for (int k = 0; k < kFineScanPoints; ++k) {
       RigParams trial = around;
       trial.wave_speed_mps =
           around.wave_speed_mps *
           (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
-      consider(trial);
+      Consider(context, trial, &scan, replays);
     }
   }
-  // Two local fits: from the best scan point, and from the best one in another valley of the
-  // wave speed (more than kSecondStartSpan away). The effect's strength and the wave speed trade
-  // against each other (a compliance or a lag lowers the resonances as a lower c does), and the
-  // scan's best point can sit in the wrong valley of that trade: measured on a hidden
-  // hose_compliance (seed 2), the fit from the best point ended 0.9% high in c with 4% more
-  // error on the fitting data than the fit from the second start, 0.4% from the true c.
-  const Point* second = nullptr;
-  for (const Point& point : points) {
-    const bool elsewhere =
-        std::fabs(point.params.wave_speed_mps / best.wave_speed_mps - 1.0) > kSecondStartSpan;
-    if (elsewhere && (second == nullptr || point.error < second->error)) second = &point;
-  }
-  auto fit = FitParameters(*context.fit_log, best, parameters, context.fit_options);
-  if (fit.ok()) *replays += fit->replays;
-  if (second != nullptr) {
-    auto other = FitParameters(*context.fit_log, second->params, parameters, context.fit_options);
-    if (other.ok()) {
-      *replays += other->replays;
-      if (!fit.ok() || other->error_after < fit->error_after) return other;
-    }
-  }
-  return fit;
+  return FitFromTwoStarts(context, scan, parameters, replays);
 }
 
 // The strengths of an effect parameter over which detectability is scanned: its plausible range
@@ -366,182 +385,265 @@ Result<ModelTraces> ReplayWithOwnLevels(const MeasuredLog& reconstructed, const 
   return ReplayModel(reconstructed, params, simulation, replay);
 }
 
-}  // namespace
+// --- Diagnose's steps ------------------------------------------------------------------------
 
-Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
-                           const DiagnoseOptions& options) {
-  if (!(options.fit_fraction > 0.1 && options.fit_fraction < 0.95)) {
-    return Status::Error("fit fraction must be in (0.1, 0.95)");
-  }
+// The effects to try: none for the baseline alone, else options.candidates (checked by
+// DiagnoseOptions::Validate), or the whole catalogue where it is empty.
+std::vector<const EffectInfo*> CandidateEffects(const DiagnoseOptions& options) {
   std::vector<const EffectInfo*> candidates;
-  if (options.baseline_only) {
-    // none
-  } else if (options.candidates.empty()) {
+  if (options.baseline_only) return candidates;
+  if (options.candidates.empty()) {
     for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
-  } else {
-    for (const std::string& name : options.candidates) {
-      const EffectInfo* info = FindEffectInfo(name);
-      if (info == nullptr) {
-        return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
-      }
-      candidates.push_back(info);
-    }
+    return candidates;
   }
-  if (!start.effects.empty()) {
-    return Status::Error(
-        "diagnose starts from the base model: remove the effects from the configuration (it "
-        "tries each of them itself)");
-  }
-  // Copies: the inputs' levels are estimated once the base model is fitted (below).
-  MeasuredLog log = measured;
-  ReplayOptions replay = options.replay;
-  const std::vector<double>& t = log.time_s();
-  const double t_begin = t.front();
-  const double t_end = t.back();
-  Diagnosis diagnosis;
-  diagnosis.fit_end_s = t_begin + options.fit_fraction * (t_end - t_begin);
-  diagnosis.noise_floor = EstimateNoiseFloor(log);
-  const double score_begin = diagnosis.fit_end_s;
-  // Fits and the scans before them see only the fitting data.
-  // Fitting needs no replay past the fitting data (40% of every fit's model time saved).
-  MeasuredLog fit_log = MeasuredLogUntil(log, diagnosis.fit_end_s);
-  if (fit_log.time_s().size() < 4) return Status::Error("too few samples to fit on");
+  for (const std::string& name : options.candidates) candidates.push_back(FindEffectInfo(name));
+  return candidates;
+}
 
-  SimulationOptions simulation = options.simulation;
+// What Diagnose's steps share: the log split in time (step 1 of diagnose.h), the options of every
+// replay and fit, and the progress report.
+struct DiagnoseRun {
+  const MeasuredLog& measured;  // as given: levels are estimated from it, per model scored
+  const DiagnoseOptions& options;
+  // Copies: the inputs' levels are estimated once the base model is fitted (FitBaseModel).
+  MeasuredLog log;
+  ReplayOptions replay;
+  // Fits and the scans before them see only the fitting data. Fitting needs no replay past the
+  // fitting data (40% of every fit's model time saved).
+  MeasuredLog fit_log = {};
+  SimulationOptions simulation = {};
+  FitOptions fit_options = {};
+  double t_begin = 0.0, t_end = 0.0;  // the whole log
+  double fit_end_s = 0.0;             // fitting data: [t_begin, fit_end_s)
+  double score_begin = 0.0;           // scoring data: [score_begin, t_end]
+  double steps = 1.0;                 // progress: the baseline, then one per candidate
+
+  void Report(std::string_view stage, double done) const {
+    if (options.progress) options.progress(stage, done / steps);
+  }
+};
+
+// Splits the log at options.fit_fraction and sets the fits' options; the split and the noise
+// floor into *diagnosis.
+DiagnoseRun SplitLog(const MeasuredLog& measured, const DiagnoseOptions& options,
+                     std::size_t candidate_count, Diagnosis* diagnosis) {
+  DiagnoseRun run{
+      .measured = measured, .options = options, .log = measured, .replay = options.replay};
+  const std::vector<double>& t = run.log.time_s();
+  run.t_begin = t.front();
+  run.t_end = t.back();
+  diagnosis->fit_end_s = run.t_begin + options.fit_fraction * (run.t_end - run.t_begin);
+  diagnosis->noise_floor = EstimateNoiseFloor(run.log);
+  run.fit_end_s = run.score_begin = diagnosis->fit_end_s;
+  run.fit_log = MeasuredLogUntil(run.log, run.fit_end_s);
+  run.simulation = options.simulation;
   // A missing effect may be what drives the base model out of its range (column separation):
   // then it must still be scored, not stopped.
-  simulation.stop_on_range_violation = false;
-  FitOptions fit_options;
-  fit_options.simulation = simulation;
-  fit_options.replay = replay;
-  fit_options.window_end_s = diagnosis.fit_end_s;
-  fit_options.max_iterations = options.max_iterations;
-  fit_options.solver_log = options.solver_log;
-  const double steps = 1.0 + candidates.size();
-  auto report = [&](std::string_view stage, double done) {
-    if (options.progress) options.progress(stage, done / steps);
-  };
+  run.simulation.stop_on_range_violation = false;
+  run.fit_options.simulation = run.simulation;
+  run.fit_options.replay = run.replay;
+  run.fit_options.window_end_s = run.fit_end_s;
+  run.fit_options.max_iterations = options.max_iterations;
+  run.fit_options.solver_log = options.solver_log;
+  run.steps = 1.0 + candidate_count;
+  return run;
+}
 
-  // --- Baseline ----------------------------------------------------------------------------------
-  std::vector<FitParameter> base_parameters;
-  for (const std::string& key : options.base_params) {
-    auto parameter = DefaultFitParameter(key);
-    if (!parameter.ok()) return parameter.status();
-    base_parameters.push_back(*parameter);
-  }
-  report("baseline", 0.0);
-  // Wave speed first, by a coarse scan on the fitting data (the thesis also tuned c before the
-  // friction, 9.4): the cost is not convex in c. A wrong c puts the resonances in the wrong place,
-  // and a local fit from there finds it cheaper to damp the response (raise f1) than to move c.
+// The fitted base model, and what the candidates are measured against.
+struct Baseline {
+  std::vector<FitParameter> parameters;  // options.base_params with their default bounds
+  FitResult fit;
+  SearchContext search;  // the local search each candidate repeats (SearchAndFit)
+  ModelTraces traces;    // over the whole log, with the levels estimated at the fit
+  Scored score;          // on the scoring data
+};
+
+// Wave speed first, by a coarse scan on the fitting data (the thesis also tuned c before the
+// friction, 9.4): the cost is not convex in c. A wrong c puts the resonances in the wrong place,
+// and a local fit from there finds it cheaper to damp the response (raise f1) than to move c.
+// Returns `start` with the best wave speed (and f1, where another one moved it).
+RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, int* replays) {
+  // Coarse then fine: the valley in c is about 1% wide (the sweep's higher resonances), so a
+  // coarse step of 2.5% finds its side and a fine step of 0.25% its floor.
+  double best_error = std::numeric_limits<double>::infinity();
+  double best_c = start.wave_speed_mps;
+  auto scan = [&](const RigParams& from, double centre, double span, int points) {
+    for (int k = 0; k < points; ++k) {
+      RigParams trial = from;
+      trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
+      auto traces = ReplayModel(run.fit_log, trial, run.simulation, run.replay);
+      ++*replays;
+      if (!traces.ok()) continue;
+      const double error = WindowError(run.fit_log, *traces, run.t_begin, run.fit_end_s);
+      if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
+    }
+  };
+  scan(start, start.wave_speed_mps, kWaveSpeedScanSpan, kWaveSpeedScanPoints);
+  scan(start, best_c, kFineScanSpan, kFineScanPoints);
+  scan(start, best_c, kFinestScanSpan, kFineScanPoints);
   RigParams base_start = start;
-  const bool fits_wave_speed = std::find(options.base_params.begin(), options.base_params.end(),
-                                         "wave_speed_mps") != options.base_params.end();
-  if (fits_wave_speed) {
-    // Coarse then fine: the valley in c is about 1% wide (the sweep's higher resonances), so a
-    // coarse step of 2.5% finds its side and a fine step of 0.25% its floor.
-    double best_error = std::numeric_limits<double>::infinity();
-    double best_c = start.wave_speed_mps;
-    auto scan = [&](double centre, double span, int points) {
-      for (int k = 0; k < points; ++k) {
-        RigParams trial = start;
-        trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
-        auto traces = ReplayModel(fit_log, trial, simulation, replay);
-        ++diagnosis.replays;
-        if (!traces.ok()) continue;
-        const double error = WindowError(fit_log, *traces, t_begin, diagnosis.fit_end_s);
-        if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
-      }
-    };
-    scan(start.wave_speed_mps, kWaveSpeedScanSpan, kWaveSpeedScanPoints);
-    scan(best_c, kFineScanSpan, kFineScanPoints);
-    scan(best_c, kFinestScanSpan, kFineScanPoints);
-    base_start.wave_speed_mps = best_c;
-    // The friction moves the best wave speed a little (damping shifts the resonances) and the
-    // valley is narrow: the finest scan again at half and twice the start's f1.
-    for (double factor : {0.5, 2.0}) {
-      const double before = best_error;
-      const double c = best_c;
-      RigParams trial_start = start;
-      trial_start.friction_f1_per_s = start.friction_f1_per_s * factor;
-      for (int k = 0; k < kFineScanPoints; ++k) {
-        RigParams trial = trial_start;
-        trial.wave_speed_mps =
-            c * (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
-        auto traces = ReplayModel(fit_log, trial, simulation, replay);
-        ++diagnosis.replays;
-        if (!traces.ok()) continue;
-        const double error = WindowError(fit_log, *traces, t_begin, diagnosis.fit_end_s);
-        if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
-      }
-      if (best_error < before) {
-        base_start = trial_start;
-        base_start.wave_speed_mps = best_c;
-      }
+  base_start.wave_speed_mps = best_c;
+  // The friction moves the best wave speed a little (damping shifts the resonances) and the
+  // valley is narrow: the finest scan again at half and twice the start's f1.
+  for (double factor : {0.5, 2.0}) {
+    const double before = best_error;
+    RigParams trial_start = start;
+    trial_start.friction_f1_per_s = start.friction_f1_per_s * factor;
+    scan(trial_start, best_c, kFinestScanSpan, kFineScanPoints);
+    if (best_error < before) {
+      base_start = trial_start;
+      base_start.wave_speed_mps = best_c;
     }
   }
-  auto base_fit = FitParameters(fit_log, base_start, base_parameters, fit_options);
+  return base_start;
+}
+
+// The base model fitted from `base_start` on the fitting data, then the inputs' levels
+// (EstimateInputLevels) at the fitted base parameters and the refit on them: at the start values
+// a wrong leak or wave speed would pass for a level error (measured: a log whose leak differs
+// 3 % from the default got its levels moved to their bound, the baseline error rose from 4.9 %
+// to 6.8 % and pump_curve was named on an effect-free log). The levels are applied to run's log,
+// replay and fitting data: every candidate sees the same levels.
+Result<FitResult> FitBaseModel(const RigParams& base_start,
+                               const std::vector<FitParameter>& parameters, DiagnoseRun* run,
+                               Diagnosis* diagnosis) {
+  auto base_fit = FitParameters(run->fit_log, base_start, parameters, run->fit_options);
   if (!base_fit.ok()) return base_fit.status().Within("fitting the base model");
-  diagnosis.replays += base_fit->replays;
-  // The inputs' levels (EstimateInputLevels), at the fitted base parameters: at the start values
-  // a wrong leak or wave speed would pass for a level error (measured: a log whose leak differs
-  // 3 % from the default got its levels moved to their bound, the baseline error rose from 4.9 %
-  // to 6.8 % and pump_curve was named on an effect-free log). Then the base model is refitted on
-  // them; every candidate sees the same levels.
-  if (replay.reconstruct_inputs && replay.estimate_levels && !log.reconstruction.levels.applied()) {
-    auto levels = EstimateInputLevels(log, base_fit->params, simulation, replay);
+  diagnosis->replays += base_fit->replays;
+  if (run->replay.reconstruct_inputs && run->replay.estimate_levels &&
+      !run->log.reconstruction.levels.applied()) {
+    auto levels = EstimateInputLevels(run->log, base_fit->params, run->simulation, run->replay);
     if (!levels.ok()) return levels.status();
-    diagnosis.replays += 3;
+    diagnosis->replays += 3;
     if (levels->applied()) {
-      ApplyInputLevels(*levels, &log);
-      ApplyInputLevels(*levels, &replay);
-      fit_log = MeasuredLogUntil(log, diagnosis.fit_end_s);
-      fit_options.replay = replay;
-      auto refit = FitParameters(fit_log, base_fit->params, base_parameters, fit_options);
+      ApplyInputLevels(*levels, &run->log);
+      ApplyInputLevels(*levels, &run->replay);
+      run->fit_log = MeasuredLogUntil(run->log, run->fit_end_s);
+      run->fit_options.replay = run->replay;
+      auto refit = FitParameters(run->fit_log, base_fit->params, parameters, run->fit_options);
       if (!refit.ok()) return refit.status().Within("refitting the base model on the input levels");
-      diagnosis.replays += refit->replays;
+      diagnosis->replays += refit->replays;
       base_fit = std::move(refit);
     }
   }
-  SearchContext search;
-  search.fit_log = &fit_log;
+  return base_fit;
+}
+
+// Step 2 of diagnose.h: the base parameters fitted (after the wave-speed scan), given the
+// candidates' search too, and scored; diagnosis->baseline and its comparison filled in.
+Result<Baseline> FitBaseline(const RigParams& start, DiagnoseRun* run, Diagnosis* diagnosis) {
+  const DiagnoseOptions& options = run->options;
+  Baseline baseline;
+  for (const std::string& key : options.base_params) {
+    auto parameter = DefaultFitParameter(key);
+    if (!parameter.ok()) return parameter.status();
+    baseline.parameters.push_back(*parameter);
+  }
+  run->Report("baseline", 0.0);
+  const bool fits_wave_speed = std::find(options.base_params.begin(), options.base_params.end(),
+                                         "wave_speed_mps") != options.base_params.end();
+  const RigParams base_start =
+      fits_wave_speed ? ScanWaveSpeed(*run, start, &diagnosis->replays) : start;
+  auto base_fit = FitBaseModel(base_start, baseline.parameters, run, diagnosis);
+  if (!base_fit.ok()) return base_fit.status();
+  SearchContext& search = baseline.search;
+  search.fit_log = &run->fit_log;
   search.start = &start;
-  search.simulation = simulation;
-  search.fit_options = fit_options;
-  search.t_begin = t_begin;
-  search.t_end = diagnosis.fit_end_s;
+  search.simulation = run->simulation;
+  search.fit_options = run->fit_options;
+  search.t_begin = run->t_begin;
+  search.t_end = run->fit_end_s;
   search.fits_wave_speed = fits_wave_speed;
-  search.base_count = base_parameters.size();
+  search.base_count = baseline.parameters.size();
   // The baseline also gets the candidates' search (their scans and two starting points, without
   // an effect), and keeps whichever fits the fitting data better. Otherwise a candidate could win
   // by its search alone: a better base point found from its other start, credited to its effect.
   {
     int null_replays = 0;
-    auto second = SearchAndFit(search, base_fit->params, base_parameters, &null_replays);
-    diagnosis.replays += null_replays;
+    auto second = SearchAndFit(search, base_fit->params, baseline.parameters, &null_replays);
+    diagnosis->replays += null_replays;
     if (second.ok() && second->error_after < base_fit->error_after) {
       second->error_before = base_fit->error_before;
       base_fit = std::move(second);
     }
   }
-  auto base_traces = ReplayWithOwnLevels(measured, base_fit->params, simulation, options.replay,
-                                         &diagnosis.replays, &diagnosis.input_levels);
-  if (!base_traces.ok()) return base_traces.status();
-  const Scored base_score = Score(log, *base_traces, score_begin, t_end);
-  CandidateResult& baseline = diagnosis.baseline;
-  baseline.params = Named(*base_fit);
-  baseline.fit_error = base_fit->error_after;
-  baseline.error = base_score.error;
-  baseline.penalised_error = base_score.error;
-  baseline.channel_errors = base_score.channel_errors;
-  baseline.fitted = base_fit->params;
-  auto comparison = CompareTraces(log, *base_traces);
+  baseline.fit = std::move(base_fit).value();
+  auto traces = ReplayWithOwnLevels(run->measured, baseline.fit.params, run->simulation,
+                                    options.replay, &diagnosis->replays, &diagnosis->input_levels);
+  if (!traces.ok()) return traces.status();
+  baseline.traces = std::move(traces).value();
+  baseline.score = Score(run->log, baseline.traces, run->score_begin, run->t_end);
+  CandidateResult& result = diagnosis->baseline;
+  result.params = Named(baseline.fit);
+  result.fit_error = baseline.fit.error_after;
+  result.error = baseline.score.error;
+  result.penalised_error = baseline.score.error;
+  result.channel_errors = baseline.score.channel_errors;
+  result.fitted = baseline.fit.params;
+  auto comparison = CompareTraces(run->log, baseline.traces);
   if (!comparison.ok()) return comparison.status();
-  diagnosis.baseline_comparison = std::move(comparison).value();
+  diagnosis->baseline_comparison = std::move(comparison).value();
+  return baseline;
+}
 
-  // --- Candidates --------------------------------------------------------------------------------
-  // One independent task per candidate (each writes only its own slot), run by options.run_tasks:
-  // in turn here, in parallel when the caller (the command line) supplies threads.
-  std::vector<std::vector<FitParameter>> candidate_parameters(candidates.size(), base_parameters);
+// One candidate (step 3 of diagnose.h): its detectability at this log, then the effect switched
+// on in the fitted baseline and `parameters` (the base ones, then the effect's) searched and
+// fitted on a short budget, scored on the scoring data. Reads only shared state: candidates run
+// in parallel.
+void FitCandidate(const DiagnoseRun& run, const Baseline& baseline, const EffectInfo& info,
+                  const std::vector<FitParameter>& parameters, CandidateResult* candidate,
+                  int* replays) {
+  const std::size_t base_count = baseline.parameters.size();
+  candidate->effect = std::string(info.name);
+  candidate->explains = std::string(info.explains);
+  candidate->extra_params = static_cast<int>(parameters.size() - base_count);
+  candidate->error = candidate->penalised_error = std::numeric_limits<double>::infinity();
+  if (parameters.size() > base_count) {
+    const FitParameter& strength = parameters[base_count];
+    auto found = FindParamByKey(strength.key);
+    const double default_value =
+        found.ok() && found->effect_param != nullptr ? found->effect_param->default_value : 0.0;
+    EstimateDetectability(run.log, baseline.fit.params, baseline.traces, baseline.score.error,
+                          run.simulation, run.replay, strength, default_value, run.score_begin,
+                          run.t_end, candidate, replays);
+  }
+  RigParams params = baseline.fit.params;
+  params.effects.push_back({candidate->effect, {}});
+  SearchContext context = baseline.search;
+  context.fit_options.max_iterations = run.options.candidate_iterations;
+  auto fit = SearchAndFit(context, params, parameters, replays);
+  if (!fit.ok()) {
+    candidate->failure = fit.status().message();
+    return;
+  }
+  auto traces =
+      ReplayWithOwnLevels(run.measured, fit->params, run.simulation, run.options.replay, replays);
+  if (!traces.ok()) {
+    candidate->failure = traces.status().message();
+    return;
+  }
+  const Scored score = Score(run.log, *traces, run.score_begin, run.t_end);
+  candidate->params = Named(*fit);
+  candidate->fit_error = fit->error_after;
+  candidate->fitted = fit->params;
+  Assess(score, baseline.score, baseline.score.error, candidate);
+}
+
+// Best first by the penalised error; ties keep their order.
+void RankCandidates(std::vector<CandidateResult>* candidates) {
+  std::stable_sort(candidates->begin(), candidates->end(),
+                   [](const CandidateResult& a, const CandidateResult& b) {
+                     return a.penalised_error < b.penalised_error;
+                   });
+}
+
+// Every candidate fitted and scored (FitCandidate) as one independent task each (each writes
+// only its own slot), run by options.run_tasks: in turn here, in parallel when the caller (the
+// command line) supplies threads. Ranked into diagnosis->candidates.
+Status ScreenCandidates(const DiagnoseRun& run, const Baseline& baseline,
+                        const std::vector<const EffectInfo*>& candidates, Diagnosis* diagnosis) {
+  std::vector<std::vector<FitParameter>> candidate_parameters(candidates.size(),
+                                                              baseline.parameters);
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     for (const EffectParamInfo& param : candidates[i]->params) {
       if (!param.fitted) continue;
@@ -556,72 +658,34 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   std::vector<std::function<void()>> tasks;
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     tasks.push_back([&, i] {
-      const EffectInfo& info = *candidates[i];
-      CandidateResult& candidate = results[i];
-      candidate.effect = std::string(info.name);
-      candidate.explains = std::string(info.explains);
-      candidate.extra_params =
-          static_cast<int>(candidate_parameters[i].size() - base_parameters.size());
-      candidate.error = candidate.penalised_error = std::numeric_limits<double>::infinity();
-      if (candidate_parameters[i].size() > base_parameters.size()) {
-        const FitParameter& strength = candidate_parameters[i][base_parameters.size()];
-        double default_value = 0.0;
-        for (const EffectParamInfo& param : info.params) {
-          if (strength.key == candidate.effect + "." + std::string(param.key)) {
-            default_value = param.default_value;
-          }
-        }
-        EstimateDetectability(log, base_fit->params, *base_traces, baseline.error, simulation,
-                              replay, strength, default_value, score_begin, t_end, &candidate,
-                              &replays[i]);
-      }
-      RigParams params = base_fit->params;
-      params.effects.push_back({candidate.effect, {}});
-      FitOptions candidate_options = fit_options;
-      candidate_options.max_iterations = options.candidate_iterations;
-      SearchContext candidate_context = search;
-      candidate_context.fit_options = candidate_options;
-      auto fit = SearchAndFit(candidate_context, params, candidate_parameters[i], &replays[i]);
-      if (!fit.ok()) {
-        candidate.failure = fit.status().message();
-        return;
-      }
-      auto traces =
-          ReplayWithOwnLevels(measured, fit->params, simulation, options.replay, &replays[i]);
-      if (!traces.ok()) {
-        candidate.failure = traces.status().message();
-        return;
-      }
-      const Scored score = Score(log, *traces, score_begin, t_end);
-      candidate.params = Named(*fit);
-      candidate.fit_error = fit->error_after;
-      candidate.fitted = fit->params;
-      Assess(score, base_score, baseline.error, &candidate);
+      FitCandidate(run, baseline, *candidates[i], candidate_parameters[i], &results[i],
+                   &replays[i]);
     });
   }
-  report("candidates", 1.0);
-  if (options.run_tasks) {
-    options.run_tasks(tasks);
+  run.Report("candidates", 1.0);
+  if (run.options.run_tasks) {
+    run.options.run_tasks(tasks);
   } else {
     for (std::size_t i = 0; i < tasks.size(); ++i) {
-      report(candidates[i]->name, 1.0 + i);
+      run.Report(candidates[i]->name, 1.0 + i);
       tasks[i]();
     }
   }
   for (std::size_t i = 0; i < results.size(); ++i) {
-    diagnosis.replays += replays[i];
-    diagnosis.candidates.push_back(std::move(results[i]));
+    diagnosis->replays += replays[i];
+    diagnosis->candidates.push_back(std::move(results[i]));
   }
-  std::stable_sort(diagnosis.candidates.begin(), diagnosis.candidates.end(),
-                   [](const CandidateResult& a, const CandidateResult& b) {
-                     return a.penalised_error < b.penalised_error;
-                   });
-  // The candidates' fits ran on a short budget: the leading ones get the baseline's, and the
-  // ranking is redone. A polished fit is kept when it fits the fitting data better (never chosen
-  // by the scoring data, which must stay unseen).
-  report("polish", steps - 0.75);
-  for (std::size_t i = 0; i < std::min(kPolishedCandidates, diagnosis.candidates.size()); ++i) {
-    CandidateResult& candidate = diagnosis.candidates[i];
+  RankCandidates(&diagnosis->candidates);
+  return Status::Ok();
+}
+
+// The candidates' fits ran on a short budget: the leading ones get the baseline's, and the
+// ranking is redone. A polished fit is kept when it fits the fitting data better (never chosen
+// by the scoring data, which must stay unseen).
+void PolishLeaders(const DiagnoseRun& run, const Baseline& baseline, Diagnosis* diagnosis) {
+  run.Report("polish", run.steps - 0.75);
+  for (std::size_t i = 0; i < std::min(kPolishedCandidates, diagnosis->candidates.size()); ++i) {
+    CandidateResult& candidate = diagnosis->candidates[i];
     if (!candidate.failure.empty()) continue;
     std::vector<FitParameter> parameters;
     for (const NamedValue& value : candidate.params) {
@@ -631,58 +695,94 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
     // On the levels that suit this candidate (estimated at its fit), as the baseline was refitted
     // on its own: an effect that moves the mean pressure (gas entrainment's slower waves at low
     // pressure) is otherwise fitted on levels bent to the baseline's misfit.
-    FitOptions own_options = fit_options;
-    MeasuredLog own_fit_log = fit_log;
-    if (replay.reconstruct_inputs && replay.estimate_levels &&
-        !measured.reconstruction.levels.applied()) {
-      auto levels = EstimateInputLevels(measured, candidate.fitted, simulation, options.replay);
-      diagnosis.replays += 3;
+    FitOptions own_options = run.fit_options;
+    MeasuredLog own_fit_log = run.fit_log;
+    if (run.replay.reconstruct_inputs && run.replay.estimate_levels &&
+        !run.measured.reconstruction.levels.applied()) {
+      auto levels =
+          EstimateInputLevels(run.measured, candidate.fitted, run.simulation, run.options.replay);
+      diagnosis->replays += 3;
       if (levels.ok() && levels->applied()) {
-        MeasuredLog own_log = measured;
-        own_options.replay = options.replay;
+        MeasuredLog own_log = run.measured;
+        own_options.replay = run.options.replay;
         ApplyInputLevels(*levels, &own_log);
         ApplyInputLevels(*levels, &own_options.replay);
-        own_fit_log = MeasuredLogUntil(own_log, diagnosis.fit_end_s);
+        own_fit_log = MeasuredLogUntil(own_log, run.fit_end_s);
       }
     }
     auto polished = FitParameters(own_fit_log, candidate.fitted, parameters, own_options);
     if (!polished.ok()) continue;
-    diagnosis.replays += polished->replays;
+    diagnosis->replays += polished->replays;
     if (!(polished->error_after < candidate.fit_error)) continue;
-    auto traces = ReplayWithOwnLevels(measured, polished->params, simulation, options.replay,
-                                      &diagnosis.replays);
+    auto traces = ReplayWithOwnLevels(run.measured, polished->params, run.simulation,
+                                      run.options.replay, &diagnosis->replays);
     if (!traces.ok()) continue;
     candidate.params = Named(*polished);
     candidate.fit_error = polished->error_after;
     candidate.fitted = polished->params;
-    Assess(Score(log, *traces, score_begin, t_end), base_score, baseline.error, &candidate);
+    Assess(Score(run.log, *traces, run.score_begin, run.t_end), baseline.score,
+           baseline.score.error, &candidate);
   }
-  std::stable_sort(diagnosis.candidates.begin(), diagnosis.candidates.end(),
-                   [](const CandidateResult& a, const CandidateResult& b) {
-                     return a.penalised_error < b.penalised_error;
-                   });
-  if (!diagnosis.candidates.empty() && diagnosis.candidates.front().significant) {
-    const CandidateResult& winner = diagnosis.candidates.front();
-    // Others as good as the winner: significant, and the winner's lead over them below what
-    // would count as significant over the baseline.
-    for (std::size_t i = 1; i < diagnosis.candidates.size(); ++i) {
-      const CandidateResult& other = diagnosis.candidates[i];
-      if (other.significant && other.penalised_error - winner.penalised_error <
-                                   kMinRelativeImprovement * baseline.error) {
-        diagnosis.equivalent.push_back(other.effect);
-      }
-    }
-    diagnosis.verdict = winner.effect;
-    report("compare", steps - 0.5);
-    auto traces = ReplayWithOwnLevels(measured, winner.fitted, simulation, options.replay,
-                                      &diagnosis.replays);
-    if (traces.ok()) {
-      auto winner_comparison = CompareTraces(log, *traces);
-      if (winner_comparison.ok())
-        diagnosis.winner_comparison = std::move(winner_comparison).value();
+  RankCandidates(&diagnosis->candidates);
+}
+
+// The verdict (step 4 of diagnose.h): the leading candidate if it is significant, the others as
+// good as it, and its model compared over the whole log.
+void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis) {
+  if (diagnosis->candidates.empty() || !diagnosis->candidates.front().significant) return;
+  const CandidateResult& winner = diagnosis->candidates.front();
+  // Others as good as the winner: significant, and the winner's lead over them below what
+  // would count as significant over the baseline.
+  for (std::size_t i = 1; i < diagnosis->candidates.size(); ++i) {
+    const CandidateResult& other = diagnosis->candidates[i];
+    if (other.significant && other.penalised_error - winner.penalised_error <
+                                 kMinRelativeImprovement * diagnosis->baseline.error) {
+      diagnosis->equivalent.push_back(other.effect);
     }
   }
-  report("done", steps);
+  diagnosis->verdict = winner.effect;
+  run.Report("compare", run.steps - 0.5);
+  auto traces = ReplayWithOwnLevels(run.measured, winner.fitted, run.simulation, run.options.replay,
+                                    &diagnosis->replays);
+  if (!traces.ok()) return;
+  auto comparison = CompareTraces(run.log, *traces);
+  if (comparison.ok()) diagnosis->winner_comparison = std::move(comparison).value();
+}
+
+}  // namespace
+
+Status DiagnoseOptions::Validate() const {
+  if (!(fit_fraction > 0.1 && fit_fraction < 0.95)) {
+    return Status::Error("fit fraction must be in (0.1, 0.95)");
+  }
+  if (baseline_only) return Status::Ok();  // the candidates are not tried
+  for (const std::string& name : candidates) {
+    if (FindEffectInfo(name) == nullptr) {
+      return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
+    }
+  }
+  return Status::Ok();
+}
+
+Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
+                           const DiagnoseOptions& options) {
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  if (!start.effects.empty()) {
+    return Status::Error(
+        "diagnose starts from the base model: remove the effects from the configuration (it "
+        "tries each of them itself)");
+  }
+  const std::vector<const EffectInfo*> candidates = CandidateEffects(options);
+  Diagnosis diagnosis;
+  DiagnoseRun run = SplitLog(measured, options, candidates.size(), &diagnosis);
+  if (run.fit_log.time_s().size() < 4) return Status::Error("too few samples to fit on");
+
+  auto baseline = FitBaseline(start, &run, &diagnosis);
+  if (!baseline.ok()) return baseline.status();
+  MPDRIG_RETURN_IF_ERROR(ScreenCandidates(run, *baseline, candidates, &diagnosis));
+  PolishLeaders(run, *baseline, &diagnosis);
+  DecideVerdict(run, &diagnosis);
+  run.Report("done", run.steps);
   return diagnosis;
 }
 

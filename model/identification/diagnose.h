@@ -93,6 +93,10 @@ struct DiagnoseOptions {
   // "baseline", "<effect>", "compare"; fraction of the whole diagnosis done.
   std::function<void(std::string_view stage, double fraction)> progress;
   bool solver_log = false;  // FitOptions::solver_log for every fit
+
+  // fit_fraction in (0.1, 0.95), and every name of `candidates` an effect of the catalogue
+  // (unless baseline_only); else an error that says which.
+  [[nodiscard]] Status Validate() const;
 };
 
 inline constexpr int kDiagnoseCells = 50;

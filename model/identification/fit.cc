@@ -20,12 +20,14 @@
 #include <cmath>
 #include <cstdlib>
 #include <deque>
+#include <optional>
 #include <sstream>
 
 #include <ceres/ceres.h>
 #include <Eigen/Dense>
 
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 #include "model/signal/input_reconstruction.h"
 
 namespace mpdrig {
@@ -37,47 +39,6 @@ constexpr double kSingularRatio = 1.0e-12;
 // A parameter whose difference step changes the residual vector by less than this share of its
 // norm has no influence (bit-identical replays give 0; round-off alone stays far below).
 constexpr double kNoInfluence = 1.0e-9;
-
-// Splits "EFFECT.KEY"; nullopt-like empty effect name when there is no dot.
-std::pair<std::string_view, std::string_view> SplitEffectKey(std::string_view key) {
-  const std::size_t dot = key.find('.');
-  if (dot == std::string_view::npos) return {{}, key};
-  return {key.substr(0, dot), key.substr(dot + 1)};
-}
-
-std::string BaseKeys() {
-  std::string keys;
-  for (const ParamInfo& info : ParamTable()) {
-    if (!keys.empty()) keys += ", ";
-    keys += info.key;
-  }
-  return keys;
-}
-
-std::string EffectKeys(const EffectInfo& info) {
-  std::string keys;
-  for (const EffectParamInfo& param : info.params) {
-    if (!keys.empty()) keys += ", ";
-    keys += std::string(info.name) + "." + std::string(param.key);
-  }
-  return keys;
-}
-
-// The effect's info and parameter info for "EFFECT.KEY", or an error listing the valid ones.
-Result<std::pair<const EffectInfo*, const EffectParamInfo*>> FindEffectParam(std::string_view key) {
-  const auto [effect_name, param_key] = SplitEffectKey(key);
-  const EffectInfo* info = FindEffectInfo(effect_name);
-  if (info == nullptr) {
-    return Status::Error("unknown effect '" + std::string(effect_name) + "' in '" +
-                         std::string(key) + "'; effects: " + EffectNames());
-  }
-  const EffectParamInfo* param = info->FindParam(param_key);
-  if (param == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) +
-                         "'; valid keys: " + EffectKeys(*info));
-  }
-  return std::make_pair(info, param);
-}
 
 // One compared channel's samples inside the window and its normalisation.
 struct WindowChannel {
@@ -328,108 +289,24 @@ class ProgressCallback final : public ceres::IterationCallback {
   const std::function<void(int, double)>& progress_;
 };
 
-}  // namespace
+// --- FitParameters's steps ------------------------------------------------------------------
 
-Result<FitParameter> DefaultFitParameter(std::string_view key) {
-  if (key.find('.') != std::string_view::npos) {
-    auto found = FindEffectParam(key);
-    if (!found.ok()) return found.status();
-    const EffectParamInfo& param = *found->second;
-    return FitParameter{std::string(key), param.min_value, param.max_value};
-  }
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
-                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
-  }
-  double lower = info->fit_min, upper = info->fit_max;
-  if (!(info->fit_min < info->fit_max)) {
-    lower = info->min_value, upper = info->max_value;
-    // A factor of 3 either way around the thesis value (the sign kept), or the table's bounds.
-    const double value = RigParams{}.*(info->member);
-    if (value != 0.0) {
-      lower = value > 0.0 ? value / 3.0 : value * 3.0;
-      upper = value > 0.0 ? value * 3.0 : value / 3.0;
-    }
-  }
-  lower = std::max(lower, info->min_value);
-  upper = std::min(upper, info->max_value);
-  return FitParameter{std::string(key), lower, upper};
-}
+// The parameters as the solver sees them: z = x / scale, with the bounds in the same form.
+struct ScaledParameters {
+  std::vector<double> scale, z, lower, upper;
+  std::size_t size() const { return z.size(); }
+};
 
-Result<double> GetParamValue(const RigParams& params, std::string_view key) {
-  if (key.find('.') != std::string_view::npos) {
-    auto found = FindEffectParam(key);
-    if (!found.ok()) return found.status();
-    const auto [effect_name, param_key] = SplitEffectKey(key);
-    const EffectSetting* setting = params.FindEffect(effect_name);
-    if (setting == nullptr) {
-      return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on");
-    }
-    const double* value = setting->Find(param_key);
-    return value != nullptr ? *value : found->second->default_value;
-  }
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
-                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
-  }
-  return params.*(info->member);
-}
-
-Status SetParamValue(RigParams* params, std::string_view key, double value) {
-  if (!std::isfinite(value)) {
-    return Status::Error(std::string(key) + ": value must be finite");
-  }
-  if (key.find('.') != std::string_view::npos) {
-    auto found = FindEffectParam(key);
-    if (!found.ok()) return found.status();
-    const EffectParamInfo& param = *found->second;
-    const auto [effect_name, param_key] = SplitEffectKey(key);
-    EffectSetting* setting = params->FindEffect(effect_name);
-    if (setting == nullptr) {
-      return Status::Error(std::string(key) + ": effect '" + std::string(effect_name) +
-                           "' is not switched on");
-    }
-    MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, param.unit, param.min_value, param.max_value));
-    for (auto& [name, existing] : setting->values) {
-      if (name == param_key) {
-        existing = value;
-        return Status::Ok();
-      }
-    }
-    setting->values.emplace_back(std::string(param_key), value);
-    return Status::Ok();
-  }
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + BaseKeys() +
-                         ", or EFFECT.KEY of an effect (`mpdrig effects`)");
-  }
-  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
-  params->*(info->member) = value;
-  return Status::Ok();
-}
-
-Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
-                                const std::vector<FitParameter>& parameters,
-                                const FitOptions& options) {
-  if (parameters.empty()) return Status::Error("no parameter to fit");
-  if (!(options.window_begin_s < options.window_end_s)) {
-    return Status::Error("fit window is empty: begin must be before end");
-  }
-  if (options.max_iterations < 0) return Status::Error("max_iterations must be >= 0");
-  if (!(options.relative_step > 0.0 && options.relative_step < 0.1)) {
-    return Status::Error("relative_step must be in (0, 0.1)");
-  }
-  MPDRIG_RETURN_IF_ERROR(options.simulation.Validate());
-  MPDRIG_RETURN_IF_ERROR(ValidateEffects(start));
-
+// Checks each parameter (given once, known, bounds finite, ordered and settable) and scales it:
+// its value in `start` clamped into the bounds is written into result->params (which starts as
+// `start`) and result->initial, its key into result->keys. The scale is |initial|, or the bound
+// range when the start is 0.
+Result<ScaledParameters> ScaleParameters(const RigParams& start,
+                                         const std::vector<FitParameter>& parameters,
+                                         FitResult* result) {
   const std::size_t p = parameters.size();
-  FitResult result;
-  result.params = start;
-  std::vector<double> scales(p), z(p), lower_z(p), upper_z(p);
+  ScaledParameters x{std::vector<double>(p), std::vector<double>(p), std::vector<double>(p),
+                     std::vector<double>(p)};
   for (std::size_t j = 0; j < p; ++j) {
     const FitParameter& parameter = parameters[j];
     for (std::size_t k = 0; k < j; ++k) {
@@ -447,74 +324,49 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
       return Status::Error(out.str());
     }
     // The bounds must be settable: inside the parameter tables' bounds.
-    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, parameter.lower));
-    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, parameter.upper));
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result->params, parameter.key, parameter.lower));
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result->params, parameter.key, parameter.upper));
     const double initial = std::clamp(*value, parameter.lower, parameter.upper);
-    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, parameter.key, initial));
-    result.keys.push_back(parameter.key);
-    result.initial.push_back(initial);
-    scales[j] = initial != 0.0 ? std::abs(initial) : parameter.upper - parameter.lower;
-    z[j] = initial / scales[j];
-    lower_z[j] = parameter.lower / scales[j];
-    upper_z[j] = parameter.upper / scales[j];
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&result->params, parameter.key, initial));
+    result->keys.push_back(parameter.key);
+    result->initial.push_back(initial);
+    x.scale[j] = initial != 0.0 ? std::abs(initial) : parameter.upper - parameter.lower;
+    x.z[j] = initial / x.scale[j];
+    x.lower[j] = parameter.lower / x.scale[j];
+    x.upper[j] = parameter.upper / x.scale[j];
   }
+  return x;
+}
 
-  std::vector<WindowChannel> channels =
-      WindowChannels(log, options.window_begin_s, options.window_end_s, options.weighting);
-  if (channels.empty()) {
-    return Status::Error("no measured channel varies inside the fit window: nothing to fit");
-  }
-  ReplayResiduals residuals(log, result.params, result.keys, scales, options, std::move(channels));
-  const int m = residuals.residual_count();
-  if (m <= static_cast<int>(p)) {
-    return Status::Error("the fit window has " + std::to_string(m) + " measured samples for " +
-                         std::to_string(p) + " parameters");
-  }
-
-  std::vector<double> r0(m);
-  if (!residuals.Evaluate(z.data(), r0.data())) {
-    return Status::Error("the model fails at the start values: " + residuals.last_failure());
-  }
-  result.error_before = residuals.Error(r0.data());
-
-  // A parameter that does not move the residuals at the start is held there and reported so
-  // (`held`), rather than returned as if it had been estimated. E.g. the choke leak is the floor
-  // of the choke characteristic (G = max(G_table, leak), 9.4): with the choke open it changes
-  // nothing, and its estimate would only be its start value. Holding it also keeps the
-  // Levenberg-Marquardt step away from a zero Jacobian column, which only Ceres's tiny minimum
-  // diagonal regularises. The probes use ReplayCost's forward steps, so Ceres's first Jacobian
-  // finds them in the cache.
-  result.held.assign(p, false);
-  {
-    const double reference = Eigen::Map<const Eigen::VectorXd>(r0.data(), m).norm();
-    std::vector<double> shifted = z, probe(m);
-    for (std::size_t j = 0; j < p; ++j) {
-      shifted[j] = z[j] + Step(options.relative_step, z[j], lower_z[j], upper_z[j]);
-      if (residuals.Evaluate(shifted.data(), probe.data())) {
-        double change = 0.0;
-        for (int i = 0; i < m; ++i) change += (probe[i] - r0[i]) * (probe[i] - r0[i]);
-        result.held[j] = std::sqrt(change) <= kNoInfluence * reference;
-      }
-      shifted[j] = z[j];
+// Which parameters to hold: those whose difference step at the start moves the residuals `r0`
+// by less than kNoInfluence of their norm. Such a parameter is held at its start value and
+// reported so (FitResult::held), rather than returned as if it had been estimated. E.g. the
+// choke leak is the floor of the choke characteristic (G = max(G_table, leak), 9.4): with the
+// choke open it changes nothing, and its estimate would only be its start value. Holding it also
+// keeps the Levenberg-Marquardt step away from a zero Jacobian column, which only Ceres's tiny
+// minimum diagonal regularises. The probes use ReplayCost's forward steps, so Ceres's first
+// Jacobian finds them in the cache.
+std::vector<bool> HeldParameters(ReplayResiduals* residuals, const ScaledParameters& x,
+                                 const std::vector<double>& r0, double relative_step) {
+  const std::size_t p = x.size();
+  const int m = static_cast<int>(r0.size());
+  std::vector<bool> held(p, false);
+  const double reference = Eigen::Map<const Eigen::VectorXd>(r0.data(), m).norm();
+  std::vector<double> shifted = x.z, probe(m);
+  for (std::size_t j = 0; j < p; ++j) {
+    shifted[j] = x.z[j] + Step(relative_step, x.z[j], x.lower[j], x.upper[j]);
+    if (residuals->Evaluate(shifted.data(), probe.data())) {
+      double change = 0.0;
+      for (int i = 0; i < m; ++i) change += (probe[i] - r0[i]) * (probe[i] - r0[i]);
+      held[j] = std::sqrt(change) <= kNoInfluence * reference;
     }
+    shifted[j] = x.z[j];
   }
-  std::vector<int> held_indices;
-  for (std::size_t j = 0; j < p; ++j) {
-    if (result.held[j]) held_indices.push_back(static_cast<int>(j));
-  }
+  return held;
+}
 
-  // Ceres owns the cost function (default ownership) and reads/writes z in place.
-  ceres::Problem problem;
-  problem.AddResidualBlock(new ReplayCost(&residuals, lower_z, upper_z, options.relative_step,
-                                          options.central_differences),
-                           nullptr, z.data());
-  if (!held_indices.empty() && held_indices.size() < p) {
-    problem.SetManifold(z.data(), new ceres::SubsetManifold(static_cast<int>(p), held_indices));
-  }
-  for (std::size_t j = 0; j < p; ++j) {
-    problem.SetParameterLowerBound(z.data(), static_cast<int>(j), lower_z[j]);
-    problem.SetParameterUpperBound(z.data(), static_cast<int>(j), upper_z[j]);
-  }
+// Trust region, Levenberg-Marquardt, dense QR, one thread, silent unless options.solver_log.
+ceres::Solver::Options SolverOptions(const FitOptions& options) {
   ceres::Solver::Options solver;
   solver.minimizer_type = ceres::TRUST_REGION;
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -532,94 +384,199 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
   solver.num_threads = 1;
   solver.logging_type = options.solver_log ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
   solver.minimizer_progress_to_stdout = options.solver_log;
-  ProgressCallback callback(residuals, options.progress);
+  return solver;
+}
+
+// Runs Ceres from x->z, which it moves in place, with the parameters of result->held fixed at
+// their start; the solver's report, iterations and convergence into *result. Where every
+// parameter is held there is nothing to solve.
+Status RunSolver(ReplayResiduals* residuals, const FitOptions& options, ScaledParameters* x,
+                 FitResult* result) {
+  const std::size_t p = x->size();
+  std::vector<int> held_indices;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (result->held[j]) held_indices.push_back(static_cast<int>(j));
+  }
+  // Ceres owns the cost function (default ownership) and reads/writes z in place.
+  ceres::Problem problem;
+  problem.AddResidualBlock(new ReplayCost(residuals, x->lower, x->upper, options.relative_step,
+                                          options.central_differences),
+                           nullptr, x->z.data());
+  if (!held_indices.empty() && held_indices.size() < p) {
+    problem.SetManifold(x->z.data(), new ceres::SubsetManifold(static_cast<int>(p), held_indices));
+  }
+  for (std::size_t j = 0; j < p; ++j) {
+    problem.SetParameterLowerBound(x->z.data(), static_cast<int>(j), x->lower[j]);
+    problem.SetParameterUpperBound(x->z.data(), static_cast<int>(j), x->upper[j]);
+  }
+  ceres::Solver::Options solver = SolverOptions(options);
+  ProgressCallback callback(*residuals, options.progress);
   solver.callbacks.push_back(&callback);
   std::string options_error;
   if (!solver.IsValid(&options_error)) return Status::Error("solver options: " + options_error);
   ceres::Solver::Summary summary;
   if (held_indices.size() < p) {
     ceres::Solve(solver, &problem, &summary);
-    result.solver_report = summary.BriefReport();
+    result->solver_report = summary.BriefReport();
   } else {
     summary.termination_type = ceres::CONVERGENCE;
-    result.solver_report = "no parameter moves the residuals: all held at their start values";
+    result->solver_report = "no parameter moves the residuals: all held at their start values";
   }
   if (summary.termination_type == ceres::FAILURE) {
     return Status::Error("the solver failed: " + summary.message +
-                         (residuals.last_failure().empty()
+                         (residuals->last_failure().empty()
                               ? std::string()
-                              : " (last model failure: " + residuals.last_failure() + ")"));
+                              : " (last model failure: " + residuals->last_failure() + ")"));
   }
-  result.iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
-  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result->iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  result->converged = summary.termination_type == ceres::CONVERGENCE;
+  return Status::Ok();
+}
+
+// The central-difference Jacobian of the residuals at x.z (scaled parameters; one-sided where
+// a bound is within the step), or nullopt where a replay fails.
+std::optional<Eigen::MatrixXd> CentralJacobian(ReplayResiduals* residuals,
+                                               const ScaledParameters& x, double relative_step) {
+  const std::size_t p = x.size();
+  const int m = residuals->residual_count();
+  Eigen::MatrixXd jacobian(m, p);
+  std::vector<double> plus(m), minus(m);
+  for (std::size_t j = 0; j < p; ++j) {
+    const double h = std::abs(Step(relative_step, x.z[j], x.lower[j], x.upper[j]));
+    std::vector<double> z_plus = x.z, z_minus = x.z;
+    z_plus[j] = std::min(x.z[j] + h, x.upper[j]);
+    z_minus[j] = std::max(x.z[j] - h, x.lower[j]);
+    if (!residuals->Evaluate(z_plus.data(), plus.data()) ||
+        !residuals->Evaluate(z_minus.data(), minus.data())) {
+      return std::nullopt;
+    }
+    const double width = z_plus[j] - z_minus[j];
+    for (int i = 0; i < m; ++i) jacobian(i, j) = (plus[i] - minus[i]) / width;
+  }
+  return jacobian;
+}
+
+// Standard errors and correlations from the Jacobian at the optimum (scaled parameters) and the
+// residuals r there: cov_z = s^2 (J^T J)^-1, s^2 = ||r||^2 / (m - p); cov_x = S cov_z S,
+// S = diag(scales). A parameter in a null direction of J^T J keeps NaN.
+void StandardErrors(const Eigen::MatrixXd& jacobian, const std::vector<double>& r,
+                    const std::vector<double>& scales, FitResult* result) {
+  const std::size_t p = scales.size();
+  const int m = static_cast<int>(r.size());
+  const double s2 = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm() /
+                    static_cast<double>(m - static_cast<int>(p));
+  const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
+  // Column scaling to unit diagonal, so the condition test sees the shape, not the units.
+  Eigen::VectorXd d = jtj.diagonal().cwiseSqrt();
+  std::vector<bool> identifiable(p, true);
+  for (std::size_t j = 0; j < p; ++j) identifiable[j] = d(j) > 0.0;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (!identifiable[j]) d(j) = 1.0;
+  }
+  const Eigen::MatrixXd normalised = d.asDiagonal().inverse() * jtj * d.asDiagonal().inverse();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalised);
+  const Eigen::VectorXd& values = eigen.eigenvalues();
+  const double largest = values.maxCoeff();
+  Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
+  for (std::size_t k = 0; k < p; ++k) {
+    const Eigen::VectorXd v = eigen.eigenvectors().col(k);
+    if (values(k) > kSingularRatio * largest) {
+      inverse += v * v.transpose() / values(k);
+    } else {
+      // A null direction: every parameter it involves is not identifiable on its own.
+      for (std::size_t j = 0; j < p; ++j) {
+        if (std::abs(v(j)) > 1.0e-3) identifiable[j] = false;
+      }
+    }
+  }
+  const Eigen::MatrixXd cov_z = s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
+  for (std::size_t i = 0; i < p; ++i) {
+    if (!identifiable[i]) continue;
+    result->standard_errors[i] = std::sqrt(cov_z(i, i)) * scales[i];
+    for (std::size_t j = 0; j < p; ++j) {
+      if (i == j || !identifiable[j]) continue;
+      result->correlation[i][j] = cov_z(i, j) / std::sqrt(cov_z(i, i) * cov_z(j, j));
+    }
+  }
+}
+
+// Covariance from the central-difference Jacobian at the optimum x.z, residuals r there: the
+// standard errors and correlations into *result, NaN where the Jacobian's replays fail.
+void EstimateCovariance(ReplayResiduals* residuals, const ScaledParameters& x,
+                        const std::vector<double>& r, double relative_step, FitResult* result) {
+  const std::size_t p = x.size();
+  const std::optional<Eigen::MatrixXd> jacobian = CentralJacobian(residuals, x, relative_step);
+  result->standard_errors.assign(p, kNaN);
+  result->correlation.assign(p, std::vector<double>(p, kNaN));
+  for (std::size_t j = 0; j < p; ++j) result->correlation[j][j] = 1.0;
+  if (jacobian) StandardErrors(*jacobian, r, x.scale, result);
+}
+
+}  // namespace
+
+Status FitOptions::Validate() const {
+  if (!(window_begin_s < window_end_s)) {
+    return Status::Error("fit window is empty: begin must be before end");
+  }
+  if (max_iterations < 0) return Status::Error("max_iterations must be >= 0");
+  if (!(relative_step > 0.0 && relative_step < 0.1)) {
+    return Status::Error("relative_step must be in (0, 0.1)");
+  }
+  return simulation.Validate();
+}
+
+Result<FitParameter> DefaultFitParameter(std::string_view key) {
+  auto found = FindParamByKey(key);
+  if (!found.ok()) return found.status();
+  return FitParameter{std::string(key), found->fit_min, found->fit_max};
+}
+
+Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
+                                const std::vector<FitParameter>& parameters,
+                                const FitOptions& options) {
+  if (parameters.empty()) return Status::Error("no parameter to fit");
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  MPDRIG_RETURN_IF_ERROR(ValidateEffects(start));
+
+  FitResult result;
+  result.params = start;
+  auto scaled = ScaleParameters(start, parameters, &result);
+  if (!scaled.ok()) return scaled.status();
+  ScaledParameters& x = *scaled;
+  const std::size_t p = x.size();
+
+  std::vector<WindowChannel> channels =
+      WindowChannels(log, options.window_begin_s, options.window_end_s, options.weighting);
+  if (channels.empty()) {
+    return Status::Error("no measured channel varies inside the fit window: nothing to fit");
+  }
+  ReplayResiduals residuals(log, result.params, result.keys, x.scale, options, std::move(channels));
+  const int m = residuals.residual_count();
+  if (m <= static_cast<int>(p)) {
+    return Status::Error("the fit window has " + std::to_string(m) + " measured samples for " +
+                         std::to_string(p) + " parameters");
+  }
+  std::vector<double> r0(m);
+  if (!residuals.Evaluate(x.z.data(), r0.data())) {
+    return Status::Error("the model fails at the start values: " + residuals.last_failure());
+  }
+  result.error_before = residuals.Error(r0.data());
+
+  result.held = HeldParameters(&residuals, x, r0, options.relative_step);
+  MPDRIG_RETURN_IF_ERROR(RunSolver(&residuals, options, &x, &result));
 
   std::vector<double> r(m);
-  if (!residuals.Evaluate(z.data(), r.data())) {
+  if (!residuals.Evaluate(x.z.data(), r.data())) {
     return Status::Error("the model fails at the estimate: " + residuals.last_failure());
   }
   result.error_after = residuals.Error(r.data());
   for (std::size_t j = 0; j < p; ++j) {
-    const double estimate = std::clamp(z[j] * scales[j], parameters[j].lower, parameters[j].upper);
+    const double estimate =
+        std::clamp(x.z[j] * x.scale[j], parameters[j].lower, parameters[j].upper);
     result.estimates.push_back(estimate);
     MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, result.keys[j], estimate));
   }
-
-  // Covariance from the central-difference Jacobian at the optimum (scaled parameters):
-  // cov_z = s^2 (J^T J)^-1, s^2 = ||r||^2 / (m - p); cov_x = S cov_z S, S = diag(scales).
-  Eigen::MatrixXd jacobian(m, p);
-  bool jacobian_ok = true;
-  std::vector<double> plus(m), minus(m);
-  for (std::size_t j = 0; j < p && jacobian_ok; ++j) {
-    double h = std::abs(Step(options.relative_step, z[j], lower_z[j], upper_z[j]));
-    std::vector<double> z_plus = z, z_minus = z;
-    z_plus[j] = std::min(z[j] + h, upper_z[j]);
-    z_minus[j] = std::max(z[j] - h, lower_z[j]);
-    jacobian_ok = residuals.Evaluate(z_plus.data(), plus.data()) &&
-                  residuals.Evaluate(z_minus.data(), minus.data());
-    const double width = z_plus[j] - z_minus[j];
-    for (int i = 0; i < m && jacobian_ok; ++i) jacobian(i, j) = (plus[i] - minus[i]) / width;
-  }
-  result.standard_errors.assign(p, kNaN);
-  result.correlation.assign(p, std::vector<double>(p, kNaN));
-  for (std::size_t j = 0; j < p; ++j) result.correlation[j][j] = 1.0;
-  if (jacobian_ok) {
-    const double s2 = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm() /
-                      static_cast<double>(m - static_cast<int>(p));
-    const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
-    // Column scaling to unit diagonal, so the condition test sees the shape, not the units.
-    Eigen::VectorXd d = jtj.diagonal().cwiseSqrt();
-    std::vector<bool> identifiable(p, true);
-    for (std::size_t j = 0; j < p; ++j) identifiable[j] = d(j) > 0.0;
-    for (std::size_t j = 0; j < p; ++j) {
-      if (!identifiable[j]) d(j) = 1.0;
-    }
-    const Eigen::MatrixXd normalised = d.asDiagonal().inverse() * jtj * d.asDiagonal().inverse();
-    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalised);
-    const Eigen::VectorXd& values = eigen.eigenvalues();
-    const double largest = values.maxCoeff();
-    Eigen::MatrixXd inverse = Eigen::MatrixXd::Zero(p, p);
-    for (std::size_t k = 0; k < p; ++k) {
-      const Eigen::VectorXd v = eigen.eigenvectors().col(k);
-      if (values(k) > kSingularRatio * largest) {
-        inverse += v * v.transpose() / values(k);
-      } else {
-        // A null direction: every parameter it involves is not identifiable on its own.
-        for (std::size_t j = 0; j < p; ++j) {
-          if (std::abs(v(j)) > 1.0e-3) identifiable[j] = false;
-        }
-      }
-    }
-    const Eigen::MatrixXd cov_z =
-        s2 * d.asDiagonal().inverse() * inverse * d.asDiagonal().inverse();
-    for (std::size_t i = 0; i < p; ++i) {
-      if (!identifiable[i]) continue;
-      result.standard_errors[i] = std::sqrt(cov_z(i, i)) * scales[i];
-      for (std::size_t j = 0; j < p; ++j) {
-        if (i == j || !identifiable[j]) continue;
-        result.correlation[i][j] = cov_z(i, j) / std::sqrt(cov_z(i, i) * cov_z(j, j));
-      }
-    }
-  }
+  EstimateCovariance(&residuals, x, r, options.relative_step, &result);
   result.replays = residuals.replays();
   return result;
 }

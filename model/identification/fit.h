@@ -38,14 +38,12 @@ struct FitParameter {
   double upper = 0.0;
 };
 
-// The parameter `key` with search bounds: the effect registry's bounds for an effect parameter;
-// for a base parameter a plausible tuning range around the thesis value (e.g. wave speed
-// 300..1500 m/s, f1 0..5 1/s, choke leak 0..1e-5 m^2), never wider than ParamTable()'s bounds.
+// The parameter `key` with search bounds (FindParamByKey's fit range, model/effects/
+// param_by_key.h): the effect registry's bounds for an effect parameter; for a base parameter a
+// plausible tuning range around the thesis value (e.g. wave speed 300..1500 m/s, f1 0..5 1/s,
+// choke leak 0..1e-5 m^2), never wider than ParamTable()'s bounds. Values in a RigParams are
+// read and set by key with GetParamValue and SetParamValue (param_by_key.h).
 Result<FitParameter> DefaultFitParameter(std::string_view key);
-// The value of `key` in `params` (base or "EFFECT.KEY", effect default if not set).
-Result<double> GetParamValue(const RigParams& params, std::string_view key);
-// Sets `key` in `params` (SetParam semantics, numbers not text).
-Status SetParamValue(RigParams* params, std::string_view key, double value);
 
 // How the channels weigh in the cost.
 enum class ChannelWeighting {
@@ -81,6 +79,10 @@ struct FitOptions {
   // see why a fit stops. The command line sets it from MPDRIG_CERES_LOG; the model reads no
   // environment.
   bool solver_log = false;
+
+  // The window is not empty, max_iterations >= 0, relative_step in (0, 0.1), the simulation
+  // options valid; else an error that says which.
+  [[nodiscard]] Status Validate() const;
 };
 
 struct FitResult {

@@ -100,26 +100,33 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
 
 }  // namespace
 
-Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
+Status SyntheticLogOptions::Validate() const {
   // Upper bounds: the log, its noise-free twin and the replay grid are held in memory, so an
   // absurd duration or rate would run out of memory or time instead of failing.
-  if (!(options.duration_s >= 10.0 && options.duration_s <= kMaxSyntheticDurationS) ||
-      !(options.rate_hz >= 10.0 && options.rate_hz <= kMaxSyntheticRateHz)) {
+  if (!(duration_s >= 10.0 && duration_s <= kMaxSyntheticDurationS) ||
+      !(rate_hz >= 10.0 && rate_hz <= kMaxSyntheticRateHz)) {
     std::ostringstream out;
-    out << "synthetic log: duration " << options.duration_s << " s must be in [10, "
-        << kMaxSyntheticDurationS << "] s and rate " << options.rate_hz << " Hz in [10, "
+    out << "synthetic log: duration " << duration_s << " s must be in [10, "
+        << kMaxSyntheticDurationS << "] s and rate " << rate_hz << " Hz in [10, "
         << kMaxSyntheticRateHz << "] Hz";
     return Status::Error(out.str());
   }
-  if (options.duration_s * options.rate_hz > kMaxSyntheticSamples) {
+  if (duration_s * rate_hz > kMaxSyntheticSamples) {
     std::ostringstream out;
-    out << "synthetic log: duration x rate = " << options.duration_s * options.rate_hz
-        << " samples, at most " << kMaxSyntheticSamples << " (held in memory)";
+    out << "synthetic log: duration x rate = " << duration_s * rate_hz << " samples, at most "
+        << kMaxSyntheticSamples << " (held in memory)";
     return Status::Error(out.str());
   }
-  if (options.sensor_noise) {
-    MPDRIG_RETURN_IF_ERROR(options.sensor_noise->Validate().Within("synthetic log"));
+  if (sensor_noise) MPDRIG_RETURN_IF_ERROR(sensor_noise->Validate().Within("synthetic log"));
+  if (hidden_effect && FindEffectInfo(*hidden_effect) == nullptr) {
+    return Status::Error("unknown effect '" + *hidden_effect +
+                         "'; valid effects: " + EffectNames());
   }
+  return Status::Ok();
+}
+
+Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
   Random random(options.seed);
   // The effect's strength comes from a stream of its own, so a seed gives the same base
   // parameters, excitation and noise with and without the hidden effect.
@@ -132,10 +139,6 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   // Hidden effect.
   if (options.hidden_effect) {
     const EffectInfo* info = FindEffectInfo(*options.hidden_effect);
-    if (info == nullptr) {
-      return Status::Error("unknown effect '" + *options.hidden_effect +
-                           "'; valid effects: " + EffectNames());
-    }
     EffectSetting setting{std::string(info->name), {}};
     description << info->name;
     for (const EffectParamInfo& param : info->params) {

@@ -54,6 +54,10 @@ struct SyntheticLogOptions {
   double piston_noise_m = 2.0e-5;
   double choke_noise_deg = 0.01;  // position feedback; near 30 deg G changes 15%/deg, so
                                   // more would swamp C2 with the replay of the noise itself
+
+  // Duration and rate within the limits above, the sensor noise valid, the hidden effect one of
+  // the catalogue; else an error that says which.
+  [[nodiscard]] Status Validate() const;
 };
 
 struct SyntheticLog {

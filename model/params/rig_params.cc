@@ -1,5 +1,6 @@
 #include "model/params/rig_params.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <numbers>
@@ -55,15 +56,6 @@ const ParamInfo kParams[] = {
     {"atmospheric_pressure_pa", "Pa", "atmospheric pressure (gauge <-> absolute)",
      &RigParams::atmospheric_pressure_pa, 1.0e4, 2.0e5},
 };
-
-std::string ValidKeys() {
-  std::string keys;
-  for (const ParamInfo& info : kParams) {
-    if (!keys.empty()) keys += ", ";
-    keys += info.key;
-  }
-  return keys;
-}
 
 }  // namespace
 
@@ -141,6 +133,26 @@ Status RigParams::ValidateChokePoint(std::size_t index) const {
   return Status::Ok();
 }
 
+Status ParamInfo::Set(RigParams* params, double value) const {
+  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, unit, min_value, max_value));
+  params->*member = value;
+  return Status::Ok();
+}
+
+std::pair<double, double> ParamInfo::FitRange() const {
+  double lower = fit_min, upper = fit_max;
+  if (!(fit_min < fit_max)) {
+    lower = min_value, upper = max_value;
+    // A factor of 3 either way around the thesis value (the sign kept), or the table's bounds.
+    const double value = RigParams{}.*member;
+    if (value != 0.0) {
+      lower = value > 0.0 ? value / 3.0 : value * 3.0;
+      upper = value > 0.0 ? value * 3.0 : value / 3.0;
+    }
+  }
+  return {std::max(lower, min_value), std::min(upper, max_value)};
+}
+
 std::span<const ParamInfo> ParamTable() { return kParams; }
 
 const ParamInfo* FindParam(std::string_view key) {
@@ -150,11 +162,32 @@ const ParamInfo* FindParam(std::string_view key) {
   return nullptr;
 }
 
+Result<const ParamInfo*> LookUpParam(std::string_view key, std::string_view other_keys) {
+  if (const ParamInfo* info = FindParam(key)) return info;
+  std::string keys;
+  for (const ParamInfo& info : kParams) {
+    if (!keys.empty()) keys += ", ";
+    keys += info.key;
+  }
+  if (!other_keys.empty()) keys += ", or " + std::string(other_keys);
+  return Status::Error("unknown parameter '" + std::string(key) + "'; valid keys: " + keys);
+}
+
 const double* EffectSetting::Find(std::string_view key) const {
   for (const auto& [name, value] : values) {
     if (name == key) return &value;
   }
   return nullptr;
+}
+
+void EffectSetting::Set(std::string_view key, double value) {
+  for (auto& [name, existing] : values) {
+    if (name == key) {
+      existing = value;
+      return;
+    }
+  }
+  values.emplace_back(std::string(key), value);
 }
 
 EffectSetting* RigParams::FindEffect(std::string_view name) {
@@ -204,13 +237,7 @@ Status SetEffectParam(RigParams* params, std::string_view key, std::string_view 
   }
   auto value = ParseNumber(key, value_text, "see `mpdrig effects`");
   if (!value.ok()) return value.status();
-  for (auto& [name, existing] : effect->values) {
-    if (name == param) {
-      existing = *value;
-      return Status::Ok();
-    }
-  }
-  effect->values.emplace_back(std::string(param), *value);
+  effect->Set(param, *value);
   return Status::Ok();
 }
 
@@ -227,17 +254,11 @@ Status CheckInRange(std::string_view key, double value, std::string_view unit, d
 
 Status SetParam(RigParams* params, std::string_view key, std::string_view value_text) {
   if (key.find('.') != std::string_view::npos) return SetEffectParam(params, key, value_text);
-  const ParamInfo* info = FindParam(key);
-  if (info == nullptr) {
-    return Status::Error("unknown parameter '" + std::string(key) +
-                         "'; valid keys: " + ValidKeys());
-  }
-  auto parsed = ParseNumber(key, value_text, info->unit);
-  if (!parsed.ok()) return parsed.status();
-  const double value = *parsed;
-  MPDRIG_RETURN_IF_ERROR(CheckInRange(key, value, info->unit, info->min_value, info->max_value));
-  params->*info->member = value;
-  return Status::Ok();
+  auto info = LookUpParam(key);
+  if (!info.ok()) return info.status();
+  auto value = ParseNumber(key, value_text, (*info)->unit);
+  if (!value.ok()) return value.status();
+  return (*info)->Set(params, *value);
 }
 
 Status ApplyOverride(RigParams* params, std::string_view assignment) {

@@ -34,6 +34,9 @@ struct EffectSetting {
 
   // The value set for `key`, or nullptr.
   const double* Find(std::string_view key) const;
+  // Gives `key` the value `value`: replaces the value set for it, else appends it. Keys and
+  // bounds are the registry's to check (ValidateEffects).
+  void Set(std::string_view key, double value);
 };
 
 struct RigParams {
@@ -101,10 +104,23 @@ struct ParamInfo {
   // thesis value. Within [min_value, max_value].
   double fit_min = 0.0;
   double fit_max = 0.0;
+
+  // The value in `params`.
+  double Get(const RigParams& params) const { return params.*member; }
+  // Sets the value in `params` if it is within the bounds (CheckInRange: NaN and infinities are
+  // outside); else the error, and `params` unchanged.
+  Status Set(RigParams* params, double value) const;
+  // The range fit searches by default: [fit_min, fit_max] where given, else a factor of 3 either
+  // way around the thesis value (the bounds for a thesis value of 0); within the bounds.
+  std::pair<double, double> FitRange() const;
 };
 
 std::span<const ParamInfo> ParamTable();
 const ParamInfo* FindParam(std::string_view key);
+// FindParam, or the error for an unknown key, which lists the valid ones: "unknown parameter
+// 'wave_speed'; valid keys: pipe_length_m, ...", then ", or `other_keys`" where the caller takes
+// other keys too (an effect's "EFFECT.KEY").
+Result<const ParamInfo*> LookUpParam(std::string_view key, std::string_view other_keys = {});
 
 // Ok when min_value <= value <= max_value, else "key = value unit is outside [min, max]" (NaN
 // and infinities are outside): the one wording of a bound check, for the table and effects.

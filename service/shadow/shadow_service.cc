@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 #include "model/identification/shadow_fit.h"
 #include "mpdrig.h"
 #include "service/dds/security.h"

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "model/config/rig_config.h"
+#include "model/effects/param_by_key.h"
 #include "model/identification/fit.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/model_options.h"

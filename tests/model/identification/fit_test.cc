@@ -15,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "model/common/units.h"
+#include "model/effects/param_by_key.h"
 #include "model/identification/synthetic_log.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"

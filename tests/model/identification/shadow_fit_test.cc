@@ -14,6 +14,7 @@
 
 #include "model/analysis/shadow_model.h"
 #include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
 #include "tests/model/rig_test_util.h"
 
 namespace mpdrig {

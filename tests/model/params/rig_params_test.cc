@@ -328,5 +328,62 @@ TEST(RigParams, TuningRangesLieWithinTheBoundsAndHoldTheThesisValues) {
   EXPECT_GE(ranges, 3) << "wave speed, pipe friction and choke leak have tuning ranges";
 }
 
+TEST(RigParams, ParamInfoGetsAndSetsItsMemberWithinItsBounds) {
+  auto info = LookUpParam("friction_f1_per_s");
+  ASSERT_TRUE(info.ok()) << info.status().message();
+  RigParams params;
+  EXPECT_EQ((*info)->Get(params), 0.15);
+  ASSERT_TRUE((*info)->Set(&params, 0.2).ok());
+  EXPECT_EQ(params.friction_f1_per_s, 0.2);
+  for (const double bad : {-0.1, 1.0e4, std::numeric_limits<double>::quiet_NaN()}) {
+    const Status status = (*info)->Set(&params, bad);
+    EXPECT_FALSE(status.ok()) << bad;
+    EXPECT_NE(status.message().find("friction_f1_per_s"), std::string::npos) << status.message();
+    EXPECT_NE(status.message().find("outside"), std::string::npos) << status.message();
+    EXPECT_EQ(params.friction_f1_per_s, 0.2);
+  }
+}
+
+TEST(RigParams, LookUpParamListsTheValidKeysAndWhatElseTheCallerTakes) {
+  auto unknown = LookUpParam("wave_speed");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_EQ(unknown.status().message().rfind("unknown parameter 'wave_speed'; valid keys: ", 0), 0u)
+      << unknown.status().message();
+  for (const ParamInfo& info : ParamTable()) {
+    EXPECT_NE(unknown.status().message().find(std::string(info.key)), std::string::npos)
+        << info.key;
+  }
+  // The same wording as SetParam's.
+  RigParams params;
+  EXPECT_EQ(unknown.status().message(), SetParam(&params, "wave_speed", "1").message());
+  auto more = LookUpParam("wave_speed", "EFFECT.KEY");
+  ASSERT_FALSE(more.ok());
+  EXPECT_EQ(more.status().message(), unknown.status().message() + ", or EFFECT.KEY");
+}
+
+TEST(RigParams, FitRangeIsTheTuningRangeOrAFactorOfThreeWithinTheBounds) {
+  for (const ParamInfo& info : ParamTable()) {
+    const auto [lower, upper] = info.FitRange();
+    EXPECT_LT(lower, upper) << info.key;
+    EXPECT_GE(lower, info.min_value) << info.key;
+    EXPECT_LE(upper, info.max_value) << info.key;
+    if (info.fit_min < info.fit_max) {
+      EXPECT_EQ(lower, info.fit_min) << info.key;
+      EXPECT_EQ(upper, info.fit_max) << info.key;
+    }
+  }
+  // No tuning range: a factor of 3 either way around the thesis value, 0.1 s here (5.3).
+  const auto [lower, upper] = FindParam("choke_time_constant_s")->FitRange();
+  EXPECT_DOUBLE_EQ(lower, 0.1 / 3.0);
+  EXPECT_DOUBLE_EQ(upper, 0.1 * 3.0);
+}
+
+TEST(RigParams, EffectSettingSetReplacesOrAppends) {
+  EffectSetting setting{"unsteady_friction", {}};
+  setting.Set("k", 0.02);
+  setting.Set("k", 0.04);
+  ASSERT_EQ(setting.values.size(), 1u);
+  EXPECT_EQ(*setting.Find("k"), 0.04);
+}
 }  // namespace
 }  // namespace mpdrig
