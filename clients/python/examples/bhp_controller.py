@@ -14,12 +14,12 @@ heave phasor z = v_d^ + j omega x_d^ (topic mpdrig_estimate), adapting theta unt
 oscillation at omega is gone.
 
     mpdrig serve --clock lockstep --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 5 \\
-        --choke-deg 31 --sensor-noise none --rig fixed --rig controlled --domain 7 &
+        --choke-deg 31 --rig fixed --rig controlled --domain 7 &
     python3 bhp_controller.py --rig fixed --domain 7 --duration 60 --open-loop
     python3 bhp_controller.py --rig controlled --domain 7 --duration 60 --use-estimate
 
-Prints one key=value line like the C++ controller: PT1's half peak-to-peak swing over the last
---measure-last seconds.
+Prints one key=value line like the C++ controller: PT1's half peak-to-peak swing, mean and
+periodic RMS (the heave's swing, the sensors' noise left out) over the last --measure-last seconds.
 """
 
 from __future__ import annotations
@@ -28,8 +28,10 @@ import argparse
 import cmath
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Optional
+
+import numpy as np
 
 import mpdrig
 
@@ -44,37 +46,68 @@ class Gains:
     delay_s: float = 1.3              # tau: l/c + actuator lag + the pipe's phase
     choke_min_deg: float = 2.0
     choke_max_deg: float = 88.0
-    learn_s: float = 10.0             # without a set point: watch this long, then hold the mean
+    # Without a set point: command nothing, watch at least settle_s and two heave periods (the
+    # heave's start-up, the observer's convergence), then average the BHP and the choke over
+    # learn_s rounded up to whole heave periods, and hold that mean BHP from that mean opening.
+    settle_s: float = 10.0
+    learn_s: float = 10.0
+
+
+SETTLE_PERIODS = 2.0  # the observer's disturbance model converges in about two heave periods
 
 
 class BhpController:
     """The control law; time and signals are arguments, the rig is elsewhere."""
 
-    def __init__(self, gains: Gains, initial_choke_deg: float,
-                 setpoint_barg: Optional[float] = None):
+    def __init__(self, gains: Gains, setpoint_barg: Optional[float] = None):
         self.g = gains
         self.setpoint_barg = setpoint_barg
-        self.integral_deg = initial_choke_deg
+        self.integral_deg: Optional[float] = None
         self.theta = 0j
         self._last_t: Optional[float] = None
+        self._first_t: Optional[float] = None
         self._learn_start: Optional[float] = None
-        self._learn_sum = 0.0
+        self._learn_end: Optional[float] = None
+        self._learn_sum = self._learn_choke_sum = 0.0
         self._learn_n = 0
 
-    def update(self, t_s: float, bhp_barg: float, z: complex, frequency_hz: float) -> float:
-        """One sample; returns the choke reference [deg]. z = 0: no feed-forward this sample."""
+    def _learn(self, t_s: float, bhp_barg: float, choke_deg: float, frequency_hz: float) -> bool:
+        """Watch with the choke left alone; True once the set point is the mean BHP seen."""
+        g = self.g
+        if self._first_t is None:
+            self._first_t = t_s
+        settle_s = max(g.settle_s, SETTLE_PERIODS / frequency_hz if frequency_hz > 0.0 else 0.0)
+        if self._learn_start is None and t_s - self._first_t < settle_s:
+            return False
+        if self._learn_start is None:
+            self._learn_start = t_s
+        if self._learn_end is None and t_s - self._learn_start >= g.learn_s:
+            # Whole heave periods: a part period biases the mean.
+            learn_s = g.learn_s
+            if frequency_hz > 0.0:
+                learn_s = math.ceil(g.learn_s * frequency_hz - 1e-9) / frequency_hz
+            self._learn_end = self._learn_start + learn_s
+        if self._learn_end is not None and t_s >= self._learn_end - 1e-9:
+            n = max(self._learn_n, 1)
+            self.setpoint_barg = self._learn_sum / n if self._learn_n else bhp_barg
+            self.integral_deg = self._learn_choke_sum / n if self._learn_n else choke_deg
+            return True
+        self._learn_sum += bhp_barg
+        self._learn_choke_sum += choke_deg
+        self._learn_n += 1
+        return False
+
+    def update(self, t_s: float, bhp_barg: float, choke_deg: float, z: complex,
+               frequency_hz: float) -> Optional[float]:
+        """One sample; returns the choke reference [deg], or None while it learns its set point.
+        z = 0: no feed-forward this sample."""
         dt = min(max(t_s - self._last_t, 0.0), 1.0) if self._last_t is not None else 0.0
         self._last_t = t_s
         g = self.g
-        if self.setpoint_barg is None:
-            # Watch with the choke held; the mean over whole heave periods is the BHP without heave.
-            if self._learn_start is None:
-                self._learn_start = t_s
-            self._learn_sum += bhp_barg
-            self._learn_n += 1
-            if t_s - self._learn_start < g.learn_s:
-                return self.integral_deg
-            self.setpoint_barg = self._learn_sum / self._learn_n
+        if self.setpoint_barg is None and not self._learn(t_s, bhp_barg, choke_deg, frequency_hz):
+            return None
+        if self.integral_deg is None:  # a set point given: start from the choke's reading
+            self.integral_deg = choke_deg
         e = bhp_barg - self.setpoint_barg
         heave_known = g.feedforward and frequency_hz > 0.0 and abs(z) > 1e-4
         if heave_known:
@@ -94,25 +127,41 @@ class BhpController:
 
 @dataclass
 class Swing:
-    """PT1 over the measured window: half peak-to-peak and mean."""
-    lo: float = math.inf
-    hi: float = -math.inf
-    total: float = 0.0
-    n: int = 0
+    """PT1 over the measured window: half peak-to-peak, mean, and the RMS of its periodic part
+    at the heave frequency f (least squares of a mean and harmonics 1-3 of f: the sensors' noise
+    is not in it, where half peak-to-peak reads about 0.07 bar of it at the lab's noise)."""
+    times: list = field(default_factory=list)
+    values: list = field(default_factory=list)
+    frequency_hz: float = 0.0
 
-    def add(self, pt1_barg: float) -> None:
-        self.lo = min(self.lo, pt1_barg)
-        self.hi = max(self.hi, pt1_barg)
-        self.total += pt1_barg
-        self.n += 1
+    def add(self, t_s: float, pt1_barg: float) -> None:
+        self.times.append(t_s)
+        self.values.append(pt1_barg)
+
+    @property
+    def n(self) -> int:
+        return len(self.values)
 
     @property
     def amplitude_bar(self) -> float:
-        return 0.5 * (self.hi - self.lo)
+        return 0.5 * (max(self.values) - min(self.values))
 
     @property
     def mean_barg(self) -> float:
-        return self.total / self.n
+        return sum(self.values) / len(self.values)
+
+    @property
+    def periodic_rms_bar(self) -> float:
+        if self.frequency_hz <= 0.0 or self.n < 28:
+            return math.nan
+        t = np.asarray(self.times)
+        columns = [np.ones_like(t)]
+        for k in (1, 2, 3):
+            w = 2.0 * math.pi * k * self.frequency_hz
+            columns += [np.cos(w * t), np.sin(w * t)]
+        coefficients, *_ = np.linalg.lstsq(np.column_stack(columns), np.asarray(self.values),
+                                           rcond=None)
+        return math.sqrt(float(np.sum(coefficients[1:] ** 2)) / 2.0)
 
 
 def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop: bool = False,
@@ -126,32 +175,34 @@ def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop:
     gains = gains or Gains()
     wants_estimate = use_estimate or gains.feedforward
     swing = Swing()
-    controller: Optional[BhpController] = None
+    controller = BhpController(gains, setpoint_barg)
     if open_loop and rig.lockstep:
         # Nothing to decide between samples: step a second at a time and read them all.
         while True:
             rig.step(100)
             for s in rig.pending():
                 if s.time_s > duration_s - measure_last_s and s.time_s <= duration_s + 1e-9:
-                    swing.add(s.PT1_barg)
+                    swing.add(s.time_s, s.PT1_barg)
                 if s.time_s >= duration_s - 1e-9:
+                    swing.frequency_hz = rig.estimate().disturbance_frequency_hz
                     return swing
     for s in rig.stream():
+        z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
+        if wants_estimate:
+            # Lockstep: the estimate of this very sample; real time: the newest one.
+            est = rig.estimate(s.sample_counter if rig.lockstep else None)
+            z = complex(est.piston_velocity_est_mps,
+                        2.0 * math.pi * est.disturbance_frequency_hz * est.piston_position_est_m)
+            frequency_hz = est.disturbance_frequency_hz
+            if use_estimate:
+                bhp = est.BHP_est_barg
         if not open_loop:
-            if controller is None:
-                controller = BhpController(gains, s.choke_position_deg, setpoint_barg)
-            z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
-            if wants_estimate:
-                # Lockstep: the estimate of this very sample; real time: the newest one.
-                est = rig.estimate(s.sample_counter if rig.lockstep else None)
-                z = complex(est.piston_velocity_est_mps,
-                            2.0 * math.pi * est.disturbance_frequency_hz * est.piston_position_est_m)
-                frequency_hz = est.disturbance_frequency_hz
-                if use_estimate:
-                    bhp = est.BHP_est_barg
-            rig.choke(controller.update(s.time_s, bhp, z, frequency_hz))
+            command = controller.update(s.time_s, bhp, s.choke_position_deg, z, frequency_hz)
+            if command is not None:
+                rig.choke(command)
         if s.time_s > duration_s - measure_last_s:
-            swing.add(s.PT1_barg)
+            swing.add(s.time_s, s.PT1_barg)
+            swing.frequency_hz = swing.frequency_hz or frequency_hz
         if s.time_s >= duration_s - 1e-9:
             break
     return swing
@@ -166,7 +217,8 @@ def main() -> int:
     parser.add_argument("--measure-last", type=float, default=20.0,
                         help="report PT1's swing over the last this many seconds")
     parser.add_argument("--setpoint-barg", type=float, default=None,
-                        help="BHP to hold [barg] (default: the mean of the first 10 s)")
+                        help="BHP to hold [barg] (default: with the choke left alone, the mean "
+                        "over whole heave periods after 10 s and two periods)")
     parser.add_argument("--use-estimate", action="store_true",
                         help="control the observer's BHP_est instead of PT1")
     parser.add_argument("--no-feedforward", action="store_true", help="PI only")
@@ -190,7 +242,8 @@ def main() -> int:
     mode = ("fixed-choke" if args.open_loop else "pi" if args.no_feedforward
             else "pi+ff(estimate)" if args.use_estimate else "pi+ff")
     print(f"rig={args.rig} mode={mode} window_s={args.measure_last:g} samples={swing.n} "
-          f"PT1_amplitude_bar={swing.amplitude_bar:.5f} PT1_mean_barg={swing.mean_barg:.5f}")
+          f"PT1_amplitude_bar={swing.amplitude_bar:.5f} PT1_mean_barg={swing.mean_barg:.5f} "
+          f"PT1_periodic_rms_bar={swing.periodic_rms_bar:.5f}")
     return 0
 
 
