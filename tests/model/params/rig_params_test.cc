@@ -1,7 +1,5 @@
 #include "model/params/rig_params.h"
 
-#include <google/protobuf/descriptor.h>
-
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -11,8 +9,6 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-
-#include "model/config/rig_config.pb.h"
 
 namespace mpdrig {
 namespace {
@@ -281,35 +277,6 @@ TEST(RigParams, ValidateCatchesBadScalars) {
     params.pipe_elevation_gain_m = 901.0;
     EXPECT_FALSE(params.Validate().ok());
   }
-}
-
-// The config file and the table describe the same scalars: every table key is an optional double
-// field of mpdrig.config.RigConfig, and every optional double field is a table key.
-TEST(RigParams, TableAndConfigProtoAreInSync) {
-  namespace pb = google::protobuf;
-  const pb::Descriptor* descriptor = config::RigConfig::descriptor();
-  ASSERT_NE(descriptor, nullptr);
-  for (const ParamInfo& info : ParamTable()) {
-    const pb::FieldDescriptor* field = descriptor->FindFieldByName(std::string(info.key));
-    ASSERT_NE(field, nullptr) << info.key << " has no field in rig_config.proto";
-    EXPECT_EQ(field->type(), pb::FieldDescriptor::TYPE_DOUBLE) << info.key;
-    EXPECT_FALSE(field->is_repeated()) << info.key;
-    EXPECT_TRUE(field->has_presence()) << info.key << " must be `optional` so unset keeps default";
-  }
-  int scalar_fields = 0;
-  for (int i = 0; i < descriptor->field_count(); ++i) {
-    const pb::FieldDescriptor* field = descriptor->field(i);
-    if (field->is_repeated()) {
-      EXPECT_TRUE(field->name() == "choke_point" || field->name() == "effect")
-          << "unexpected repeated field " << field->name();
-      continue;
-    }
-    ++scalar_fields;
-    EXPECT_EQ(field->type(), pb::FieldDescriptor::TYPE_DOUBLE) << field->name();
-    EXPECT_NE(FindParam(field->name()), nullptr)
-        << "rig_config.proto field " << field->name() << " is not a key of ParamTable()";
-  }
-  EXPECT_EQ(scalar_fields, static_cast<int>(ParamTable().size()));
 }
 
 // The tuning ranges `fit` searches live in the parameter table beside the bounds: each lies
