@@ -1,7 +1,8 @@
-// A rig log as a stream of rows for the comparison (compare.h), in memory that does not grow with
-// the log's length: rows come from a file (RigLogReader, one line at a time) or from a log
-// already in memory, go through the piston-position smoothing and, if asked, through the model
-// replay, and leave in order, one at a time, with what the metrics need of each sample.
+// A rig log as a stream of rows for the comparison (compare.h) and the replay (log_replay.h), in
+// memory that does not grow with the log's length: rows come from a file (RigLogReader, one line
+// at a time) or from a log already in memory (measured_log.h), go through the piston-position
+// smoothing and, if asked, through the model replay, and leave in order, one at a time, with what
+// the metrics need of each sample.
 //
 // RowPipeline reproduces `Simulate` on a log's inputs exactly (SignalsFromColumns + SimulateEach,
 // model/sim): the same smoothing (SmoothLocalQuadratic, model/signal, run on blocks that hold
@@ -12,6 +13,7 @@
 // it hands out, plus one smoothing block (4096 samples).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <deque>
@@ -19,11 +21,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/status.h"
 #include "model/riglog/rig_log_reader.h"
+#include "model/sim/log_inputs.h"
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
@@ -224,5 +228,29 @@ class RowPipeline {
 
 // Pulls every row of `source` through `pipeline`.
 Status RunPipeline(LogRowSource* source, RowPipeline* pipeline);
+
+// The pipeline's own piston smoothing for a replay fed as `replay` says: none on reconstructed
+// inputs (already smoothed).
+inline double PipelineSmoothingS(const InputReplayOptions& replay) {
+  return replay.reconstruct_inputs ? 0.0 : replay.piston_smoothing_s;
+}
+
+// Reports `stage` at every whole percent of `total` samples.
+class PercentProgress {
+ public:
+  PercentProgress(const CompareProgress& progress, std::string_view stage, long total)
+      : progress_(progress), stage_(stage), total_(std::max(1L, total)) {}
+  void Done(long samples) {
+    if (!progress_ || samples < next_) return;
+    progress_(stage_, static_cast<double>(samples) / static_cast<double>(total_));
+    next_ = (samples * 100 / total_ + 1) * total_ / 100;
+  }
+
+ private:
+  const CompareProgress& progress_;
+  std::string_view stage_;
+  long total_;
+  long next_ = 0;
+};
 
 }  // namespace mpdrig

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "service/cli/commands.h"
 #include "service/cli/model_options.h"
 #include "service/report/comparison_json.h"

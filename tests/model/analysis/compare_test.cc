@@ -2,6 +2,8 @@
 // without injected discrepancies: the metrics must point at exactly the injected sensor, lag or
 // band. Logs are generated here with Simulate and RigLogWriter (no binary fixtures).
 #include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 
 #include <algorithm>
 #include <cmath>
