@@ -15,19 +15,15 @@ const ChannelMetrics* Comparison::Find(Channel channel) const {
   return nullptr;
 }
 
-namespace {
-
-Status CheckOptions(const CompareOptions& options) {
-  if (options.residual_lags < 1 || options.trace_columns < 1 || options.band_half_width_bins < 1 ||
-      options.welch_segment_samples < 8) {
+Status CompareOptions::Validate() const {
+  if (residual_lags < 1 || trace_columns < 1 || band_half_width_bins < 1 ||
+      welch_segment_samples < 8) {
     return Status::Error(
         "compare options: residual_lags, trace_columns and band_half_width_bins must be >= 1, "
         "welch_segment_samples >= 8");
   }
   return Status::Ok();
 }
-
-}  // namespace
 
 Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& model,
                                  const CompareOptions& options, const CompareProgress& progress) {
@@ -43,7 +39,7 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
   if (log.channels.size() > kComparedChannelCount) {
     return Status::Error(log.path + ": more channels than P1 P2 PT1..PT10 C2 FT1 FT3 FT4");
   }
-  MPDRIG_RETURN_IF_ERROR(CheckOptions(options));
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
 
   // Pass 1: what the metrics need of the whole log.
   MemoryRowSource first_source(log);
@@ -93,7 +89,7 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
 Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
                               const SimulationOptions& sim_options, const CompareOptions& options,
                               const CompareProgress& progress) {
-  MPDRIG_RETURN_IF_ERROR(CheckOptions(options));
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
   MPDRIG_RETURN_IF_ERROR(sim_options.Validate());
   // Pass 1: read the file (checking every line) for what the metrics need up front.
   auto first_source = FileRowSource::Open(path, progress, options.read);

@@ -101,6 +101,10 @@ struct CompareOptions {
   int welch_segment_samples = 1 << 17;
   // CompareLog: the reader's limits on the log's time axis (largest gap, smallest step).
   riglog::ReadOptions read;
+
+  // residual_lags, trace_columns and band_half_width_bins >= 1, welch_segment_samples >= 8
+  // (CompareTraces and CompareLog refuse options that fail it).
+  [[nodiscard]] Status Validate() const;
 };
 
 struct BandMetrics {
