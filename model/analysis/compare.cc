@@ -86,62 +86,77 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
   return result;
 }
 
-Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
-                              const SimulationOptions& sim_options, const CompareOptions& options,
-                              const CompareProgress& progress) {
-  MPDRIG_RETURN_IF_ERROR(options.Validate());
-  MPDRIG_RETURN_IF_ERROR(sim_options.Validate());
-  // Pass 1: read the file (checking every line) for what the metrics need up front.
-  auto first_source = FileRowSource::Open(path, progress, options.read);
-  if (!first_source.ok()) return first_source.status();
-  LogScanner scanner((*first_source)->channels(), options);
+namespace {
+
+// What CompareLog's first pass learns of the file: the metrics' summary of the whole log, its
+// first rows (for the reconstruction's plan, the replay's start and levels) and its atmospheric
+// pressure.
+struct FileScan {
+  LogSummary summary;
   ReconstructionPlanner planner;
+  double atmospheric_pressure_pa = 0.0;
+};
+
+// Pass 1: reads the file (checking every line) for what the metrics need up front.
+Result<FileScan> ScanFile(const std::string& path, const CompareOptions& options,
+                          const CompareProgress& progress) {
+  auto source = FileRowSource::Open(path, progress, options.read);
+  if (!source.ok()) return source.status();
+  FileScan scan;
+  LogScanner scanner((*source)->channels(), options);
   RowPipeline first_pass(options.piston_smoothing_s, std::nullopt,
                          [&](const PipelineSample& sample) {
                            scanner.Add(sample);
-                           planner.Add(*sample.row);
+                           scan.planner.Add(*sample.row);
                          });
-  MPDRIG_RETURN_IF_ERROR(RunPipeline(first_source->get(), &first_pass));
+  MPDRIG_RETURN_IF_ERROR(RunPipeline(source->get(), &first_pass));
   auto summary = scanner.Finish(path);
   if (!summary.ok()) return summary.status();
-  const double atmospheric_pressure_pa = (*first_source)->atmospheric_pressure_pa();
-  first_source->reset();
+  scan.summary = std::move(summary).value();
+  scan.atmospheric_pressure_pa = (*source)->atmospheric_pressure_pa();
+  return scan;
+}
 
-  // Pass 2: read it again, replay the model in lock step, accumulate the metrics.
-  auto file = FileRowSource::Open(path, {}, options.read);
-  if (!file.ok()) return file.status();
-  std::unique_ptr<LogRowSource> source = std::move(file).value();
-  std::optional<InputReconstruction> plan;
-  if (options.reconstruct_inputs) plan = planner.Plan();
-  ReplayOptions replay;
-  replay.reconstruct_inputs = options.reconstruct_inputs;
-  replay.piston_smoothing_s = options.piston_smoothing_s;
-  replay.estimate_levels = options.estimate_levels;
-  if (options.choose_warmup || (plan && options.estimate_levels)) {
-    // The log's first rows in memory (the plan's): enough to choose the start and the levels.
-    auto head = planner.HeadLog(source->channels(), path, atmospheric_pressure_pa);
-    if (!head.ok()) return head.status();
-    if (options.choose_warmup) {
-      auto warmup = ChooseWarmup(*head, params, sim_options, replay);
-      if (!warmup.ok()) return warmup.status();
-      replay.warmup = *warmup;
-    }
-    if (plan && options.estimate_levels) {
-      auto levels = EstimateInputLevels(*head, params, sim_options, replay);
-      if (!levels.ok()) return levels.status();
-      plan->levels = *levels;
-      ApplyInputLevels(*levels, &replay);
-    }
+// The replay's start (ChooseWarmup) and input levels (EstimateInputLevels, into `plan` and the
+// warm-up), decided on the file's first rows in memory, as PrepareLogReplay decides them on a
+// whole log in memory; `channels` as the second pass's source.
+Status PrepareStreamedReplay(const FileScan& scan, const std::vector<SourceChannel>& channels,
+                             const std::string& path, const RigParams& params,
+                             const SimulationOptions& sim_options, const CompareOptions& options,
+                             ReplayOptions* replay, std::optional<InputReconstruction>* plan) {
+  const bool estimate_levels = plan->has_value() && options.estimate_levels;
+  if (!options.choose_warmup && !estimate_levels) return Status::Ok();
+  auto head = scan.planner.HeadLog(channels, path, scan.atmospheric_pressure_pa);
+  if (!head.ok()) return head.status();
+  if (options.choose_warmup) {
+    auto warmup = ChooseWarmup(*head, params, sim_options, *replay);
+    if (!warmup.ok()) return warmup.status();
+    replay->warmup = *warmup;
   }
-  if (plan) source = std::make_unique<ReconstructingRowSource>(std::move(source), *plan);
-  ComparisonAccumulator accumulator(*summary, options);
-  std::vector<double> model_si(summary->channels.size());
-  PercentProgress percent(progress, "replay", summary->samples);
+  if (estimate_levels) {
+    auto levels = EstimateInputLevels(*head, params, sim_options, *replay);
+    if (!levels.ok()) return levels.status();
+    (*plan)->levels = *levels;
+    ApplyInputLevels(*levels, replay);
+  }
+  return Status::Ok();
+}
+
+// Pass 2: the file's rows again, the model replayed in lock step, into the metrics. A file whose
+// rows differ in number or reach from pass 1's is refused.
+Result<Comparison> ReplayAndAccumulate(LogRowSource* source, const std::string& path,
+                                       const LogSummary& summary, const RigParams& params,
+                                       const SimulationOptions& sim_options,
+                                       const CompareOptions& options, const ReplayOptions& replay,
+                                       const CompareProgress& progress) {
+  ComparisonAccumulator accumulator(summary, options);
+  std::vector<double> model_si(summary.channels.size());
+  PercentProgress percent(progress, "replay", summary.samples);
   RowPipeline pipeline(PipelineSmoothingS(replay),
-                       ReplaySetup{params, sim_options, summary->t1_s, replay.warmup},
+                       ReplaySetup{params, sim_options, summary.t1_s, replay.warmup},
                        [&](const PipelineSample& sample) {
                          for (std::size_t c = 0; c < model_si.size(); ++c) {
-                           model_si[c] = sample.model->values[Index(summary->channels[c].channel)];
+                           model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
                          }
                          accumulator.Add(sample, model_si.data());
                          percent.Done(sample.index + 1);
@@ -151,20 +166,45 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
     auto more = source->Next(&row);
     if (!more.ok()) return more.status();
     if (!*more) break;
-    if (pipeline.rows_pushed() >= summary->samples || row.time_s > summary->t1_s) {
+    if (pipeline.rows_pushed() >= summary.samples || row.time_s > summary.t1_s) {
       return Status::Error(path + ": the file changed between the two passes");
     }
     MPDRIG_RETURN_IF_ERROR(pipeline.Push(row).Within(path));
   }
-  if (pipeline.rows_pushed() != summary->samples) {
+  if (pipeline.rows_pushed() != summary.samples) {
     return Status::Error(path + ": the file changed between the two passes");
   }
   MPDRIG_RETURN_IF_ERROR(pipeline.Finish().Within(path));
   const RigSampler* sampler = pipeline.sampler();
-  auto result = accumulator.Finish(
+  return accumulator.Finish(
       path, sampler != nullptr ? sampler->simulator().first_range_event() : std::nullopt);
+}
+
+}  // namespace
+
+Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
+                              const SimulationOptions& sim_options, const CompareOptions& options,
+                              const CompareProgress& progress) {
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  MPDRIG_RETURN_IF_ERROR(sim_options.Validate());
+  const auto scan = ScanFile(path, options, progress);
+  if (!scan.ok()) return scan.status();
+  auto file = FileRowSource::Open(path, {}, options.read);
+  if (!file.ok()) return file.status();
+  std::unique_ptr<LogRowSource> source = std::move(file).value();
+  std::optional<InputReconstruction> plan;
+  if (options.reconstruct_inputs) plan = scan->planner.Plan();
+  ReplayOptions replay;
+  replay.reconstruct_inputs = options.reconstruct_inputs;
+  replay.piston_smoothing_s = options.piston_smoothing_s;
+  replay.estimate_levels = options.estimate_levels;
+  MPDRIG_RETURN_IF_ERROR(PrepareStreamedReplay(*scan, source->channels(), path, params, sim_options,
+                                               options, &replay, &plan));
+  if (plan) source = std::make_unique<ReconstructingRowSource>(std::move(source), *plan);
+  auto result = ReplayAndAccumulate(source.get(), path, scan->summary, params, sim_options, options,
+                                    replay, progress);
   if (result.ok()) {
-    result->atmospheric_pressure_pa = atmospheric_pressure_pa;
+    result->atmospheric_pressure_pa = scan->atmospheric_pressure_pa;
     result->input_reconstruction = plan;
     result->warmup = replay.warmup;
   }
