@@ -7,10 +7,24 @@
 // RowPipeline reproduces `Simulate` on a log's inputs exactly (SignalsFromColumns + SimulateEach,
 // model/sim): the same smoothing (SmoothLocalQuadratic, model/signal, run on blocks that hold
 // every sample of each smoothed sample's window, so each value is the same double), the same
-// linear interpolation of the inputs between samples, the same piston velocity at each step end
-// (centred difference over one solver step, one-sided at the log's ends) and the same RigSampler.
+// linear interpolation of the inputs between samples (InterpolateLinear, log_inputs.h), the same
+// initial state (InitialInputs, log_inputs.h), the same piston velocity at each step end (centred
+// difference over one solver step, one-sided at the log's ends) and the same RigSampler.
 // It keeps only a lookahead window: the smoothing window and two solver steps beyond the sample
 // it hands out, plus one smoothing block (4096 samples).
+//
+// Two replays of a log, on purpose. Simulate on SignalsFromColumns is the reference (`mpdrig
+// simulate --inputs`, synthetic logs): the whole log in memory as time functions, which
+// SimulateEach may ask at any time. RowPipeline is its streaming twin (compare, fit, diagnose, the
+// shadow). Neither can be written through the other: the reference lies in model/sim, below this
+// folder in model/'s layer order, and a stream of rows cannot answer a time function; the other
+// way, time functions hold every input column whole (at least 40 bytes a row: 144 MB for an hour
+// at 1 kHz, where the stream holds a few thousand rows). What they can share they share (the
+// smoothing, the reconstruction, InitialInputs, InterpolateLinear); each still repeats by hand
+// the piston velocity's window slid inside the log (SimulateEach's step inputs, StepInputsAt
+// here) and the bracket search between samples. tests/model/analysis/compare_test.cc holds them
+// together: ReplayGivesExactlyWhatSimulateGives (the same doubles) and
+// ReplayStartsFromTheMeanOfTheFirstInputs (the same start). A change to one is a change to both.
 #pragma once
 
 #include <algorithm>

@@ -45,6 +45,14 @@ class InitialInputs {
   RigInputs sum_{0.0, 0.0, 0.0};
 };
 
+// An input between two samples (t_a, a) and (t_b, b), t_a <= t < t_b: linear in time. The one
+// formula of both replays of a log (SignalsFromColumns, RowPipeline), so they give the same
+// doubles.
+inline double InterpolateLinear(double t, double t_a, double a, double t_b, double b) {
+  const double w = (t - t_a) / (t_b - t_a);
+  return (1.0 - w) * a + w * b;
+}
+
 // How a replay feeds a log's inputs to the model.
 struct InputReplayOptions {
   // Reconstruct the inputs under their measurement noise (InputReconstruction); false: as measured.
@@ -201,6 +209,9 @@ Result<LogInputColumns> InputColumnsFromLog(const riglog::RigLog& log, const std
 // Time functions of the inputs, reconstructed or smoothed as `options` say; the columns are moved
 // into shared storage (one copy of time). Needs at least 2 rows. Reconstructed by `plan` where
 // given (e.g. a MeasuredLog's, with its level correction), else by a plan made here.
+// Simulate on these is the reference replay of a log; RowPipeline (model/analysis/log_stream.h)
+// streams the same doubles in bounded memory, and tests/model/analysis/compare_test.cc
+// (ReplayGivesExactlyWhatSimulateGives) checks that they agree: change both together.
 Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::string& path,
                                         const InputReplayOptions& options,
                                         const InputReconstruction* plan = nullptr);
