@@ -1,68 +1,12 @@
 #include "model/analysis/compare.h"
 
-#include <algorithm>
-#include <cmath>
-#include <limits>
+#include <memory>
 #include <utility>
-
-#include <Eigen/Dense>
 
 #include "model/analysis/compare_accumulator.h"
 #include "model/analysis/log_stream.h"
-#include "model/riglog/rig_log.h"
-#include "model/riglog/rig_log_reader.h"
 
 namespace mpdrig {
-namespace {
-
-// ---- Reading ----------------------------------------------------------------------------------
-
-// A column of unknown length read in fixed-size chunks: no vector doubling (which would hold up to
-// twice every column while reading), and one contiguous copy per column at the end.
-class ChunkedColumn {
- public:
-  void Push(double value) {
-    if (chunks_.empty() || chunks_.back().size() == kChunk) {
-      chunks_.emplace_back();
-      chunks_.back().reserve(kChunk);
-    }
-    chunks_.back().push_back(value);
-  }
-  std::vector<double> Release() {
-    std::size_t total = 0;
-    for (const auto& chunk : chunks_) total += chunk.size();
-    std::vector<double> out;
-    out.reserve(total);
-    for (auto& chunk : chunks_) {
-      out.insert(out.end(), chunk.begin(), chunk.end());
-      std::vector<double>().swap(chunk);
-    }
-    chunks_.clear();
-    return out;
-  }
-
- private:
-  static constexpr std::size_t kChunk = 1 << 16;
-  std::vector<std::vector<double>> chunks_;
-};
-
-}  // namespace
-
-std::vector<Channel> ComparedChannels() {
-  std::vector<Channel> channels = {Channel::kP1, Channel::kP2};
-  for (int k = 0; k < kPipeTransmitterCount; ++k) {
-    channels.push_back(static_cast<Channel>(static_cast<int>(Channel::kPT1) + k));
-  }
-  channels.insert(channels.end(), {Channel::kC2, Channel::kFT1, Channel::kFT3, Channel::kFT4});
-  return channels;
-}
-
-std::optional<double> PipePositionM(Channel channel) {
-  constexpr double kSpacingM = 100.0;
-  const int k = static_cast<int>(channel) - static_cast<int>(Channel::kPT1);
-  if (k < 0 || k >= kPipeTransmitterCount) return std::nullopt;
-  return kSpacingM * k;
-}
 
 const ChannelMetrics* Comparison::Find(Channel channel) const {
   for (const ChannelMetrics& metrics : channels) {
@@ -71,466 +15,15 @@ const ChannelMetrics* Comparison::Find(Channel channel) const {
   return nullptr;
 }
 
-namespace {
-
-Status CheckMeasuredLog(MeasuredLog* log) {
-  if (log->inputs.time_s.size() < 4) {
-    return Status::Error(log->path + ": needs at least 4 samples to compare");
-  }
-  // Keep only channels with at least one measured sample.
-  std::erase_if(log->channels, [](const MeasuredChannel& channel) {
-    return std::none_of(channel.values_si.begin(), channel.values_si.end(),
-                        [](double v) { return std::isfinite(v); });
-  });
-  if (log->channels.empty()) {
-    return Status::Error(log->path +
-                         ": no measured channel to compare (P1 P2 PT1..PT10 C2 FT1 FT3 FT4)");
-  }
-  const std::vector<Channel> order = ComparedChannels();
-  auto rank = [&](Channel channel) { return std::find(order.begin(), order.end(), channel); };
-  std::sort(log->channels.begin(), log->channels.end(),
-            [&](const MeasuredChannel& a, const MeasuredChannel& b) {
-              return rank(a.channel) < rank(b.channel);
-            });
-  ReconstructInputs(log);
-  return Status::Ok();
-}
-
-}  // namespace
-
-void ReconstructInputs(MeasuredLog* log) {
-  log->reconstruction = PlanInputReconstruction(log->inputs);
-  log->reconstructed_inputs = ReconstructInputColumns(log->inputs, log->reconstruction);
-}
-
-Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress,
-                                    const riglog::ReadOptions& read) {
-  auto source = FileRowSource::Open(path, progress, read);
-  if (!source.ok()) return source.status();
-  MeasuredLog log;
-  log.path = path;
-  log.metadata = (*source)->metadata();
-  log.atmospheric_pressure_pa = (*source)->atmospheric_pressure_pa();
-  const std::vector<SourceChannel>& channels = (*source)->channels();
-  for (const SourceChannel& channel : channels) {
-    log.channels.push_back({channel.channel, channel.unit, {}});
-  }
-  // time, the four inputs, then the compared channels
-  std::vector<ChunkedColumn> columns(5 + channels.size());
-  LogRow row;
-  while (true) {
-    auto more = (*source)->Next(&row);
-    if (!more.ok()) return more.status();
-    if (!*more) break;
-    columns[0].Push(row.time_s);
-    columns[1].Push(row.piston_position_m);
-    columns[2].Push(row.choke_opening_frac);
-    columns[3].Push(row.pump_flow_m3ps);
-    columns[4].Push(row.outlet_pressure_pa);
-    for (std::size_t i = 0; i < channels.size(); ++i) columns[5 + i].Push(row.measured_si[i]);
-  }
-  log.inputs.time_s = columns[0].Release();
-  log.inputs.piston_position_m = columns[1].Release();
-  log.inputs.choke_opening_frac = columns[2].Release();
-  log.inputs.pump_flow_m3ps = columns[3].Release();
-  log.inputs.outlet_pressure_pa = columns[4].Release();
-  for (std::size_t i = 0; i < channels.size(); ++i) {
-    log.channels[i].values_si = columns[5 + i].Release();
-  }
-  MPDRIG_RETURN_IF_ERROR(CheckMeasuredLog(&log));
-  return log;
-}
-
-Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& rig_log, const std::string& path) {
-  MeasuredLog log;
-  log.path = path;
-  log.metadata = rig_log.metadata;
-  log.atmospheric_pressure_pa = rig_log.atmospheric_pressure_pa;
-  auto inputs = InputColumnsFromLog(rig_log, path);
-  if (!inputs.ok()) return inputs.status();
-  log.inputs = std::move(inputs).value();
-  for (Channel channel : ComparedChannels()) {
-    if (auto column = rig_log.FindColumn(riglog::ChannelName(channel))) {
-      log.channels.push_back({channel, rig_log.columns[*column].unit, rig_log.values_si[*column]});
-    }
-  }
-  MPDRIG_RETURN_IF_ERROR(CheckMeasuredLog(&log));
-  return log;
-}
-
-// ---- Replay -----------------------------------------------------------------------------------
-
-namespace {
-
-// The pipeline's own piston smoothing: none on reconstructed inputs (already smoothed).
-double PipelineSmoothingS(const ReplayOptions& replay) {
-  return replay.reconstruct_inputs ? 0.0 : replay.piston_smoothing_s;
-}
-
-// Reports `stage` at every whole percent of `total` samples.
-class PercentProgress {
- public:
-  PercentProgress(const CompareProgress& progress, std::string_view stage, long total)
-      : progress_(progress), stage_(stage), total_(std::max(1L, total)) {}
-  void Done(long samples) {
-    if (!progress_ || samples < next_) return;
-    progress_(stage_, static_cast<double>(samples) / static_cast<double>(total_));
-    next_ = (samples * 100 / total_ + 1) * total_ / 100;
-  }
-
- private:
-  const CompareProgress& progress_;
-  std::string_view stage_;
-  long total_;
-  long next_ = 0;
-};
-
-}  // namespace
-
-Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
-                                const SimulationOptions& sim_options, const ReplayOptions& replay,
-                                const CompareProgress& progress) {
-  const std::vector<double>& times = log.time_s();
-  if (times.size() < 2) return Status::Error(log.path + ": needs at least 2 samples");
-  if (log.channels.size() > kComparedChannelCount) {
-    return Status::Error(log.path + ": more channels than P1 P2 PT1..PT10 C2 FT1 FT3 FT4");
-  }
-  // Keep only the compared channels of each sample.
-  ModelTraces traces;
-  traces.values_si.assign(log.channels.size(), {});
-  for (auto& values : traces.values_si) values.reserve(times.size());
-  PercentProgress percent(progress, "simulate", static_cast<long>(times.size()));
-  // The reconstruction made at loading; a log put together by hand gets one here.
-  const MeasuredLog* replayed = &log;
-  MeasuredLog reconstructed;
-  if (replay.reconstruct_inputs && log.reconstructed_inputs.time_s.size() != times.size()) {
-    reconstructed = log;
-    ReconstructInputs(&reconstructed);
-    replayed = &reconstructed;
-  }
-  traces.inputs_reconstructed = replay.reconstruct_inputs;
-  traces.warmup = replay.warmup;
-  RowPipeline pipeline(
-      PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back(), replay.warmup},
-      [&](const PipelineSample& sample) {
-        for (std::size_t i = 0; i < log.channels.size(); ++i) {
-          traces.values_si[i].push_back(sample.model->values[Index(log.channels[i].channel)]);
-        }
-        percent.Done(sample.index + 1);
-      });
-  MemoryRowSource source(
-      *replayed, replay.reconstruct_inputs ? InputView::kReconstructed : InputView::kMeasured);
-  MPDRIG_RETURN_IF_ERROR(RunPipeline(&source, &pipeline));
-  const RigSampler* sampler = pipeline.sampler();
-  MPDRIG_CHECK(sampler != nullptr);
-  traces.time_step_s = sampler->simulator().time_step_s();
-  traces.steps = sampler->steps();
-  traces.first_range_event = sampler->simulator().first_range_event();
-  return traces;
-}
-
-MeasuredLog MeasuredLogUntil(const MeasuredLog& log, double t_end) {
-  const std::vector<double>& t = log.time_s();
-  const auto n = static_cast<std::size_t>(std::upper_bound(t.begin(), t.end(), t_end) - t.begin());
-  const auto head = [n](const std::vector<double>& v) {
-    return std::vector<double>(v.begin(),
-                               v.begin() + static_cast<std::ptrdiff_t>(std::min(n, v.size())));
-  };
-  const auto head_columns = [&](const LogInputColumns& c) {
-    return LogInputColumns{head(c.time_s), head(c.piston_position_m), head(c.choke_opening_frac),
-                           head(c.pump_flow_m3ps), head(c.outlet_pressure_pa)};
-  };
-  MeasuredLog cut;
-  cut.path = log.path;
-  cut.metadata = log.metadata;
-  cut.atmospheric_pressure_pa = log.atmospheric_pressure_pa;
-  cut.inputs = head_columns(log.inputs);
-  cut.reconstructed_inputs = head_columns(log.reconstructed_inputs);
-  cut.reconstruction = log.reconstruction;
-  for (const MeasuredChannel& channel : log.channels) {
-    cut.channels.push_back({channel.channel, channel.unit, head(channel.values_si)});
-  }
-  return cut;
-}
-
-namespace {
-
-bool IsPressure(Channel channel) {
-  return channel != Channel::kFT1 && channel != Channel::kFT3 && channel != Channel::kFT4;
-}
-
-}  // namespace
-
-Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const RigParams& params,
-                                                   const SimulationOptions& sim_options,
-                                                   const ReplayOptions& replay) {
-  const std::optional<PeriodicWarmup> candidate =
-      PlanPeriodicWarmup(log.inputs, replay.reconstruct_inputs);
-  if (!candidate) return std::optional<PeriodicWarmup>{};
-  const MeasuredLog cut = MeasuredLogUntil(log, log.time_s().front() + 2.0 * candidate->period_s);
-  double error[2] = {0.0, 0.0};
-  for (int warm = 0; warm < 2; ++warm) {
-    ReplayOptions start = replay;
-    start.warmup = warm ? candidate : std::nullopt;
-    auto traces = ReplayModel(cut, params, sim_options, start);
-    if (!traces.ok()) {
-      // A start that leaves the model's range (or fails) is not chosen; if both do, the replay
-      // itself will say why.
-      error[warm] = std::numeric_limits<double>::infinity();
-      continue;
-    }
-    for (std::size_t c = 0; c < cut.channels.size(); ++c) {
-      if (!IsPressure(cut.channels[c].channel)) continue;
-      for (std::size_t i = 0; i < cut.time_s().size(); ++i) {
-        const double d = traces->values_si[c][i] - cut.channels[c].values_si[i];
-        if (std::isfinite(d)) error[warm] += d * d;
-      }
-    }
-  }
-  return error[1] < error[0] ? candidate : std::nullopt;
-}
-
-namespace {
-
-// The mean of the steady state's pressures (5.3.2) over the log's pressure channels at `inputs`.
-std::optional<double> SteadyMeanPressurePa(const MeasuredLog& log, const RigParams& params,
-                                           SimulationOptions options, const RigInputs& inputs) {
-  options.choke_input = ChokeInput::kMeasured;
-  auto simulator = RigSimulator::Create(params, options, inputs);
-  if (!simulator.ok()) return std::nullopt;
-  const RigSample sample = simulator->Sample();
-  double sum = 0.0;
-  int count = 0;
-  for (const MeasuredChannel& channel : log.channels) {
-    if (!IsPressure(channel.channel)) continue;
-    sum += sample[channel.channel];
-    ++count;
-  }
-  if (count == 0 || !std::isfinite(sum)) return std::nullopt;
-  return sum / count;
-}
-
-}  // namespace
-
-Result<InputLevelCorrection> EstimateInputLevels(const MeasuredLog& log, const RigParams& params,
-                                                 const SimulationOptions& sim_options,
-                                                 const ReplayOptions& replay) {
-  InputLevelCorrection none;
-  if (!replay.reconstruct_inputs || !replay.estimate_levels) return none;
-  const std::vector<double>& t = log.time_s();
-  const std::size_t n = std::min(t.size(), kReconstructionPlanSamples);
-  if (n < 16) return none;
-  const MeasuredLog head = n < t.size() ? MeasuredLogUntil(log, t[n - 1]) : log;
-  const InputReconstruction& plan = head.reconstruction;
-  if (head.reconstructed_inputs.time_s.size() != n || plan.levels.applied()) return none;
-
-  InputLevelCorrection levels;
-  levels.center_s = 0.5 * (t.front() + t[n - 1]);
-  levels.half_span_s = 0.5 * (t[n - 1] - t.front());
-  // The priors. The mean of N samples of white noise errs by sigma / sqrt(N) (a flat stretch's
-  // reconstruction by about that over its windows, the head's mean level over the head); at the
-  // ends a one-sided local linear fit over W samples errs by 2 sigma / sqrt(W), which is what a
-  // trend over the head picks up.
-  const double sqrt_n = std::sqrt(static_cast<double>(n));
-  const double sqrt_w = std::sqrt(static_cast<double>(
-      std::clamp<long>(plan.level_max_half_width_samples, 1, static_cast<long>(n))));
-  levels.choke_sigma_frac = plan.choke_noise_frac / sqrt_n;
-  levels.pump_sigma_m3ps = plan.pump_noise_m3ps / sqrt_n;
-  levels.choke_trend_sigma_frac = 2.0 * plan.choke_noise_frac / sqrt_w;
-  levels.pump_trend_sigma_m3ps = 2.0 * plan.pump_noise_m3ps / sqrt_w;
-  if (plan.choke_noise_frac == 0.0 && plan.pump_noise_m3ps == 0.0) return none;
-
-  std::vector<std::size_t> pressures;
-  for (std::size_t c = 0; c < head.channels.size(); ++c) {
-    if (IsPressure(head.channels[c].channel)) pressures.push_back(c);
-  }
-  if (pressures.empty()) return none;
-  auto base = ReplayModel(head, params, sim_options, replay);
-  if (!base.ok()) return none;
-
-  // Both levels act through the choke's steady law, so the pipe answers a change of either with
-  // the same dynamics (the pipe's mean level settles with its compliance times the choke's
-  // resistance, about 17 s on the lab's rig, so a level error at the start weighs on the whole
-  // head): their steady sensitivities give the ratio, and the replay, perturbed in the noisier
-  // input by a constant and by a trend, gives the pipe's answer to each, start and warm-up
-  // included.
-  RigInputs mean{0.0, 0.0, 0.0};
-  const LogInputColumns& in = head.reconstructed_inputs;
-  for (std::size_t i = 0; i < n; ++i) {
-    mean.choke_opening_frac += in.choke_opening_frac[i] / n;
-    mean.pump_flow_m3ps += in.pump_flow_m3ps[i] / n;
-    mean.outlet_pressure_pa += in.outlet_pressure_pa[i] / n;
-  }
-  const auto sensitivity = [&](double RigInputs::*level, double step) -> double {
-    RigInputs up = mean, down = mean;
-    up.*level += step;
-    down.*level = std::max(0.0, down.*level - step);
-    const double span = up.*level - down.*level;
-    const auto p_up = SteadyMeanPressurePa(head, params, sim_options, up);
-    const auto p_down = SteadyMeanPressurePa(head, params, sim_options, down);
-    if (!p_up || !p_down || !(span > 0.0)) return 0.0;
-    const double s = (*p_up - *p_down) / span;
-    return std::isfinite(s) ? s : 0.0;
-  };
-  // Steps well inside the steady law's smooth range and well above its rounding.
-  const double pump_step = std::max(1.0e-2 * mean.pump_flow_m3ps, units::LpmToM3ps(0.05));
-  const double choke_step = 2.0e-3;
-  const double s_choke =
-      plan.choke_noise_frac > 0.0 ? sensitivity(&RigInputs::choke_opening_frac, choke_step) : 0.0;
-  const double s_pump =
-      plan.pump_noise_m3ps > 0.0 ? sensitivity(&RigInputs::pump_flow_m3ps, pump_step) : 0.0;
-  // The carrier: the input whose prior moves the pressure more.
-  const bool pump_carries =
-      std::abs(s_pump) * levels.pump_sigma_m3ps >= std::abs(s_choke) * levels.choke_sigma_frac;
-  const double s_carrier = pump_carries ? s_pump : s_choke;
-  if (s_carrier == 0.0) return none;
-  const double step = pump_carries ? pump_step : choke_step;
-
-  // The replay's answer (per unit of the carrier) to a constant and to a trend.
-  std::vector<double> answer[2];
-  for (int basis = 0; basis < 2; ++basis) {
-    InputLevelCorrection nudge = levels;
-    (pump_carries ? (basis == 0 ? nudge.pump_offset_m3ps : nudge.pump_trend_m3ps)
-                  : (basis == 0 ? nudge.choke_offset_frac : nudge.choke_trend_frac)) = step;
-    MeasuredLog nudged = head;
-    ReplayOptions nudged_replay = replay;
-    ApplyInputLevels(nudge, &nudged);
-    ApplyInputLevels(nudge, &nudged_replay);
-    auto traces = ReplayModel(nudged, params, sim_options, nudged_replay);
-    if (!traces.ok()) return none;
-    for (std::size_t c : pressures) {
-      for (std::size_t i = 0; i < n; ++i) {
-        answer[basis].push_back((traces->values_si[c][i] - base->values_si[c][i]) / step);
-      }
-    }
-  }
-  // Least squares of the residual (measured - model) on the two answers, over every pressure
-  // sample; the residual's spread gives the estimate's covariance (white residual).
-  Eigen::Matrix2d normal = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d projection = Eigen::Vector2d::Zero();
-  std::vector<double> residual;
-  for (std::size_t k = 0; k < pressures.size(); ++k) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const double r = head.channels[pressures[k]].values_si[i] - base->values_si[pressures[k]][i];
-      const std::size_t j = k * n + i;
-      residual.push_back(r);
-      if (!std::isfinite(r) || !std::isfinite(answer[0][j]) || !std::isfinite(answer[1][j])) {
-        continue;
-      }
-      const Eigen::Vector2d u(answer[0][j], answer[1][j]);
-      normal += u * u.transpose();
-      projection += u * r;
-    }
-  }
-  if (!(normal.determinant() > 0.0)) return none;
-  const Eigen::Vector2d z = normal.ldlt().solve(projection);  // carrier units: constant, trend
-  double sum_sq = 0.0;
-  long count = 0;
-  for (std::size_t j = 0; j < residual.size(); ++j) {
-    const double e = residual[j] - z(0) * answer[0][j] - z(1) * answer[1][j];
-    if (!std::isfinite(e)) continue;
-    sum_sq += e * e;
-    ++count;
-  }
-  if (count < 16) return none;
-  const Eigen::Matrix2d z_covariance = sum_sq / (count - 2) * normal.inverse();
-
-  // Maximum a posteriori split over x = (choke, pump) x (constant, trend): z = B x + e, with
-  // the carrier's units; x ~ N(0, P), e ~ N(0, z_covariance): x = P B' (B P B' + Cov)^-1 z.
-  const double k_choke = s_choke / s_carrier, k_pump = s_pump / s_carrier;
-  Eigen::Matrix<double, 2, 4> mix = Eigen::Matrix<double, 2, 4>::Zero();
-  mix(0, 0) = k_choke;
-  mix(0, 1) = k_pump;
-  mix(1, 2) = k_choke;
-  mix(1, 3) = k_pump;
-  const Eigen::Vector4d sigma(levels.choke_sigma_frac, levels.pump_sigma_m3ps,
-                              levels.choke_trend_sigma_frac, levels.pump_trend_sigma_m3ps);
-  const Eigen::Matrix4d prior = sigma.cwiseProduct(sigma).asDiagonal();
-  const Eigen::Matrix2d innovation = mix * prior * mix.transpose() + z_covariance;
-  Eigen::Vector4d x = prior * mix.transpose() * innovation.ldlt().solve(z);
-  for (int i = 0; i < 4; ++i) {
-    const double bound = kMaxLevelOffsetSigmas * sigma(i);
-    if (!std::isfinite(x(i))) return none;
-    if (std::abs(x(i)) > bound) levels.at_bound = true;
-    x(i) = std::clamp(x(i), -bound, bound);
-  }
-  levels.choke_offset_frac = x(0);
-  levels.pump_offset_m3ps = x(1);
-  levels.choke_trend_frac = x(2);
-  levels.pump_trend_m3ps = x(3);
-
-  // The residual's mean and trend (at tau = 1) over the pressure samples, before and after (the
-  // after as the answers predict).
-  const Eigen::Vector2d applied = mix * x;
-  Eigen::Matrix2d basis_normal = Eigen::Matrix2d::Zero();
-  Eigen::Vector2d before = Eigen::Vector2d::Zero(), after = Eigen::Vector2d::Zero();
-  for (std::size_t j = 0; j < residual.size(); ++j) {
-    const double r = residual[j];
-    const double r_after = r - applied(0) * answer[0][j] - applied(1) * answer[1][j];
-    if (!std::isfinite(r_after)) continue;
-    const Eigen::Vector2d b(1.0, levels.Tau(t[j % n]));
-    basis_normal += b * b.transpose();
-    before += b * r;
-    after += b * r_after;
-  }
-  if (basis_normal.determinant() > 0.0) {
-    const Eigen::Vector2d mb = basis_normal.ldlt().solve(before);
-    const Eigen::Vector2d ma = basis_normal.ldlt().solve(after);
-    levels.residual_before_pa = mb(0);
-    levels.residual_trend_before_pa = mb(1);
-    levels.residual_after_pa = ma(0);
-    levels.residual_trend_after_pa = ma(1);
-  }
-  return levels;
-}
-
-void ApplyInputLevels(const InputLevelCorrection& levels, MeasuredLog* log) {
-  log->reconstruction.levels = levels;
-  log->reconstructed_inputs = ReconstructInputColumns(log->inputs, log->reconstruction);
-}
-
-void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay) {
-  if (!replay->warmup) return;
-  // The warm-up holds the levels the log starts with (tau = -1).
-  const double start_s = levels.center_s - levels.half_span_s;
-  RigInputs& warm = replay->warmup->levels;
-  warm.choke_opening_frac = std::clamp(warm.choke_opening_frac + levels.ChokeAt(start_s), 0.0, 1.0);
-  warm.pump_flow_m3ps = std::max(0.0, warm.pump_flow_m3ps + levels.PumpAt(start_s));
-}
-
-Status PrepareLogReplay(MeasuredLog* log, const RigParams& params,
-                        const SimulationOptions& sim_options, ReplayOptions* replay,
-                        InputLevels levels) {
-  if (replay->choose_warmup) {
-    auto warmup = ChooseWarmup(*log, params, sim_options, *replay);
-    if (!warmup.ok()) return warmup.status();
-    replay->warmup = *warmup;
-  }
-  if (levels == InputLevels::kWithTheseParams && replay->reconstruct_inputs &&
-      replay->estimate_levels) {
-    auto estimate = EstimateInputLevels(*log, params, sim_options, *replay);
-    if (!estimate.ok()) return estimate.status();
-    ApplyInputLevels(*estimate, log);
-    ApplyInputLevels(*estimate, replay);
-  }
-  return Status::Ok();
-}
-
-// ---- Metrics ----------------------------------------------------------------------------------
-
-namespace {
-
-Status CheckOptions(const CompareOptions& options) {
-  if (options.residual_lags < 1 || options.trace_columns < 1 || options.band_half_width_bins < 1 ||
-      options.welch_segment_samples < 8) {
+Status CompareOptions::Validate() const {
+  if (residual_lags < 1 || trace_columns < 1 || band_half_width_bins < 1 ||
+      welch_segment_samples < 8) {
     return Status::Error(
         "compare options: residual_lags, trace_columns and band_half_width_bins must be >= 1, "
         "welch_segment_samples >= 8");
   }
   return Status::Ok();
 }
-
-}  // namespace
 
 Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& model,
                                  const CompareOptions& options, const CompareProgress& progress) {
@@ -546,7 +39,7 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
   if (log.channels.size() > kComparedChannelCount) {
     return Status::Error(log.path + ": more channels than P1 P2 PT1..PT10 C2 FT1 FT3 FT4");
   }
-  MPDRIG_RETURN_IF_ERROR(CheckOptions(options));
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
 
   // Pass 1: what the metrics need of the whole log.
   MemoryRowSource first_source(log);
@@ -593,62 +86,77 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
   return result;
 }
 
-Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
-                              const SimulationOptions& sim_options, const CompareOptions& options,
-                              const CompareProgress& progress) {
-  MPDRIG_RETURN_IF_ERROR(CheckOptions(options));
-  MPDRIG_RETURN_IF_ERROR(sim_options.Validate());
-  // Pass 1: read the file (checking every line) for what the metrics need up front.
-  auto first_source = FileRowSource::Open(path, progress, options.read);
-  if (!first_source.ok()) return first_source.status();
-  LogScanner scanner((*first_source)->channels(), options);
+namespace {
+
+// What CompareLog's first pass learns of the file: the metrics' summary of the whole log, its
+// first rows (for the reconstruction's plan, the replay's start and levels) and its atmospheric
+// pressure.
+struct FileScan {
+  LogSummary summary;
   ReconstructionPlanner planner;
+  double atmospheric_pressure_pa = 0.0;
+};
+
+// Pass 1: reads the file (checking every line) for what the metrics need up front.
+Result<FileScan> ScanFile(const std::string& path, const CompareOptions& options,
+                          const CompareProgress& progress) {
+  auto source = FileRowSource::Open(path, progress, options.read);
+  if (!source.ok()) return source.status();
+  FileScan scan;
+  LogScanner scanner((*source)->channels(), options);
   RowPipeline first_pass(options.piston_smoothing_s, std::nullopt,
                          [&](const PipelineSample& sample) {
                            scanner.Add(sample);
-                           planner.Add(*sample.row);
+                           scan.planner.Add(*sample.row);
                          });
-  MPDRIG_RETURN_IF_ERROR(RunPipeline(first_source->get(), &first_pass));
+  MPDRIG_RETURN_IF_ERROR(RunPipeline(source->get(), &first_pass));
   auto summary = scanner.Finish(path);
   if (!summary.ok()) return summary.status();
-  const double atmospheric_pressure_pa = (*first_source)->atmospheric_pressure_pa();
-  first_source->reset();
+  scan.summary = std::move(summary).value();
+  scan.atmospheric_pressure_pa = (*source)->atmospheric_pressure_pa();
+  return scan;
+}
 
-  // Pass 2: read it again, replay the model in lock step, accumulate the metrics.
-  auto file = FileRowSource::Open(path, {}, options.read);
-  if (!file.ok()) return file.status();
-  std::unique_ptr<LogRowSource> source = std::move(file).value();
-  std::optional<InputReconstruction> plan;
-  if (options.reconstruct_inputs) plan = planner.Plan();
-  ReplayOptions replay;
-  replay.reconstruct_inputs = options.reconstruct_inputs;
-  replay.piston_smoothing_s = options.piston_smoothing_s;
-  replay.estimate_levels = options.estimate_levels;
-  if (options.choose_warmup || (plan && options.estimate_levels)) {
-    // The log's first rows in memory (the plan's): enough to choose the start and the levels.
-    auto head = planner.HeadLog(source->channels(), path, atmospheric_pressure_pa);
-    if (!head.ok()) return head.status();
-    if (options.choose_warmup) {
-      auto warmup = ChooseWarmup(*head, params, sim_options, replay);
-      if (!warmup.ok()) return warmup.status();
-      replay.warmup = *warmup;
-    }
-    if (plan && options.estimate_levels) {
-      auto levels = EstimateInputLevels(*head, params, sim_options, replay);
-      if (!levels.ok()) return levels.status();
-      plan->levels = *levels;
-      ApplyInputLevels(*levels, &replay);
-    }
+// The replay's start (ChooseWarmup) and input levels (EstimateInputLevels, into `plan` and the
+// warm-up), decided on the file's first rows in memory, as PrepareLogReplay decides them on a
+// whole log in memory; `channels` as the second pass's source.
+Status PrepareStreamedReplay(const FileScan& scan, const std::vector<SourceChannel>& channels,
+                             const std::string& path, const RigParams& params,
+                             const SimulationOptions& sim_options, const CompareOptions& options,
+                             ReplayOptions* replay, std::optional<InputReconstruction>* plan) {
+  const bool estimate_levels = plan->has_value() && options.estimate_levels;
+  if (!options.choose_warmup && !estimate_levels) return Status::Ok();
+  auto head = scan.planner.HeadLog(channels, path, scan.atmospheric_pressure_pa);
+  if (!head.ok()) return head.status();
+  if (options.choose_warmup) {
+    auto warmup = ChooseWarmup(*head, params, sim_options, *replay);
+    if (!warmup.ok()) return warmup.status();
+    replay->warmup = *warmup;
   }
-  if (plan) source = std::make_unique<ReconstructingRowSource>(std::move(source), *plan);
-  ComparisonAccumulator accumulator(*summary, options);
-  std::vector<double> model_si(summary->channels.size());
-  PercentProgress percent(progress, "replay", summary->samples);
+  if (estimate_levels) {
+    auto levels = EstimateInputLevels(*head, params, sim_options, *replay);
+    if (!levels.ok()) return levels.status();
+    (*plan)->levels = *levels;
+    ApplyInputLevels(*levels, replay);
+  }
+  return Status::Ok();
+}
+
+// Pass 2: the file's rows again, the model replayed in lock step, into the metrics. A file whose
+// rows differ in number or reach from pass 1's is refused.
+Result<Comparison> ReplayAndAccumulate(LogRowSource* source, const std::string& path,
+                                       const LogSummary& summary, const RigParams& params,
+                                       const SimulationOptions& sim_options,
+                                       const CompareOptions& options, const ReplayOptions& replay,
+                                       const CompareProgress& progress) {
+  ComparisonAccumulator accumulator(summary, options);
+  std::vector<double> model_si(summary.channels.size());
+  PercentProgress percent(progress, "replay", summary.samples);
   RowPipeline pipeline(PipelineSmoothingS(replay),
-                       ReplaySetup{params, sim_options, summary->t1_s, replay.warmup},
+                       ReplaySetup{params, sim_options, summary.t1_s, replay.warmup},
                        [&](const PipelineSample& sample) {
                          for (std::size_t c = 0; c < model_si.size(); ++c) {
-                           model_si[c] = sample.model->values[Index(summary->channels[c].channel)];
+                           model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
                          }
                          accumulator.Add(sample, model_si.data());
                          percent.Done(sample.index + 1);
@@ -658,20 +166,45 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
     auto more = source->Next(&row);
     if (!more.ok()) return more.status();
     if (!*more) break;
-    if (pipeline.rows_pushed() >= summary->samples || row.time_s > summary->t1_s) {
+    if (pipeline.rows_pushed() >= summary.samples || row.time_s > summary.t1_s) {
       return Status::Error(path + ": the file changed between the two passes");
     }
     MPDRIG_RETURN_IF_ERROR(pipeline.Push(row).Within(path));
   }
-  if (pipeline.rows_pushed() != summary->samples) {
+  if (pipeline.rows_pushed() != summary.samples) {
     return Status::Error(path + ": the file changed between the two passes");
   }
   MPDRIG_RETURN_IF_ERROR(pipeline.Finish().Within(path));
   const RigSampler* sampler = pipeline.sampler();
-  auto result = accumulator.Finish(
+  return accumulator.Finish(
       path, sampler != nullptr ? sampler->simulator().first_range_event() : std::nullopt);
+}
+
+}  // namespace
+
+Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
+                              const SimulationOptions& sim_options, const CompareOptions& options,
+                              const CompareProgress& progress) {
+  MPDRIG_RETURN_IF_ERROR(options.Validate());
+  MPDRIG_RETURN_IF_ERROR(sim_options.Validate());
+  const auto scan = ScanFile(path, options, progress);
+  if (!scan.ok()) return scan.status();
+  auto file = FileRowSource::Open(path, {}, options.read);
+  if (!file.ok()) return file.status();
+  std::unique_ptr<LogRowSource> source = std::move(file).value();
+  std::optional<InputReconstruction> plan;
+  if (options.reconstruct_inputs) plan = scan->planner.Plan();
+  ReplayOptions replay;
+  replay.reconstruct_inputs = options.reconstruct_inputs;
+  replay.piston_smoothing_s = options.piston_smoothing_s;
+  replay.estimate_levels = options.estimate_levels;
+  MPDRIG_RETURN_IF_ERROR(PrepareStreamedReplay(*scan, source->channels(), path, params, sim_options,
+                                               options, &replay, &plan));
+  if (plan) source = std::make_unique<ReconstructingRowSource>(std::move(source), *plan);
+  auto result = ReplayAndAccumulate(source.get(), path, scan->summary, params, sim_options, options,
+                                    replay, progress);
   if (result.ok()) {
-    result->atmospheric_pressure_pa = atmospheric_pressure_pa;
+    result->atmospheric_pressure_pa = scan->atmospheric_pressure_pa;
     result->input_reconstruction = plan;
     result->warmup = replay.warmup;
   }

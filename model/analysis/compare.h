@@ -8,11 +8,10 @@
 //                     log up front (length, mean interval, each channel's mean, the inputs' means,
 //                     the piston's dominant frequencies); pass 2 reads it again with the model
 //                     replay in lock step (log_stream.h) and accumulates the metrics.
-//   LoadMeasuredLog   keeps time, the inputs and the compared channels in memory;
-//   ReplayModel       runs the model on them (the same replay as pass 2: the same numbers);
-//   CompareTraces     the same two passes over traces in memory. fit and diagnose call
-//                     ReplayModel and CompareTraces many times on one log to fit and screen
-//                     effects.
+//   CompareTraces     the same two passes over a log in memory (LoadMeasuredLog, measured_log.h)
+//                     and the model's traces on it (ReplayModel, log_replay.h: the same replay as
+//                     pass 2, the same numbers). fit and diagnose call ReplayModel and
+//                     CompareTraces many times on one log to fit and screen effects.
 //
 // Metrics per channel y (measured) and yhat (model), over the samples where y is measured:
 //   NRMSE = ||y - yhat|| / ||y - mean(y)||, fit = 100 (1 - NRMSE) %  (System Identification);
@@ -55,13 +54,15 @@
 
 #include <array>
 #include <complex>
-#include <functional>
+#include <cstddef>
 #include <optional>
 #include <string>
-#include <string_view>
 #include <vector>
 
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/status.h"
+#include "model/common/units.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/channels.h"
 #include "model/riglog/rig_log_reader.h"
@@ -69,109 +70,6 @@
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
-
-// The measured channels a comparison looks at (not the inputs): P1 P2 PT1..PT10 C2 FT1 FT3 FT4.
-std::vector<Channel> ComparedChannels();
-// x [m] of PTk along the lab's pipe (0, 100, ..., 900, rig-log-format.md); nullopt otherwise.
-std::optional<double> PipePositionM(Channel channel);
-
-// "stage" names the part of the work ("read", "replay", "simulate", "analyse"); fraction in
-// [0, 1], or minus a sample count where the total is unknown (reading standard input).
-using CompareProgress = std::function<void(std::string_view stage, double fraction)>;
-
-struct MeasuredChannel {
-  Channel channel = Channel::kP1;
-  riglog::Unit unit = riglog::Unit::kBarg;  // the log's unit, for the edges
-  std::vector<double> values_si;            // NaN where not measured
-};
-
-// What a comparison needs from a log. Memory: 8 bytes per sample for time, each input and each
-// compared channel present (nothing else of the file is kept).
-struct MeasuredLog {
-  std::string path;
-  riglog::Metadata metadata;
-  double atmospheric_pressure_pa = units::kStandardAtmospherePa;
-  LogInputColumns inputs;  // as measured; time_s lives here
-  // The inputs reconstructed under their noise (log_inputs.h), what a replay feeds the model by
-  // default, and how: made when the log is loaded.
-  LogInputColumns reconstructed_inputs;
-  InputReconstruction reconstruction;
-  // Present (at least one sample measured), in the order of ComparedChannels().
-  std::vector<MeasuredChannel> channels;
-  const std::vector<double>& time_s() const { return inputs.time_s; }
-};
-
-// Streams `path` (RigLogReader): errors are `path:line:column: message`. Refuses a log without
-// piston_position or choke_position (or with an unmeasured input sample), fewer than 4 samples,
-// or no compared channel.
-Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress = {},
-                                    const riglog::ReadOptions& read = {});
-// The same from a log already in memory (tests, tools that build logs).
-Result<MeasuredLog> MeasuredLogFromRigLog(const riglog::RigLog& log, const std::string& path);
-// The samples of `log` with t <= t_end; the reconstructed inputs are the whole log's, cut (a
-// replay of the head sees what a replay of the whole log sees there).
-MeasuredLog MeasuredLogUntil(const MeasuredLog& log, double t_end);
-
-// Plans and makes log->reconstructed_inputs from log->inputs (both loaders do it; call it again
-// after changing the inputs by hand).
-void ReconstructInputs(MeasuredLog* log);
-
-// Reconstructed inputs by default, or as measured (log_inputs.h).
-using ReplayOptions = InputReplayOptions;
-
-// The model's values of the compared channels at the log's times, in the order of
-// log.channels. The same numbers Simulate() gives for the log's inputs (the test checks this),
-// but only the compared channels are kept: 8 bytes per sample and channel.
-struct ModelTraces {
-  std::vector<std::vector<double>> values_si;
-  bool inputs_reconstructed = false;     // fed MeasuredLog::reconstructed_inputs
-  std::optional<PeriodicWarmup> warmup;  // the start, as ReplayOptions::warmup
-  std::optional<RangeEvent> first_range_event;
-  long steps = 0;
-  double time_step_s = 0.0;
-};
-
-// The choke input is forced to ChokeInput::kMeasured (design.md: a log's choke_position is the
-// measured opening).
-Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
-                                const SimulationOptions& sim_options,
-                                const ReplayOptions& replay = {},
-                                const CompareProgress& progress = {});
-
-// Whether a replay of `log` should start after a periodic warm-up (PlanPeriodicWarmup,
-// log_inputs.h) or from the steady state: the inputs cannot tell a heave that was already running
-// when the recording started from one that started with it, the pressures can. Where the log's
-// start is periodic, both starts are replayed over its first two periods with `params`, and the
-// warm-up is chosen if its squared error over the measured pressure channels is smaller (a start
-// whose replay fails, e.g. leaves the model's range, is never chosen).
-Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const RigParams& params,
-                                                   const SimulationOptions& sim_options,
-                                                   const ReplayOptions& replay);
-
-// The choke's and FT2's level offsets that make the replay's mean pressures meet the measured
-// ones, within what the inputs' noise allows (InputLevelCorrection, log_inputs.h): one replay of
-// the log's first kReconstructionPlanSamples rows with `params` and `replay` (its warm-up
-// included), the sensitivities from the steady law at the inputs' mean, the maximum a posteriori
-// offsets with each input's sigma/sqrt(N) as the prior, clipped to kMaxLevelOffsetSigmas of it.
-// None when the inputs are not reconstructed, replay.estimate_levels is false, the log has no
-// pressure channel, or the replay fails (the replay itself will say why).
-Result<InputLevelCorrection> EstimateInputLevels(const MeasuredLog& log, const RigParams& params,
-                                                 const SimulationOptions& sim_options,
-                                                 const ReplayOptions& replay);
-// Puts the correction into the log's reconstruction (and its reconstructed inputs) and into the
-// warm-up's levels, so that every replay after it feeds the corrected levels.
-void ApplyInputLevels(const InputLevelCorrection& levels, MeasuredLog* log);
-void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay);
-
-// Everything a replay of a whole log in memory decides from the log before it runs: the start
-// (ChooseWarmup, where replay->choose_warmup) and, with kWithTheseParams, the input levels
-// (EstimateInputLevels + ApplyInputLevels, where replay->estimate_levels). simulate --inputs
-// calls it so, as CompareLog does on its streamed head; fit and diagnose with kAfterTheFit, as
-// they estimate the levels at the parameters they fit (FitParametersAndInputLevels, Diagnose).
-enum class InputLevels { kWithTheseParams, kAfterTheFit };
-Status PrepareLogReplay(MeasuredLog* log, const RigParams& params,
-                        const SimulationOptions& sim_options, ReplayOptions* replay,
-                        InputLevels levels = InputLevels::kWithTheseParams);
 
 struct CompareOptions {
   int residual_lags = 25;   // M, as MATLAB resid's default
@@ -203,6 +101,10 @@ struct CompareOptions {
   int welch_segment_samples = 1 << 17;
   // CompareLog: the reader's limits on the log's time axis (largest gap, smallest step).
   riglog::ReadOptions read;
+
+  // residual_lags, trace_columns and band_half_width_bins >= 1, welch_segment_samples >= 8
+  // (CompareTraces and CompareLog refuse options that fail it).
+  [[nodiscard]] Status Validate() const;
 };
 
 struct BandMetrics {

@@ -131,6 +131,35 @@ std::vector<double> WindowCorrelation(const std::vector<double>& window, std::si
   return correlation;
 }
 
+// Transfer functions: the bins where the piston has power; beyond transfer_points of them,
+// log-spaced groups of bins pooled as sum(Y conj U) / sum |U|^2 (a smoothed ETFE). `groups` holds
+// each bin's group, numbered from 0 in frequency order.
+void PlanTransferPoints(const std::vector<double>& power, const CompareOptions& options,
+                        std::vector<std::size_t>* bins, std::vector<std::size_t>* groups) {
+  double max_power = 0.0;
+  for (std::size_t k = 2; k < power.size(); ++k) max_power = std::max(max_power, power[k]);
+  for (std::size_t k = 2; k < power.size(); ++k) {
+    if (power[k] >= options.transfer_min_power_fraction * max_power && max_power > 0.0) {
+      bins->push_back(k);
+    }
+  }
+  if (bins->empty()) return;
+  const std::size_t max_points = static_cast<std::size_t>(std::max(1, options.transfer_points));
+  const double lo = std::log(static_cast<double>(bins->front()));
+  const double hi = std::log(static_cast<double>(bins->back()) + 1.0);
+  auto group_of = [&](std::size_t k) {
+    if (bins->size() <= max_points) return k;  // every excited bin is a point
+    return static_cast<std::size_t>((std::log(static_cast<double>(k)) - lo) / (hi - lo) *
+                                    static_cast<double>(max_points));
+  };
+  std::size_t point = 0;
+  std::size_t current = group_of(bins->front());
+  for (std::size_t k : *bins) {
+    if (group_of(k) != current) current = group_of(k), ++point;
+    groups->push_back(point);
+  }
+}
+
 void UpdateRange(double value, double* lo, double* hi) {
   if (!std::isfinite(value)) return;
   if (!(*lo <= value)) *lo = value;
@@ -324,79 +353,61 @@ ComparisonAccumulator::ComparisonAccumulator(const LogSummary& summary,
     if (band.second == 1) zoom_span_s_ = options.zoom_periods / band.first;
   }
 
-  // Transfer functions: the bins where the piston has power; beyond transfer_points of them,
-  // log-spaced groups of bins pooled as sum(Y conj U) / sum |U|^2 (a smoothed ETFE).
-  const std::vector<double>& power = summary.piston_power;
-  double max_power = 0.0;
-  for (std::size_t k = 2; k < power.size(); ++k) max_power = std::max(max_power, power[k]);
-  for (std::size_t k = 2; k < power.size(); ++k) {
-    if (power[k] >= options.transfer_min_power_fraction * max_power && max_power > 0.0) {
-      excited_bins_.push_back(k);
-    }
-  }
-  if (!excited_bins_.empty()) {
-    const std::size_t max_points = static_cast<std::size_t>(std::max(1, options.transfer_points));
-    const double lo = std::log(static_cast<double>(excited_bins_.front()));
-    const double hi = std::log(static_cast<double>(excited_bins_.back()) + 1.0);
-    auto group_of = [&](std::size_t k) {
-      if (excited_bins_.size() <= max_points) return k;  // every excited bin is a point
-      return static_cast<std::size_t>((std::log(static_cast<double>(k)) - lo) / (hi - lo) *
-                                      static_cast<double>(max_points));
-    };
-    std::size_t point = 0;
-    std::size_t current = group_of(excited_bins_.front());
-    for (std::size_t k : excited_bins_) {
-      if (group_of(k) != current) current = group_of(k), ++point;
-      excited_group_.push_back(point);
-    }
-  }
+  PlanTransferPoints(summary.piston_power, options, &excited_bins_, &excited_group_);
   const std::size_t transfer_groups = excited_group_.empty() ? 0 : excited_group_.back() + 1;
-
   const std::size_t lags = static_cast<std::size_t>(options.residual_lags);
   for (std::size_t u = 0; u < kResidualInputCount; ++u) input_history_.emplace_back(lags + 1);
-  const std::size_t zoom_ring =
-      2 * static_cast<std::size_t>(std::max(2, options.max_zoom_samples)) + 1;
-  const std::size_t columns = static_cast<std::size_t>(std::max(1, options.trace_columns));
   channels_.resize(summary.channels.size());
   for (std::size_t c = 0; c < channels_.size(); ++c) {
-    ChannelState& state = channels_[c];
-    state.summary = &summary.channels[c];
-    TraceEnvelope& env = state.envelope;
-    env.t0_s = summary.t0_s;
-    env.t1_s = summary.t1_s;
-    for (auto* v : {&env.measured_min, &env.model_min, &env.residual_min}) v->assign(columns, kNaN);
-    for (auto* v : {&env.measured_max, &env.model_max, &env.residual_max}) v->assign(columns, kNaN);
-    state.ring_time.assign(zoom_ring, kNaN);
-    state.ring_measured.assign(zoom_ring, kNaN);
-    state.ring_model.assign(zoom_ring, kNaN);
-    state.residual_history = std::make_unique<History>(lags + 1);
-    state.dd.assign(lags + 1, 0.0);
-    if (state.summary->has_gaps) {
-      state.mask_history = std::make_unique<History>(lags + 1);
-      state.dm.assign(lags + 1, 0.0);
-      state.md.assign(lags + 1, 0.0);
-      state.mm.assign(lags + 1, 0.0);
-    }
-    for (std::size_t u = 0; u < kResidualInputCount; ++u) {
-      state.du[u].assign(2 * lags + 2, 0.0);
-      if (state.summary->has_gaps) state.mu[u].assign(2 * lags + 2, 0.0);
-    }
-    state.measured_ring = std::make_unique<SampleRing>(segmenter_.max_length());
-    state.model_ring = std::make_unique<SampleRing>(segmenter_.max_length());
-    for (auto* v : {&state.band_power_measured, &state.band_power_model, &state.band_power_error}) {
-      v->assign(band_centres_.size(), 0.0);
-    }
-    state.band_cross.assign(band_centres_.size(), 0.0);
-    state.transfer =
-        state.summary->channel == Channel::kPT1 || state.summary->channel == Channel::kC2;
-    if (state.transfer) {
-      state.transfer_measured.assign(transfer_groups, 0.0);
-      state.transfer_model.assign(transfer_groups, 0.0);
-      state.transfer_power.assign(transfer_groups, 0.0);
-      state.transfer_freq_power.assign(transfer_groups, 0.0);
-    }
-    state.lag_cross.assign(lag_fft_size_ / 2 + 1, 0.0);
+    InitChannel(&channels_[c], summary.channels[c], transfer_groups);
   }
+}
+
+// Every sum and buffer of one channel, empty; the mask's lagged sums only where it has gaps,
+// the transfer function's only for PT1 and C2.
+void ComparisonAccumulator::InitChannel(ChannelState* state,
+                                        const LogSummary::ChannelSummary& summary,
+                                        std::size_t transfer_groups) const {
+  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
+  const std::size_t zoom_ring =
+      2 * static_cast<std::size_t>(std::max(2, options_.max_zoom_samples)) + 1;
+  const std::size_t columns = static_cast<std::size_t>(std::max(1, options_.trace_columns));
+  state->summary = &summary;
+  TraceEnvelope& env = state->envelope;
+  env.t0_s = summary_.t0_s;
+  env.t1_s = summary_.t1_s;
+  for (auto* v : {&env.measured_min, &env.model_min, &env.residual_min}) v->assign(columns, kNaN);
+  for (auto* v : {&env.measured_max, &env.model_max, &env.residual_max}) v->assign(columns, kNaN);
+  state->ring_time.assign(zoom_ring, kNaN);
+  state->ring_measured.assign(zoom_ring, kNaN);
+  state->ring_model.assign(zoom_ring, kNaN);
+  state->residual_history = std::make_unique<History>(lags + 1);
+  state->dd.assign(lags + 1, 0.0);
+  if (summary.has_gaps) {
+    state->mask_history = std::make_unique<History>(lags + 1);
+    state->dm.assign(lags + 1, 0.0);
+    state->md.assign(lags + 1, 0.0);
+    state->mm.assign(lags + 1, 0.0);
+  }
+  for (std::size_t u = 0; u < kResidualInputCount; ++u) {
+    state->du[u].assign(2 * lags + 2, 0.0);
+    if (summary.has_gaps) state->mu[u].assign(2 * lags + 2, 0.0);
+  }
+  state->measured_ring = std::make_unique<SampleRing>(segmenter_.max_length());
+  state->model_ring = std::make_unique<SampleRing>(segmenter_.max_length());
+  for (auto* v :
+       {&state->band_power_measured, &state->band_power_model, &state->band_power_error}) {
+    v->assign(band_centres_.size(), 0.0);
+  }
+  state->band_cross.assign(band_centres_.size(), 0.0);
+  state->transfer = summary.channel == Channel::kPT1 || summary.channel == Channel::kC2;
+  if (state->transfer) {
+    state->transfer_measured.assign(transfer_groups, 0.0);
+    state->transfer_model.assign(transfer_groups, 0.0);
+    state->transfer_power.assign(transfer_groups, 0.0);
+    state->transfer_freq_power.assign(transfer_groups, 0.0);
+  }
+  state->lag_cross.assign(lag_fft_size_ / 2 + 1, 0.0);
 }
 
 ComparisonAccumulator::~ComparisonAccumulator() = default;
@@ -404,42 +415,18 @@ ComparisonAccumulator::~ComparisonAccumulator() = default;
 void ComparisonAccumulator::Add(const PipelineSample& sample, const double* model_si) {
   const LogRow& row = *sample.row;
   const long n = added_++;
-  if (input_close_up_.time_s.size() < kInputCloseUpSamples) {
-    input_close_up_.time_s.push_back(row.time_s);
-    const std::array<double, 4> replayed = {row.piston_position_m, row.choke_opening_frac,
-                                            row.pump_flow_m3ps, row.outlet_pressure_pa};
-    for (std::size_t k = 0; k < 4; ++k) {
-      input_close_up_.measured[k].push_back(row.measured_inputs[k]);
-      input_close_up_.replayed[k].push_back(replayed[k]);
-    }
-  }
-  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
-  // Residual inputs, mean removed.
-  const std::array<double, kResidualInputCount> raw = {
-      sample.piston_velocity_mps, sample.piston_position_m, row.choke_opening_frac};
-  std::array<double, kResidualInputCount> u{};
-  for (std::size_t i = 0; i < kResidualInputCount; ++i) {
-    u[i] = raw[i] - summary_.input_mean[i];
-    input_sum_[i] += u[i];
-    input_square_sum_[i] += u[i] * u[i];
-    if (input_head_[i].size() < lags) input_head_[i].push_back(u[i]);
-    input_history_[i].Push(u[i]);
-  }
+  AddInputCloseUp(row);
+  const std::array<double, kResidualInputCount> u = AddResidualInputs(sample);
   const double span = summary_.t1_s - summary_.t0_s;
   const std::size_t columns = static_cast<std::size_t>(std::max(1, options_.trace_columns));
   std::size_t column =
       span > 0.0 ? static_cast<std::size_t>((row.time_s - summary_.t0_s) / span * columns) : 0;
   column = std::min(column, columns - 1);
-  const long zoom_half = static_cast<long>(std::max(2, options_.max_zoom_samples));
-  const std::size_t ring_size = static_cast<std::size_t>(2 * zoom_half + 1);
-  const std::size_t ring_slot = static_cast<std::size_t>(n) % ring_size;
-
   for (std::size_t c = 0; c < channels_.size(); ++c) {
     ChannelState& s = channels_[c];
     const double y = row.measured_si[s.summary->source_index];
     const double yhat = model_si[c];
-    const bool measured = std::isfinite(y);
-    if (measured) {
+    if (std::isfinite(y)) {
       const double e = yhat - y;
       s.sse += e * e;
       s.sum_e += e;
@@ -448,53 +435,98 @@ void ComparisonAccumulator::Add(const PipelineSample& sample, const double* mode
     UpdateRange(y, &s.envelope.measured_min[column], &s.envelope.measured_max[column]);
     UpdateRange(yhat, &s.envelope.model_min[column], &s.envelope.model_max[column]);
     UpdateRange(y - yhat, &s.envelope.residual_min[column], &s.envelope.residual_max[column]);
-
-    s.ring_time[ring_slot] = row.time_s;
-    s.ring_measured[ring_slot] = y;
-    s.ring_model[ring_slot] = yhat;
-    const double abs_error = std::abs(y - yhat);
-    if (std::isfinite(abs_error) && abs_error > s.worst_abs) {
-      s.worst_abs = abs_error, s.worst = n, s.snapshot_due = true;
-    }
-    if (s.snapshot_due && n == s.worst + zoom_half) TakeSnapshot(&s, n);
-
-    // Lagged residual sums.
-    double d = 0.0;
-    if (measured) {
-      if (!s.shifted) s.shift = y - yhat, s.shifted = true;
-      d = (y - yhat) - s.shift;
-      s.sum_shifted += d;
-    }
-    const double m = measured ? 1.0 : 0.0;
-    if (s.head.size() < lags) s.head.push_back(d);
-    s.residual_history->Push(d);
-    const double* dh = s.residual_history->data();
-    Axpy(lags + 1, d, dh, s.dd.data());
-    const double* mh = nullptr;
-    if (s.mask_history) {
-      s.mask_history->Push(m);
-      mh = s.mask_history->data();
-      Axpy(lags + 1, d, mh, s.dm.data());
-      Axpy(lags + 1, m, dh, s.md.data());
-      Axpy(lags + 1, m, mh, s.mm.data());
-    }
-    for (std::size_t i = 0; i < kResidualInputCount; ++i) {
-      const double* uh = input_history_[i].data();
-      double* du = s.du[i].data();
-      // k = j >= 0: d_n u_{n-j}; k = -j <= 0: d_{n-j} u_n.
-      Axpy(lags + 1, d, uh, du);
-      Axpy(lags + 1, u[i], dh, du + lags + 1);
-      if (mh != nullptr) {
-        double* mu = s.mu[i].data();
-        Axpy(lags + 1, m, uh, mu);
-        Axpy(lags + 1, u[i], mh, mu + lags + 1);
-      }
-    }
+    AddToCloseUp(&s, n, row.time_s, y, yhat);
+    AddLaggedSums(&s, y, yhat, u);
     s.measured_ring->Push(y);
     s.model_ring->Push(yhat);
   }
   piston_ring_.Push(sample.piston_position_m);
   if (auto length = segmenter_.Push()) AddSegment(*length);
+}
+
+// The log's first kInputCloseUpSamples inputs, as measured and as replayed.
+void ComparisonAccumulator::AddInputCloseUp(const LogRow& row) {
+  if (input_close_up_.time_s.size() >= kInputCloseUpSamples) return;
+  input_close_up_.time_s.push_back(row.time_s);
+  const std::array<double, 4> replayed = {row.piston_position_m, row.choke_opening_frac,
+                                          row.pump_flow_m3ps, row.outlet_pressure_pa};
+  for (std::size_t k = 0; k < 4; ++k) {
+    input_close_up_.measured[k].push_back(row.measured_inputs[k]);
+    input_close_up_.replayed[k].push_back(replayed[k]);
+  }
+}
+
+// The residual inputs of this sample, mean removed, into their sums and histories.
+std::array<double, kResidualInputCount> ComparisonAccumulator::AddResidualInputs(
+    const PipelineSample& sample) {
+  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
+  const std::array<double, kResidualInputCount> raw = {
+      sample.piston_velocity_mps, sample.piston_position_m, sample.row->choke_opening_frac};
+  std::array<double, kResidualInputCount> u{};
+  for (std::size_t i = 0; i < kResidualInputCount; ++i) {
+    u[i] = raw[i] - summary_.input_mean[i];
+    input_sum_[i] += u[i];
+    input_square_sum_[i] += u[i] * u[i];
+    if (input_head_[i].size() < lags) input_head_[i].push_back(u[i]);
+    input_history_[i].Push(u[i]);
+  }
+  return u;
+}
+
+// Sample n into the channel's ring of the last 2 B + 1 samples; the largest |residual| so far,
+// and its snapshot B samples after it.
+void ComparisonAccumulator::AddToCloseUp(ChannelState* s, long n, double time_s, double y,
+                                         double yhat) const {
+  const long zoom_half = static_cast<long>(std::max(2, options_.max_zoom_samples));
+  const std::size_t ring_size = static_cast<std::size_t>(2 * zoom_half + 1);
+  const std::size_t ring_slot = static_cast<std::size_t>(n) % ring_size;
+  s->ring_time[ring_slot] = time_s;
+  s->ring_measured[ring_slot] = y;
+  s->ring_model[ring_slot] = yhat;
+  const double abs_error = std::abs(y - yhat);
+  if (std::isfinite(abs_error) && abs_error > s->worst_abs) {
+    s->worst_abs = abs_error, s->worst = n, s->snapshot_due = true;
+  }
+  if (s->snapshot_due && n == s->worst + zoom_half) TakeSnapshot(s, n);
+}
+
+// The lagged residual sums (ChannelState) with this sample's shifted residual d, its mask m and
+// the residual inputs u.
+void ComparisonAccumulator::AddLaggedSums(ChannelState* s, double y, double yhat,
+                                          const std::array<double, kResidualInputCount>& u) const {
+  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
+  const bool measured = std::isfinite(y);
+  double d = 0.0;
+  if (measured) {
+    if (!s->shifted) s->shift = y - yhat, s->shifted = true;
+    d = (y - yhat) - s->shift;
+    s->sum_shifted += d;
+  }
+  const double m = measured ? 1.0 : 0.0;
+  if (s->head.size() < lags) s->head.push_back(d);
+  s->residual_history->Push(d);
+  const double* dh = s->residual_history->data();
+  Axpy(lags + 1, d, dh, s->dd.data());
+  const double* mh = nullptr;
+  if (s->mask_history) {
+    s->mask_history->Push(m);
+    mh = s->mask_history->data();
+    Axpy(lags + 1, d, mh, s->dm.data());
+    Axpy(lags + 1, m, dh, s->md.data());
+    Axpy(lags + 1, m, mh, s->mm.data());
+  }
+  for (std::size_t i = 0; i < kResidualInputCount; ++i) {
+    const double* uh = input_history_[i].data();
+    double* du = s->du[i].data();
+    // k = j >= 0: d_n u_{n-j}; k = -j <= 0: d_{n-j} u_n.
+    Axpy(lags + 1, d, uh, du);
+    Axpy(lags + 1, u[i], dh, du + lags + 1);
+    if (mh != nullptr) {
+      double* mu = s->mu[i].data();
+      Axpy(lags + 1, m, uh, mu);
+      Axpy(lags + 1, u[i], mh, mu + lags + 1);
+    }
+  }
 }
 
 void ComparisonAccumulator::AddSegment(std::size_t length) {
@@ -603,174 +635,16 @@ Result<Comparison> ComparisonAccumulator::Finish(
                          std::to_string(summary_.samples) + " on the first (did the file change?)");
   }
   if (auto length = segmenter_.Finish()) AddSegment(*length);
-  const long n = summary_.samples;
-  const double dt = summary_.sample_interval_s;
-  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
-  Comparison result;
-  result.path = path;
-  result.samples = n;
-  result.input_close_up = input_close_up_;
-  result.duration_s = summary_.t1_s - summary_.t0_s;
-  result.sample_interval_s = dt;
-  result.uniform_sampling = summary_.uniform_sampling;
-  result.first_range_event = first_range_event;
-  result.spectrum_segments = static_cast<long>(summary_.segments);
-  result.spectrum_segment_s = static_cast<double>(summary_.segment_length) * dt;
-  for (const auto& band : band_centres_) result.dominant_freqs_hz.push_back(band.first);
-  result.max_lag_s = max_lag_s_;
-  const double confidence = kConfidence99 / std::sqrt(static_cast<double>(n));
-  const double amplitude_scale =
-      2.0 / std::sqrt(static_cast<double>(summary_.fft_size) * window_power_);
-
+  Comparison result = LogMetrics(path, first_range_event);
   double error_sum = 0.0;
   int error_count = 0;
   for (ChannelState& s : channels_) {
-    const LogSummary::ChannelSummary& channel = *s.summary;
-    ChannelMetrics metrics;
-    metrics.channel = channel.channel;
-    metrics.unit = channel.unit;
-    const auto count = static_cast<double>(channel.count);
-    metrics.samples = channel.count;
-    metrics.measured_mean_si = channel.mean_si;
-    metrics.measured_std_si = std::sqrt(s.sst / count);
-    metrics.rms_si = std::sqrt(s.sse / count);
-    metrics.bias_si = s.sum_e / count;
-    // A constant measurement has no variation to explain: NRMSE undefined (NaN).
-    metrics.nrmse = Nrmse(s.sse, s.sst);
-    metrics.fit_percent = 100.0 * (1.0 - metrics.nrmse);
+    ChannelMetrics metrics = SampleMetrics(s);
     if (std::isfinite(metrics.nrmse)) error_sum += metrics.nrmse, ++error_count;
-
-    // Lag: the averaged cross-correlation sum_segments sum_n a[n] b[n + k] (FFTW's inverse
-    // leaves out 1/size; negative k at index size + k; no wrap-around: size >= L + max_lag + 1),
-    // normalised and with the window's own correlation W(k) divided out.
-    const double norm = std::sqrt(s.lag_aa * s.lag_bb);
-    if (norm > 0.0) {
-      const std::size_t size = lag_fft_size_;
-      std::vector<double> raw;
-      lag_fft_->Inverse(s.lag_cross, &raw);
-      const long max_lag = static_cast<long>(max_lag_);
-      const double w0 = window_correlation_[max_lag_];
-      auto r = [&](long k) {
-        const std::size_t index =
-            k >= 0 ? static_cast<std::size_t>(k) : size - static_cast<std::size_t>(-k);
-        return raw[index] / static_cast<double>(size) / norm * w0 /
-               window_correlation_[static_cast<std::size_t>(k + max_lag)];
-      };
-      const long limit = std::min(max_lag, static_cast<long>(summary_.segment_length) - 2);
-      long best = 0;
-      for (long k = -limit; k <= limit; ++k) {
-        if (r(k) > r(best)) best = k;
-      }
-      double offset = 0.0;
-      if (best > -limit && best < limit) {
-        offset = ParabolicOffset(r(best - 1), r(best), r(best + 1));
-      }
-      metrics.lag_s = (static_cast<double>(best) + offset) * dt;
-      metrics.lag_correlation = r(best);
-    }
-
-    // Bands, averaged over the segments this channel was measured in.
-    const double segments = static_cast<double>(std::max<std::size_t>(1, s.segments));
-    for (std::size_t i = 0; i < band_centres_.size(); ++i) {
-      const auto& [centre, harmonic] = band_centres_[i];
-      BandMetrics band;
-      band.freq_hz = centre;
-      band.harmonic = harmonic;
-      band.low_hz = std::max(0.0, centre - options_.band_half_width_bins * summary_.df_hz);
-      band.high_hz = centre + options_.band_half_width_bins * summary_.df_hz;
-      const double power_y = s.band_power_measured[i];
-      const double power_model = s.band_power_model[i];
-      const double power_error = s.band_power_error[i];
-      // Parseval: a sinusoid A cos puts size (A/2)^2 sum w^2 into the positive-frequency bins.
-      band.measured_amplitude = amplitude_scale * std::sqrt(power_y / segments);
-      band.model_amplitude = amplitude_scale * std::sqrt(power_model / segments);
-      band.magnitude_ratio = power_y > 0.0 ? std::sqrt(power_model / power_y) : kNaN;
-      band.phase_diff_deg = WrapDeg(std::arg(s.band_cross[i]) * 180.0 / std::numbers::pi);
-      band.band_nrmse = power_y > 0.0 ? std::sqrt(power_error / power_y) : kNaN;
-      band.error_amplitude = amplitude_scale * std::sqrt(power_error / segments);
-      metrics.bands.push_back(band);
-    }
-    if (s.transfer) {
-      TransferFunction tf;
-      tf.output = channel.channel;
-      for (std::size_t g = 0; g < s.transfer_power.size(); ++g) {
-        const double power = s.transfer_power[g];
-        if (!(power > 0.0)) continue;
-        tf.points.push_back({s.transfer_freq_power[g] / power, s.transfer_measured[g] / power,
-                             s.transfer_model[g] / power});
-      }
-      result.transfer_functions.push_back(std::move(tf));
-    }
-
-    // Residual e = m (d - c), c the mean of the shifted residual over the measured samples:
-    //   sum e_n e_{n-j} = dd - c (dm + md) + c^2 mm,  sum e_n u_{n-k} = du - c mu.
-    // Without gaps (m = 1) the mask sums are sums of all but the first or last j values.
-    const std::size_t history = std::min<std::size_t>(lags, static_cast<std::size_t>(n));
-    std::vector<double> dm = s.dm, md = s.md, mm = s.mm;
-    std::array<std::vector<double>, kResidualInputCount> mu = s.mu;
-    if (!channel.has_gaps) {
-      const double* tail = s.residual_history->data();  // newest first
-      dm.assign(lags + 1, 0.0), md.assign(lags + 1, 0.0), mm.assign(lags + 1, 0.0);
-      double head_sum = 0.0, tail_sum = 0.0;
-      for (std::size_t j = 0; j <= lags; ++j) {
-        if (j > 0 && j <= history) head_sum += s.head[j - 1], tail_sum += tail[j - 1];
-        dm[j] = j < static_cast<std::size_t>(n) ? s.sum_shifted - head_sum : 0.0;
-        md[j] = j < static_cast<std::size_t>(n) ? s.sum_shifted - tail_sum : 0.0;
-        mm[j] =
-            j < static_cast<std::size_t>(n) ? static_cast<double>(n - static_cast<long>(j)) : 0.0;
-      }
-      for (std::size_t i = 0; i < kResidualInputCount; ++i) {
-        const double* input_tail = input_history_[i].data();
-        mu[i].assign(2 * lags + 2, 0.0);
-        double head = 0.0, tail_u = 0.0;
-        for (std::size_t j = 0; j <= lags; ++j) {
-          if (j > 0 && j <= history) head += input_head_[i][j - 1], tail_u += input_tail[j - 1];
-          if (j >= static_cast<std::size_t>(n)) continue;
-          mu[i][j] = input_sum_[i] - tail_u;           // k = j: u_0 .. u_{N-1-j}
-          mu[i][lags + 1 + j] = input_sum_[i] - head;  // k = -j: u_j .. u_{N-1}
-        }
-      }
-    }
-    const double c = -metrics.bias_si - s.shift;
-    std::vector<double> ee(lags + 1);
-    for (std::size_t j = 0; j <= lags; ++j) {
-      ee[j] = s.dd[j] - c * (dm[j] + md[j]) + c * c * mm[j];
-    }
-    ResidualAnalysis& analysis = metrics.residual;
-    analysis.lags = options_.residual_lags;
-    analysis.confidence = confidence;
-    for (std::size_t j = 0; j <= lags; ++j) {
-      analysis.autocorrelation.push_back(ee[0] > 0.0 ? ee[j] / ee[0] : 0.0);
-    }
-    for (std::size_t k = 1; k < analysis.autocorrelation.size(); ++k) {
-      analysis.max_abs_autocorrelation =
-          std::max(analysis.max_abs_autocorrelation, std::abs(analysis.autocorrelation[k]));
-    }
-    // A residual at round-off level (rms below 1e-9 of the measured signal's rms) is the text
-    // round trip of the log's numbers, not dynamics: a perfect model, white and independent of
-    // the inputs by definition.
-    const double measured_rms = std::hypot(metrics.measured_mean_si, metrics.measured_std_si);
-    const bool round_off = metrics.rms_si <= 1e-9 * measured_rms;
-    analysis.white = round_off || analysis.max_abs_autocorrelation <= confidence;
-    for (std::size_t i = 0; i < kResidualInputCount; ++i) {
-      Correlation correlation;
-      correlation.input = kResidualInputNames[i];
-      correlation.constant_input = summary_.input_constant[i];
-      if (!correlation.constant_input) {
-        const double scale = std::sqrt(std::max(0.0, ee[0]) * input_square_sum_[i]);
-        for (long k = -static_cast<long>(lags); k <= static_cast<long>(lags); ++k) {
-          const std::size_t index =
-              k >= 0 ? static_cast<std::size_t>(k) : lags + 1 + static_cast<std::size_t>(-k);
-          correlation.r.push_back(scale > 0.0 ? (s.du[i][index] - c * mu[i][index]) / scale : 0.0);
-        }
-        for (double r : correlation.r)
-          correlation.max_abs = std::max(correlation.max_abs, std::abs(r));
-        correlation.independent = round_off || correlation.max_abs <= confidence;
-      }
-      analysis.independent_of_inputs = analysis.independent_of_inputs && correlation.independent;
-      analysis.cross.push_back(std::move(correlation));
-    }
-
+    CalcLag(s, &metrics);
+    metrics.bands = CalcBands(s);
+    if (s.transfer) result.transfer_functions.push_back(CalcTransferFunction(s));
+    metrics.residual = CalcResidualAnalysis(s, metrics);
     if (auto x_m = PipePositionM(metrics.channel)) {
       result.profile.push_back({metrics.channel, *x_m, metrics.nrmse, metrics.fit_percent,
                                 metrics.rms_si, metrics.bias_si, metrics.lag_s});
@@ -781,6 +655,196 @@ Result<Comparison> ComparisonAccumulator::Finish(
   }
   result.error = error_count > 0 ? error_sum / error_count : kNaN;
   return result;
+}
+
+// What the whole log's comparison says before its channels.
+Comparison ComparisonAccumulator::LogMetrics(
+    const std::string& path, const std::optional<RangeEvent>& first_range_event) const {
+  const double dt = summary_.sample_interval_s;
+  Comparison result;
+  result.path = path;
+  result.samples = summary_.samples;
+  result.input_close_up = input_close_up_;
+  result.duration_s = summary_.t1_s - summary_.t0_s;
+  result.sample_interval_s = dt;
+  result.uniform_sampling = summary_.uniform_sampling;
+  result.first_range_event = first_range_event;
+  result.spectrum_segments = static_cast<long>(summary_.segments);
+  result.spectrum_segment_s = static_cast<double>(summary_.segment_length) * dt;
+  for (const auto& band : band_centres_) result.dominant_freqs_hz.push_back(band.first);
+  result.max_lag_s = max_lag_s_;
+  return result;
+}
+
+// NRMSE, fit, rms, bias and the measurement's mean and spread from the scalar sums.
+ChannelMetrics ComparisonAccumulator::SampleMetrics(const ChannelState& s) const {
+  const LogSummary::ChannelSummary& channel = *s.summary;
+  ChannelMetrics metrics;
+  metrics.channel = channel.channel;
+  metrics.unit = channel.unit;
+  const auto count = static_cast<double>(channel.count);
+  metrics.samples = channel.count;
+  metrics.measured_mean_si = channel.mean_si;
+  metrics.measured_std_si = std::sqrt(s.sst / count);
+  metrics.rms_si = std::sqrt(s.sse / count);
+  metrics.bias_si = s.sum_e / count;
+  // A constant measurement has no variation to explain: NRMSE undefined (NaN).
+  metrics.nrmse = Nrmse(s.sse, s.sst);
+  metrics.fit_percent = 100.0 * (1.0 - metrics.nrmse);
+  return metrics;
+}
+
+// Lag: the averaged cross-correlation sum_segments sum_n a[n] b[n + k] (FFTW's inverse leaves out
+// 1/size; negative k at index size + k; no wrap-around: size >= L + max_lag + 1), normalised and
+// with the window's own correlation W(k) divided out. Left at 0 where either side is flat.
+void ComparisonAccumulator::CalcLag(const ChannelState& s, ChannelMetrics* metrics) const {
+  const double norm = std::sqrt(s.lag_aa * s.lag_bb);
+  if (!(norm > 0.0)) return;
+  const std::size_t size = lag_fft_size_;
+  std::vector<double> raw;
+  lag_fft_->Inverse(s.lag_cross, &raw);
+  const long max_lag = static_cast<long>(max_lag_);
+  const double w0 = window_correlation_[max_lag_];
+  auto r = [&](long k) {
+    const std::size_t index =
+        k >= 0 ? static_cast<std::size_t>(k) : size - static_cast<std::size_t>(-k);
+    return raw[index] / static_cast<double>(size) / norm * w0 /
+           window_correlation_[static_cast<std::size_t>(k + max_lag)];
+  };
+  const long limit = std::min(max_lag, static_cast<long>(summary_.segment_length) - 2);
+  long best = 0;
+  for (long k = -limit; k <= limit; ++k) {
+    if (r(k) > r(best)) best = k;
+  }
+  double offset = 0.0;
+  if (best > -limit && best < limit) offset = ParabolicOffset(r(best - 1), r(best), r(best + 1));
+  metrics->lag_s = (static_cast<double>(best) + offset) * summary_.sample_interval_s;
+  metrics->lag_correlation = r(best);
+}
+
+// The bands, averaged over the segments this channel was measured in.
+std::vector<BandMetrics> ComparisonAccumulator::CalcBands(const ChannelState& s) const {
+  const double amplitude_scale =
+      2.0 / std::sqrt(static_cast<double>(summary_.fft_size) * window_power_);
+  const double segments = static_cast<double>(std::max<std::size_t>(1, s.segments));
+  std::vector<BandMetrics> bands;
+  for (std::size_t i = 0; i < band_centres_.size(); ++i) {
+    const auto& [centre, harmonic] = band_centres_[i];
+    BandMetrics band;
+    band.freq_hz = centre;
+    band.harmonic = harmonic;
+    band.low_hz = std::max(0.0, centre - options_.band_half_width_bins * summary_.df_hz);
+    band.high_hz = centre + options_.band_half_width_bins * summary_.df_hz;
+    const double power_y = s.band_power_measured[i];
+    const double power_model = s.band_power_model[i];
+    const double power_error = s.band_power_error[i];
+    // Parseval: a sinusoid A cos puts size (A/2)^2 sum w^2 into the positive-frequency bins.
+    band.measured_amplitude = amplitude_scale * std::sqrt(power_y / segments);
+    band.model_amplitude = amplitude_scale * std::sqrt(power_model / segments);
+    band.magnitude_ratio = power_y > 0.0 ? std::sqrt(power_model / power_y) : kNaN;
+    band.phase_diff_deg = WrapDeg(std::arg(s.band_cross[i]) * 180.0 / std::numbers::pi);
+    band.band_nrmse = power_y > 0.0 ? std::sqrt(power_error / power_y) : kNaN;
+    band.error_amplitude = amplitude_scale * std::sqrt(power_error / segments);
+    bands.push_back(band);
+  }
+  return bands;
+}
+
+// The empirical transfer function from the piston, one point per group of excited bins.
+TransferFunction ComparisonAccumulator::CalcTransferFunction(const ChannelState& s) const {
+  TransferFunction tf;
+  tf.output = s.summary->channel;
+  for (std::size_t g = 0; g < s.transfer_power.size(); ++g) {
+    const double power = s.transfer_power[g];
+    if (!(power > 0.0)) continue;
+    tf.points.push_back({s.transfer_freq_power[g] / power, s.transfer_measured[g] / power,
+                         s.transfer_model[g] / power});
+  }
+  return tf;
+}
+
+// The lagged sums with the mask m: the channel's own where it has gaps; without gaps (m = 1)
+// sums of all but the first or last j values of the shifted residual and of the inputs.
+ComparisonAccumulator::MaskSums ComparisonAccumulator::CalcMaskSums(const ChannelState& s) const {
+  MaskSums sums{s.dm, s.md, s.mm, s.mu};
+  if (s.summary->has_gaps) return sums;
+  const long n = summary_.samples;
+  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
+  const std::size_t history = std::min<std::size_t>(lags, static_cast<std::size_t>(n));
+  const double* tail = s.residual_history->data();  // newest first
+  sums.dm.assign(lags + 1, 0.0), sums.md.assign(lags + 1, 0.0), sums.mm.assign(lags + 1, 0.0);
+  double head_sum = 0.0, tail_sum = 0.0;
+  for (std::size_t j = 0; j <= lags; ++j) {
+    if (j > 0 && j <= history) head_sum += s.head[j - 1], tail_sum += tail[j - 1];
+    sums.dm[j] = j < static_cast<std::size_t>(n) ? s.sum_shifted - head_sum : 0.0;
+    sums.md[j] = j < static_cast<std::size_t>(n) ? s.sum_shifted - tail_sum : 0.0;
+    sums.mm[j] =
+        j < static_cast<std::size_t>(n) ? static_cast<double>(n - static_cast<long>(j)) : 0.0;
+  }
+  for (std::size_t i = 0; i < kResidualInputCount; ++i) {
+    const double* input_tail = input_history_[i].data();
+    sums.mu[i].assign(2 * lags + 2, 0.0);
+    double head = 0.0, tail_u = 0.0;
+    for (std::size_t j = 0; j <= lags; ++j) {
+      if (j > 0 && j <= history) head += input_head_[i][j - 1], tail_u += input_tail[j - 1];
+      if (j >= static_cast<std::size_t>(n)) continue;
+      sums.mu[i][j] = input_sum_[i] - tail_u;           // k = j: u_0 .. u_{N-1-j}
+      sums.mu[i][lags + 1 + j] = input_sum_[i] - head;  // k = -j: u_j .. u_{N-1}
+    }
+  }
+  return sums;
+}
+
+// Residual e = m (d - c), c the mean of the shifted residual over the measured samples:
+//   sum e_n e_{n-j} = dd - c (dm + md) + c^2 mm,  sum e_n u_{n-k} = du - c mu,
+// normalised, against the 99% band.
+ResidualAnalysis ComparisonAccumulator::CalcResidualAnalysis(const ChannelState& s,
+                                                             const ChannelMetrics& metrics) const {
+  const std::size_t lags = static_cast<std::size_t>(options_.residual_lags);
+  const double confidence = kConfidence99 / std::sqrt(static_cast<double>(summary_.samples));
+  const MaskSums mask = CalcMaskSums(s);
+  const double c = -metrics.bias_si - s.shift;
+  std::vector<double> ee(lags + 1);
+  for (std::size_t j = 0; j <= lags; ++j) {
+    ee[j] = s.dd[j] - c * (mask.dm[j] + mask.md[j]) + c * c * mask.mm[j];
+  }
+  ResidualAnalysis analysis;
+  analysis.lags = options_.residual_lags;
+  analysis.confidence = confidence;
+  for (std::size_t j = 0; j <= lags; ++j) {
+    analysis.autocorrelation.push_back(ee[0] > 0.0 ? ee[j] / ee[0] : 0.0);
+  }
+  for (std::size_t k = 1; k < analysis.autocorrelation.size(); ++k) {
+    analysis.max_abs_autocorrelation =
+        std::max(analysis.max_abs_autocorrelation, std::abs(analysis.autocorrelation[k]));
+  }
+  // A residual at round-off level (rms below 1e-9 of the measured signal's rms) is the text
+  // round trip of the log's numbers, not dynamics: a perfect model, white and independent of
+  // the inputs by definition.
+  const double measured_rms = std::hypot(metrics.measured_mean_si, metrics.measured_std_si);
+  const bool round_off = metrics.rms_si <= 1e-9 * measured_rms;
+  analysis.white = round_off || analysis.max_abs_autocorrelation <= confidence;
+  for (std::size_t i = 0; i < kResidualInputCount; ++i) {
+    Correlation correlation;
+    correlation.input = kResidualInputNames[i];
+    correlation.constant_input = summary_.input_constant[i];
+    if (!correlation.constant_input) {
+      const double scale = std::sqrt(std::max(0.0, ee[0]) * input_square_sum_[i]);
+      for (long k = -static_cast<long>(lags); k <= static_cast<long>(lags); ++k) {
+        const std::size_t index =
+            k >= 0 ? static_cast<std::size_t>(k) : lags + 1 + static_cast<std::size_t>(-k);
+        correlation.r.push_back(scale > 0.0 ? (s.du[i][index] - c * mask.mu[i][index]) / scale
+                                            : 0.0);
+      }
+      for (double r : correlation.r) {
+        correlation.max_abs = std::max(correlation.max_abs, std::abs(r));
+      }
+      correlation.independent = round_off || correlation.max_abs <= confidence;
+    }
+    analysis.independent_of_inputs = analysis.independent_of_inputs && correlation.independent;
+    analysis.cross.push_back(std::move(correlation));
+  }
+  return analysis;
 }
 
 }  // namespace mpdrig

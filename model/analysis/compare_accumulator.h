@@ -97,8 +97,31 @@ class ComparisonAccumulator {
 
  private:
   struct ChannelState;
+  // The lagged residual sums that involve the mask (1 measured, 0 not), j = 0..M and per input
+  // k = -M..M, stored as ChannelState's.
+  struct MaskSums {
+    std::vector<double> dm, md, mm;
+    std::array<std::vector<double>, kResidualInputCount> mu;
+  };
+  void InitChannel(ChannelState* state, const LogSummary::ChannelSummary& summary,
+                   std::size_t transfer_groups) const;
+  // Add's steps.
+  void AddInputCloseUp(const LogRow& row);
+  std::array<double, kResidualInputCount> AddResidualInputs(const PipelineSample& sample);
+  void AddToCloseUp(ChannelState* s, long n, double time_s, double y, double yhat) const;
+  void AddLaggedSums(ChannelState* s, double y, double yhat,
+                     const std::array<double, kResidualInputCount>& u) const;
   void AddSegment(std::size_t length);
   void TakeSnapshot(ChannelState* s, long last) const;
+  // Finish's steps.
+  Comparison LogMetrics(const std::string& path,
+                        const std::optional<RangeEvent>& first_range_event) const;
+  ChannelMetrics SampleMetrics(const ChannelState& s) const;
+  void CalcLag(const ChannelState& s, ChannelMetrics* metrics) const;
+  std::vector<BandMetrics> CalcBands(const ChannelState& s) const;
+  TransferFunction CalcTransferFunction(const ChannelState& s) const;
+  MaskSums CalcMaskSums(const ChannelState& s) const;
+  ResidualAnalysis CalcResidualAnalysis(const ChannelState& s, const ChannelMetrics& metrics) const;
   TraceWindow Zoom(ChannelState* s) const;
 
   const LogSummary& summary_;

@@ -334,8 +334,7 @@ double RowPipeline::Interpolate(double t, double Entry::*value) const {
   hint_ = j;
   const Entry& a = rows_[j - 1];
   const Entry& b = rows_[j];
-  const double w = (t - a.row.time_s) / (b.row.time_s - a.row.time_s);
-  return (1.0 - w) * (a.*value) + w * (b.*value);
+  return InterpolateLinear(t, a.row.time_s, a.*value, b.row.time_s, b.*value);
 }
 
 double RowPipeline::InterpolateRow(double t, double LogRow::*value) const {
@@ -353,8 +352,7 @@ double RowPipeline::InterpolateRow(double t, double LogRow::*value) const {
   hint_ = j;
   const LogRow& a = rows_[j - 1].row;
   const LogRow& b = rows_[j].row;
-  const double w = (t - a.time_s) / (b.time_s - a.time_s);
-  return (1.0 - w) * (a.*value) + w * (b.*value);
+  return InterpolateLinear(t, a.time_s, a.*value, b.time_s, b.*value);
 }
 
 // As SimulateEach's step inputs: the piston velocity at a step's end t_b is the centred

@@ -1,17 +1,33 @@
-// A rig log as a stream of rows for the comparison (compare.h), in memory that does not grow with
-// the log's length: rows come from a file (RigLogReader, one line at a time) or from a log
-// already in memory, go through the piston-position smoothing and, if asked, through the model
-// replay, and leave in order, one at a time, with what the metrics need of each sample.
+// A rig log as a stream of rows for the comparison (compare.h) and the replay (log_replay.h), in
+// memory that does not grow with the log's length: rows come from a file (RigLogReader, one line
+// at a time) or from a log already in memory (measured_log.h), go through the piston-position
+// smoothing and, if asked, through the model replay, and leave in order, one at a time, with what
+// the metrics need of each sample.
 //
 // RowPipeline reproduces `Simulate` on a log's inputs exactly (SignalsFromColumns + SimulateEach,
 // model/sim): the same smoothing (SmoothLocalQuadratic, model/signal, run on blocks that hold
 // every sample of each smoothed sample's window, so each value is the same double), the same
-// linear interpolation of the inputs between samples, the same piston velocity at each step end
-// (centred difference over one solver step, one-sided at the log's ends) and the same RigSampler.
+// linear interpolation of the inputs between samples (InterpolateLinear, log_inputs.h), the same
+// initial state (InitialInputs, log_inputs.h), the same piston velocity at each step end (centred
+// difference over one solver step, one-sided at the log's ends) and the same RigSampler.
 // It keeps only a lookahead window: the smoothing window and two solver steps beyond the sample
 // it hands out, plus one smoothing block (4096 samples).
+//
+// Two replays of a log, on purpose. Simulate on SignalsFromColumns is the reference (`mpdrig
+// simulate --inputs`, synthetic logs): the whole log in memory as time functions, which
+// SimulateEach may ask at any time. RowPipeline is its streaming twin (compare, fit, diagnose, the
+// shadow). Neither can be written through the other: the reference lies in model/sim, below this
+// folder in model/'s layer order, and a stream of rows cannot answer a time function; the other
+// way, time functions hold every input column whole (at least 40 bytes a row: 144 MB for an hour
+// at 1 kHz, where the stream holds a few thousand rows). What they can share they share (the
+// smoothing, the reconstruction, InitialInputs, InterpolateLinear); each still repeats by hand
+// the piston velocity's window slid inside the log (SimulateEach's step inputs, StepInputsAt
+// here) and the bracket search between samples. tests/model/analysis/compare_test.cc holds them
+// together: ReplayGivesExactlyWhatSimulateGives (the same doubles) and
+// ReplayStartsFromTheMeanOfTheFirstInputs (the same start). A change to one is a change to both.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <deque>
@@ -19,11 +35,13 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/status.h"
 #include "model/riglog/rig_log_reader.h"
+#include "model/sim/log_inputs.h"
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
@@ -224,5 +242,29 @@ class RowPipeline {
 
 // Pulls every row of `source` through `pipeline`.
 Status RunPipeline(LogRowSource* source, RowPipeline* pipeline);
+
+// The pipeline's own piston smoothing for a replay fed as `replay` says: none on reconstructed
+// inputs (already smoothed).
+inline double PipelineSmoothingS(const InputReplayOptions& replay) {
+  return replay.reconstruct_inputs ? 0.0 : replay.piston_smoothing_s;
+}
+
+// Reports `stage` at every whole percent of `total` samples.
+class PercentProgress {
+ public:
+  PercentProgress(const CompareProgress& progress, std::string_view stage, long total)
+      : progress_(progress), stage_(stage), total_(std::max(1L, total)) {}
+  void Done(long samples) {
+    if (!progress_ || samples < next_) return;
+    progress_(stage_, static_cast<double>(samples) / static_cast<double>(total_));
+    next_ = (samples * 100 / total_ + 1) * total_ / 100;
+  }
+
+ private:
+  const CompareProgress& progress_;
+  std::string_view stage_;
+  long total_;
+  long next_ = 0;
+};
 
 }  // namespace mpdrig

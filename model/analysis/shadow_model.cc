@@ -5,7 +5,7 @@
 #include <iterator>
 #include <limits>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "model/effects/effect.h"
 
 namespace mpdrig {

@@ -7,7 +7,8 @@
 
 #include <vector>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 
 namespace mpdrig {
 

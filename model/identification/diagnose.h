@@ -33,6 +33,8 @@
 #include <vector>
 
 #include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/status.h"
 #include "model/identification/fit.h"
 #include "model/params/rig_params.h"

@@ -22,7 +22,8 @@
 #include <string_view>
 #include <vector>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/analysis/window_error.h"  // WindowError: the error fit reports
 #include "model/common/status.h"
 #include "model/params/rig_params.h"

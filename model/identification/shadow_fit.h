@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/status.h"
 #include "model/identification/fit.h"
 #include "model/params/rig_params.h"

@@ -6,7 +6,7 @@
 #include <random>
 #include <sstream>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "model/effects/effect.h"
 #include "model/sim/rig_simulator.h"
 #include "model/sim/sensor_noise.h"

@@ -377,34 +377,67 @@ double CharacteristicsSolver::CavityVolumeM3() const {
   return sum;
 }
 
+// What the parts of a general step share: the mixture's W(p) and c(p), the cavities' vapour
+// pressure, the momentum sources of this step.
+struct CharacteristicsSolver::GeneralStep {
+  PressureFunction fn;
+  double r;  // dt / dx [s/m]: 1 / c of the grid
+  bool linear;
+  bool cavitation;
+  double p_v;                     // vapour pressure [Pa]; 0 without column separation
+  double w_v;                     // W(p_v)
+  const double* source_explicit;  // a_i [m/s^2] of S_i = a_i + b_i u_i; null: no sources
+  const double* source_implicit;  // b_i [1/s]
+  double SourceExplicit(int i) const {
+    return source_explicit != nullptr ? source_explicit[i] : 0.0;
+  }
+  double SourceImplicit(int i) const {
+    return source_implicit != nullptr ? source_implicit[i] : 0.0;
+  }
+};
+
 Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation) {
   const int n = config_.cells;
-  const double h = dt_s_;
-  const double r = dt_s_ / config_.dx_m();  // 1 / c of the grid
-  const double gs = config_.gravity_slope_mps2;
-  const double area = config_.area_m2;
-  const bool linear = config_.model == PipeModel::kLinear;
   const bool cavitation = vapour_pressure_pa_ > 0.0;
   const PressureFunction fn(law_, mixture_.get());
-  const double p_v = vapour_pressure_pa_;
-  const double w_v = cavitation ? fn.W(p_v) : 0.0;
   const bool has_sources = EvaluateMomentumSources();
-  const auto source_explicit = [&](int i) { return has_sources ? source_explicit_[i] : 0.0; };
-  const auto source_implicit = [&](int i) { return has_sources ? source_implicit_[i] : 0.0; };
+  const GeneralStep step{fn,
+                         dt_s_ / config_.dx_m(),
+                         config_.model == PipeModel::kLinear,
+                         cavitation,
+                         vapour_pressure_pa_,
+                         cavitation ? fn.W(vapour_pressure_pa_) : 0.0,
+                         has_sources ? source_explicit_.data() : nullptr,
+                         has_sources ? source_implicit_.data() : nullptr};
+  LoadGeneralOldLevel(step);
+  StepGeneralInterior(step);
+  StepGeneralInlet(step, inputs);
+  StepGeneralOutlet(step, inputs);
+  alpha_.swap(alpha_next_);
+  beta_.swap(beta_next_);
+  if (!std::isfinite(alpha_[n]) || !std::isfinite(beta_[0])) {
+    return Status::Error("pipe state is no longer finite (check the inputs for NaN)");
+  }
+  CheckRange(violation);
+  return Status::Ok();
+}
 
-  // The old level in the mixture's invariants, each side of a cavity node separately.
+// The old level in the mixture's invariants, each side of a cavity node separately.
+void CharacteristicsSolver::LoadGeneralOldLevel(const GeneralStep& step) {
+  const int n = config_.cells;
   for (int i = 0; i <= n; ++i) {
     const double p = law_.Pressure(alpha_[i], beta_[i]);
     const double u = 0.5 * (alpha_[i] + beta_[i]);
     double c = 0.0;
-    const double w = fn.WAndWaveSpeed(p, &c);
+    const double w = step.fn.WAndWaveSpeed(p, &c);
     pressure_[i] = p;
     velocity_[i] = u;
     w_[i] = w;
-    speed_up_[i] = linear ? c : u + c;  // the linear model's characteristics move at +-c (7.0.4)
-    speed_down_[i] = linear ? c : c - u;
+    speed_up_[i] =
+        step.linear ? c : u + c;  // the linear model's characteristics move at +-c (7.0.4)
+    speed_down_[i] = step.linear ? c : c - u;
     // An interior cavity node stores the mean of its sides, a boundary node its outer side.
-    const double jump = cavitation ? velocity_jump_[i] : 0.0;
+    const double jump = step.cavitation ? velocity_jump_[i] : 0.0;
     const double right_share = i == 0 ? 1.0 : (i == n ? 0.0 : 0.5);
     u_left_[i] = u - (1.0 - right_share) * jump;
     u_right_[i] = u + right_share * jump;
@@ -413,78 +446,93 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeVio
     beta_left_[i] = -w + u_left_[i];
     beta_right_[i] = -w + u_right_[i];
   }
+}
 
-  // Foot of the C+ characteristic arriving at node i: at x_i - sigma dx with the speed
-  // interpolated there, sigma = s_i / (1 + s_i - s_(i-1)), s = speed dt / dx (<= 1 but for u > 0
-  // at the full wave speed, where the foot lies beyond node i-1, as in AlphaFoot).
-  const auto alpha_foot = [&](int i, double* u_foot) {
-    const double s_here = speed_up_[i] * r;
-    const double s_near = speed_up_[i - 1] * r;
-    const double sigma = s_here / (1.0 + s_here - s_near);
-    if (sigma <= 1.0) {
-      *u_foot = (1.0 - sigma) * u_left_[i] + sigma * u_right_[i - 1];
-      return (1.0 - sigma) * alpha_left_[i] + sigma * alpha_right_[i - 1];
-    }
-    const int j = std::max(i - 2, 0);
-    const double tau = std::min(sigma - 1.0, 1.0);
-    *u_foot = (1.0 - tau) * u_left_[i - 1] + tau * u_right_[j];
-    return (1.0 - tau) * alpha_left_[i - 1] + tau * alpha_right_[j];
-  };
-  const auto beta_foot = [&](int i, double* u_foot) {
-    const double s_here = speed_down_[i] * r;
-    const double s_near = speed_down_[i + 1] * r;
-    const double sigma = s_here / (1.0 + s_here - s_near);
-    if (sigma <= 1.0) {
-      *u_foot = (1.0 - sigma) * u_right_[i] + sigma * u_left_[i + 1];
-      return (1.0 - sigma) * beta_right_[i] + sigma * beta_left_[i + 1];
-    }
-    const int j = std::min(i + 2, n);
-    const double tau = std::min(sigma - 1.0, 1.0);
-    *u_foot = (1.0 - tau) * u_right_[i + 1] + tau * u_left_[j];
-    return (1.0 - tau) * beta_right_[i + 1] + tau * beta_left_[j];
-  };
-  // A cavity's volume after the step with the new jump u_right - u_left (implicit Euler, see the
-  // header); <= 0 means it collapses.
-  const auto cavity_after = [&](int i, double jump) { return cavity_volume_[i] + h * area * jump; };
-  const auto in_cavity = [&](int i, double liquid_pressure_pa) {
-    return liquid_pressure_pa < p_v || cavity_volume_[i] > 0.0;
-  };
-  // Below p_v the node is a cavity whatever the volume (a closure at an end need not make the
-  // jump positive); above it, while the cavity has volume.
-  const auto keeps_cavity = [&](double liquid_pressure_pa, double volume) {
-    return liquid_pressure_pa < p_v || volume > 0.0;
-  };
+// Foot of the C+ characteristic arriving at node i: at x_i - sigma dx with the speed interpolated
+// there, sigma = s_i / (1 + s_i - s_(i-1)), s = speed dt / dx (<= 1 but for u > 0 at the full wave
+// speed, where the foot lies beyond node i-1, as in AlphaFoot). Returns alpha there, *u_foot u.
+inline double CharacteristicsSolver::GeneralAlphaFoot(const GeneralStep& step, int i,
+                                                      double* u_foot) const {
+  const double s_here = speed_up_[i] * step.r;
+  const double s_near = speed_up_[i - 1] * step.r;
+  const double sigma = s_here / (1.0 + s_here - s_near);
+  if (sigma <= 1.0) {
+    *u_foot = (1.0 - sigma) * u_left_[i] + sigma * u_right_[i - 1];
+    return (1.0 - sigma) * alpha_left_[i] + sigma * alpha_right_[i - 1];
+  }
+  const int j = std::max(i - 2, 0);
+  const double tau = std::min(sigma - 1.0, 1.0);
+  *u_foot = (1.0 - tau) * u_left_[i - 1] + tau * u_right_[j];
+  return (1.0 - tau) * alpha_left_[i - 1] + tau * alpha_right_[j];
+}
 
-  // Interior nodes: the trapezoidal rule along both characteristics with the new point's
-  // friction linearised, as NodeUpdate, and the momentum sources semi-implicit.
+// Foot of the C- characteristic arriving at node i, mirrored.
+inline double CharacteristicsSolver::GeneralBetaFoot(const GeneralStep& step, int i,
+                                                     double* u_foot) const {
+  const int n = config_.cells;
+  const double s_here = speed_down_[i] * step.r;
+  const double s_near = speed_down_[i + 1] * step.r;
+  const double sigma = s_here / (1.0 + s_here - s_near);
+  if (sigma <= 1.0) {
+    *u_foot = (1.0 - sigma) * u_right_[i] + sigma * u_left_[i + 1];
+    return (1.0 - sigma) * beta_right_[i] + sigma * beta_left_[i + 1];
+  }
+  const int j = std::min(i + 2, n);
+  const double tau = std::min(sigma - 1.0, 1.0);
+  *u_foot = (1.0 - tau) * u_right_[i + 1] + tau * u_left_[j];
+  return (1.0 - tau) * beta_right_[i + 1] + tau * beta_left_[j];
+}
+
+bool CharacteristicsSolver::InCavity(const GeneralStep& step, int i,
+                                     double liquid_pressure_pa) const {
+  return liquid_pressure_pa < step.p_v || cavity_volume_[i] > 0.0;
+}
+
+// A cavity's volume after the step with the new jump u_right - u_left (implicit Euler, see the
+// header). Below p_v the node is a cavity whatever the volume (a closure at an end need not make
+// the jump positive); above it, while the cavity has volume: then true, and the node holds p_v.
+// Otherwise the cavity collapses (V = 0) and the liquid solution stands.
+bool CharacteristicsSolver::SettleCavity(const GeneralStep& step, int i, double liquid_pressure_pa,
+                                         double jump) {
+  const double volume = cavity_volume_[i] + dt_s_ * config_.area_m2 * jump;
+  if (liquid_pressure_pa < step.p_v || volume > 0.0) {
+    cavity_volume_[i] = std::max(volume, 0.0);
+    return true;
+  }
+  cavity_volume_[i] = 0.0;
+  return false;
+}
+
+// Interior nodes: the trapezoidal rule along both characteristics with the new point's friction
+// linearised, as NodeUpdate, and the momentum sources semi-implicit.
+void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
+  const int n = config_.cells;
+  const double h = dt_s_;
+  const double gs = config_.gravity_slope_mps2;
   for (int i = 1; i < n; ++i) {
     double ua, ub;
-    const double a_foot = alpha_foot(i, &ua);
-    const double b_foot = beta_foot(i, &ub);
+    const double a_foot = GeneralAlphaFoot(step, i, &ua);
+    const double b_foot = GeneralBetaFoot(step, i, &ub);
     const double fa = config_.Friction(ua);
     const double fb = config_.Friction(ub);
     const double lambda =
         config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(velocity_[i]);
-    const double sa = source_explicit(i);
-    const double sb = source_implicit(i);
+    const double sa = step.SourceExplicit(i);
+    const double sb = step.SourceImplicit(i);
     double u_p = (a_foot + b_foot - 0.5 * h * (fa + fb) - 2.0 * h * gs - 2.0 * h * sa) /
                  (2.0 + h * lambda + 2.0 * h * sb);
-    double p_p = fn.Pressure(0.5 * (a_foot - b_foot) - 0.25 * h * (fa - fb), pressure_[i]);
-    if (cavitation) {
+    double p_p = step.fn.Pressure(0.5 * (a_foot - b_foot) - 0.25 * h * (fa - fb), pressure_[i]);
+    if (step.cavitation) {
       double jump = 0.0;
-      if (in_cavity(i, p_p)) {
+      if (InCavity(step, i, p_p)) {
         // Each side at p_v: alpha_P = W(p_v) + u_left, beta_P = -W(p_v) + u_right.
         const double d = 1.0 + 0.5 * h * lambda + h * sb;
-        const double u_l = (a_foot - 0.5 * h * fa - h * gs - h * sa - w_v) / d;
-        const double u_r = (b_foot - 0.5 * h * fb - h * gs - h * sa + w_v) / d;
-        const double volume = cavity_after(i, u_r - u_l);
-        if (keeps_cavity(p_p, volume)) {
-          p_p = p_v;
+        const double u_l = (a_foot - 0.5 * h * fa - h * gs - h * sa - step.w_v) / d;
+        const double u_r = (b_foot - 0.5 * h * fb - h * gs - h * sa + step.w_v) / d;
+        if (SettleCavity(step, i, p_p, u_r - u_l)) {
+          p_p = step.p_v;
           u_p = 0.5 * (u_l + u_r);
           jump = u_r - u_l;
-          cavity_volume_[i] = std::max(volume, 0.0);
-        } else {
-          cavity_volume_[i] = 0.0;  // collapse: the liquid solution stands
         }
       }
       velocity_jump_[i] = jump;
@@ -492,104 +540,97 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeVio
     alpha_next_[i] = law_.Alpha(p_p, u_p);
     beta_next_[i] = law_.Beta(p_p, u_p);
   }
+}
 
-  // Inlet, x = 0: the beta characteristic from the pipe; u(0) from the piston or a closure.
-  {
-    double ub;
-    const double b_foot = beta_foot(0, &ub);
-    const double fb = config_.Friction(ub);
-    const auto beta_at = [&](double u) {
-      return b_foot - 0.5 * h * (fb + config_.Friction(u)) - h * gs -
-             h * (source_explicit(0) + source_implicit(0) * u);
-    };
-    const InletInputs inlet{inputs.end.inlet_velocity_mps * area, area, h};
-    double u0 = inlet_closure_ != nullptr ? velocity_[0] : inputs.end.inlet_velocity_mps;
-    double beta0 = 0.0;
-    for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
-      beta0 = beta_at(u0);
-      if (inlet_closure_ != nullptr) {
-        u0 = inlet_closure_->SolveInletVelocity(GeneralInletRelation(fn, beta0, pressure_[0]),
-                                                inlet);
+// Inlet, x = 0: the beta characteristic from the pipe; u(0) from the piston or a closure.
+void CharacteristicsSolver::StepGeneralInlet(const GeneralStep& step,
+                                             const PipeStepInputs& inputs) {
+  const double h = dt_s_;
+  const double gs = config_.gravity_slope_mps2;
+  const double area = config_.area_m2;
+  double ub;
+  const double b_foot = GeneralBetaFoot(step, 0, &ub);
+  const double fb = config_.Friction(ub);
+  const auto beta_at = [&](double u) {
+    return b_foot - 0.5 * h * (fb + config_.Friction(u)) - h * gs -
+           h * (step.SourceExplicit(0) + step.SourceImplicit(0) * u);
+  };
+  const InletInputs inlet{inputs.end.inlet_velocity_mps * area, area, h};
+  double u0 = inlet_closure_ != nullptr ? velocity_[0] : inputs.end.inlet_velocity_mps;
+  double beta0 = 0.0;
+  for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
+    beta0 = beta_at(u0);
+    if (inlet_closure_ != nullptr) {
+      u0 = inlet_closure_->SolveInletVelocity(GeneralInletRelation(step.fn, beta0, pressure_[0]),
+                                              inlet);
+    }
+  }
+  double p0 = step.fn.Pressure(u0 - beta0, pressure_[0]);
+  if (step.cavitation) {
+    double jump = 0.0;
+    if (InCavity(step, 0, p0)) {
+      // Pipe side from C- at p_v (friction settled by fixed-point passes, h f' << 1); the
+      // piston side is what the inlet delivers against p_v.
+      double u_pipe = u0;
+      for (int pass = 0; pass < 3; ++pass) u_pipe = beta_at(u_pipe) + step.w_v;
+      const double u_side = inlet_closure_ != nullptr ? inlet_closure_->SolveInletVelocity(
+                                                            CavityRelation(step.p_v), inlet)
+                                                      : inputs.end.inlet_velocity_mps;
+      if (SettleCavity(step, 0, p0, u_pipe - u_side)) {
+        p0 = step.p_v;
+        u0 = u_side;  // the node keeps the flow at x = 0, the pipe side leaves on alpha
+        jump = u_pipe - u_side;
       }
     }
-    double p0 = fn.Pressure(u0 - beta0, pressure_[0]);
-    if (cavitation) {
-      double jump = 0.0;
-      if (in_cavity(0, p0)) {
-        // Pipe side from C- at p_v (friction settled by fixed-point passes, h f' << 1); the
-        // piston side is what the inlet delivers against p_v.
-        double u_pipe = u0;
-        for (int pass = 0; pass < 3; ++pass) u_pipe = beta_at(u_pipe) + w_v;
-        const double u_side = inlet_closure_ != nullptr
-                                  ? inlet_closure_->SolveInletVelocity(CavityRelation(p_v), inlet)
-                                  : inputs.end.inlet_velocity_mps;
-        const double volume = cavity_after(0, u_pipe - u_side);
-        if (keeps_cavity(p0, volume)) {
-          p0 = p_v;
-          u0 = u_side;  // the node keeps the flow at x = 0, the pipe side leaves on alpha
-          jump = u_pipe - u_side;
-          cavity_volume_[0] = std::max(volume, 0.0);
-        } else {
-          cavity_volume_[0] = 0.0;
-        }
-      }
-      velocity_jump_[0] = jump;
-    }
-    alpha_next_[0] = law_.Alpha(p0, u0);
-    beta_next_[0] = law_.Beta(p0, u0);
+    velocity_jump_[0] = jump;
   }
+  alpha_next_[0] = law_.Alpha(p0, u0);
+  beta_next_[0] = law_.Beta(p0, u0);
+}
 
-  // Outlet, x = L: the alpha characteristic from the pipe; u(L) from the choke or a closure.
-  {
-    double ua;
-    const double a_foot = alpha_foot(n, &ua);
-    const double fa = config_.Friction(ua);
-    const auto alpha_at = [&](double u) {
-      return a_foot - 0.5 * h * (fa + config_.Friction(u)) - h * gs -
-             h * (source_explicit(n) + source_implicit(n) * u);
-    };
-    const auto solve = [&](const BoundaryRelation& relation, double guess) {
-      return outlet_closure_ != nullptr
-                 ? outlet_closure_->SolveOutletVelocity(relation, inputs.end.choke, h, guess)
-                 : SolveChokeVelocity(relation, inputs.end.choke, area, config_.choke_density_kgpm3,
-                                      guess);
-    };
-    double u_l = velocity_[n];
-    double alpha_l = 0.0;
-    for (int pass = 0; pass < 2; ++pass) {
-      alpha_l = alpha_at(u_l);
-      u_l = solve(GeneralOutletRelation(fn, alpha_l, pressure_[n]), u_l);
-    }
-    double p_l = fn.Pressure(alpha_l - u_l, pressure_[n]);
-    if (cavitation) {
-      double jump = 0.0;
-      if (in_cavity(n, p_l)) {
-        double u_pipe = u_l;
-        for (int pass = 0; pass < 3; ++pass) u_pipe = alpha_at(u_pipe) - w_v;
-        const double u_side = solve(CavityRelation(p_v), u_l);
-        const double volume = cavity_after(n, u_side - u_pipe);
-        if (keeps_cavity(p_l, volume)) {
-          p_l = p_v;
-          u_l = u_side;  // the node keeps the flow through the choke, the pipe side leaves on beta
-          jump = u_side - u_pipe;
-          cavity_volume_[n] = std::max(volume, 0.0);
-        } else {
-          cavity_volume_[n] = 0.0;
-        }
+// Outlet, x = L: the alpha characteristic from the pipe; u(L) from the choke or a closure.
+void CharacteristicsSolver::StepGeneralOutlet(const GeneralStep& step,
+                                              const PipeStepInputs& inputs) {
+  const int n = config_.cells;
+  const double h = dt_s_;
+  const double gs = config_.gravity_slope_mps2;
+  const double area = config_.area_m2;
+  double ua;
+  const double a_foot = GeneralAlphaFoot(step, n, &ua);
+  const double fa = config_.Friction(ua);
+  const auto alpha_at = [&](double u) {
+    return a_foot - 0.5 * h * (fa + config_.Friction(u)) - h * gs -
+           h * (step.SourceExplicit(n) + step.SourceImplicit(n) * u);
+  };
+  const auto solve = [&](const BoundaryRelation& relation, double guess) {
+    return outlet_closure_ != nullptr
+               ? outlet_closure_->SolveOutletVelocity(relation, inputs.end.choke, h, guess)
+               : SolveChokeVelocity(relation, inputs.end.choke, area, config_.choke_density_kgpm3,
+                                    guess);
+  };
+  double u_l = velocity_[n];
+  double alpha_l = 0.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    alpha_l = alpha_at(u_l);
+    u_l = solve(GeneralOutletRelation(step.fn, alpha_l, pressure_[n]), u_l);
+  }
+  double p_l = step.fn.Pressure(alpha_l - u_l, pressure_[n]);
+  if (step.cavitation) {
+    double jump = 0.0;
+    if (InCavity(step, n, p_l)) {
+      double u_pipe = u_l;
+      for (int pass = 0; pass < 3; ++pass) u_pipe = alpha_at(u_pipe) - step.w_v;
+      const double u_side = solve(CavityRelation(step.p_v), u_l);
+      if (SettleCavity(step, n, p_l, u_side - u_pipe)) {
+        p_l = step.p_v;
+        u_l = u_side;  // the node keeps the flow through the choke, the pipe side leaves on beta
+        jump = u_side - u_pipe;
       }
-      velocity_jump_[n] = jump;
     }
-    alpha_next_[n] = law_.Alpha(p_l, u_l);
-    beta_next_[n] = law_.Beta(p_l, u_l);
+    velocity_jump_[n] = jump;
   }
-
-  alpha_.swap(alpha_next_);
-  beta_.swap(beta_next_);
-  if (!std::isfinite(alpha_[n]) || !std::isfinite(beta_[0])) {
-    return Status::Error("pipe state is no longer finite (check the inputs for NaN)");
-  }
-  CheckRange(violation);
-  return Status::Ok();
+  alpha_next_[n] = law_.Alpha(p_l, u_l);
+  beta_next_[n] = law_.Beta(p_l, u_l);
 }
 
 }  // namespace mpdrig

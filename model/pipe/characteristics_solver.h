@@ -74,8 +74,21 @@ class CharacteristicsSolver final : public PipeSolver {
   Foot BetaFoot(int i) const;   // beta characteristic arriving at node i (from the right)
   void StepInteriorLinear();
   void StepInteriorQuasiLinear();
-  // The general path (see the header comment).
+  // The general path (see the header comment), in its steps; GeneralStep holds what they share.
+  struct GeneralStep;
   Status StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation);
+  void LoadGeneralOldLevel(const GeneralStep& step);
+  void StepGeneralInterior(const GeneralStep& step);
+  void StepGeneralInlet(const GeneralStep& step, const PipeStepInputs& inputs);
+  void StepGeneralOutlet(const GeneralStep& step, const PipeStepInputs& inputs);
+  // Feet of the characteristics arriving at node i in the general path: the invariant there,
+  // and the velocity in *u_foot.
+  double GeneralAlphaFoot(const GeneralStep& step, int i, double* u_foot) const;
+  double GeneralBetaFoot(const GeneralStep& step, int i, double* u_foot) const;
+  // Node i has a cavity, or its liquid solution's pressure falls below p_v.
+  bool InCavity(const GeneralStep& step, int i, double liquid_pressure_pa) const;
+  // Advances node i's cavity with the new jump u_right - u_left: true while it stays open.
+  bool SettleCavity(const GeneralStep& step, int i, double liquid_pressure_pa, double jump);
 
   double dt_s_;
   std::vector<double> alpha_next_;

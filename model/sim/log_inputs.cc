@@ -52,8 +52,7 @@ class SharedInputs {
       j = static_cast<std::size_t>(std::upper_bound(time.begin(), time.end(), t) - time.begin());
       hint_ = j;
     }
-    const double w = (t - time[j - 1]) / (time[j] - time[j - 1]);
-    return (1.0 - w) * values[j - 1] + w * values[j];
+    return InterpolateLinear(t, time[j - 1], values[j - 1], time[j], values[j]);
   }
   double Piston(double t) const { return At(piston_m_, t); }
   RigInputs Rig(double t) const {

@@ -45,6 +45,14 @@ class InitialInputs {
   RigInputs sum_{0.0, 0.0, 0.0};
 };
 
+// An input between two samples (t_a, a) and (t_b, b), t_a <= t < t_b: linear in time. The one
+// formula of both replays of a log (SignalsFromColumns, RowPipeline), so they give the same
+// doubles.
+inline double InterpolateLinear(double t, double t_a, double a, double t_b, double b) {
+  const double w = (t - t_a) / (t_b - t_a);
+  return (1.0 - w) * a + w * b;
+}
+
 // How a replay feeds a log's inputs to the model.
 struct InputReplayOptions {
   // Reconstruct the inputs under their measurement noise (InputReconstruction); false: as measured.
@@ -53,7 +61,7 @@ struct InputReplayOptions {
   // position before it is differentiated (0: none).
   double piston_smoothing_s = 0.05;
   // Start after this warm-up instead of from the steady state: for a log that starts in the middle
-  // of a periodic excitation (PlanPeriodicWarmup; ChooseWarmup in model/analysis/compare.h
+  // of a periodic excitation (PlanPeriodicWarmup; ChooseWarmup in model/analysis/log_replay.h
   // decides from the measured pressures).
   std::optional<PeriodicWarmup> warmup;
   // Commands that have the measured log let ChooseWarmup set `warmup`; false: always steady.
@@ -91,10 +99,10 @@ inline constexpr long kMaxLevelHalfWidthSamples = 8192;
 inline constexpr double kMaxPistonHalfWidthSamples = 256;
 
 // The choke's and FT2's levels, corrected from the measured pressures (EstimateInputLevels in
-// model/analysis/compare.h). Reconstructed, a flat input still errs by about sigma / sqrt(N) over
-// its windows, more near the log's ends where the windows are one-sided (0.003-0.01 L/min of FT2
-// at 100 Hz), and through the choke's steady law (dp/p = 2 dq/q; G steep at small openings) that
-// moves every pipe pressure by 0.01-0.05 bar: a channel that swings little (PT4 at 0.33 Hz and
+// model/analysis/log_replay.h). Reconstructed, a flat input still errs by about sigma / sqrt(N)
+// over its windows, more near the log's ends where the windows are one-sided (0.003-0.01 L/min of
+// FT2 at 100 Hz), and through the choke's steady law (dp/p = 2 dq/q; G steep at small openings)
+// that moves every pipe pressure by 0.01-0.05 bar: a channel that swings little (PT4 at 0.33 Hz and
 // 28 deg, PT5 near the half-wave resonance) then fits several points worse than the same model fed
 // the true inputs. The pressures know the level far better (0.024 bar per sample on a dozen
 // channels), so the correction, a mean and a linear trend over the log's head, is the maximum a
@@ -201,6 +209,9 @@ Result<LogInputColumns> InputColumnsFromLog(const riglog::RigLog& log, const std
 // Time functions of the inputs, reconstructed or smoothed as `options` say; the columns are moved
 // into shared storage (one copy of time). Needs at least 2 rows. Reconstructed by `plan` where
 // given (e.g. a MeasuredLog's, with its level correction), else by a plan made here.
+// Simulate on these is the reference replay of a log; RowPipeline (model/analysis/log_stream.h)
+// streams the same doubles in bounded memory, and tests/model/analysis/compare_test.cc
+// (ReplayGivesExactlyWhatSimulateGives) checks that they agree: change both together.
 Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::string& path,
                                         const InputReplayOptions& options,
                                         const InputReconstruction* plan = nullptr);

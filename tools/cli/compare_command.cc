@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/model_options.h"
 #include "tools/report/comparison_json.h"

@@ -11,7 +11,8 @@
 #include <string>
 #include <thread>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/identification/diagnose.h"
 #include "model/identification/synthetic_log.h"
 #include "model/riglog/rig_log.h"

@@ -11,7 +11,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
 #include "model/riglog/rig_log_reader.h"

@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"

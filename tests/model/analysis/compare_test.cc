@@ -2,6 +2,8 @@
 // without injected discrepancies: the metrics must point at exactly the injected sensor, lag or
 // band. Logs are generated here with Simulate and RigLogWriter (no binary fixtures).
 #include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +16,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -770,6 +773,32 @@ TEST(CompareTest, UnmeasuredInputSampleIsRefusedWithLine) {
   ASSERT_FALSE(comparison.ok());
   EXPECT_NE(comparison.status().message().find(path + ":3:"), std::string::npos)
       << comparison.status().message();
+}
+
+// Options are checked before the log is read: each bad field is refused by Validate, and by
+// CompareLog with the same message, before it would look at the (missing) file.
+TEST(CompareTest, BadOptionsAreRefusedUpFront) {
+  EXPECT_TRUE(CompareOptions{}.Validate().ok());
+  const std::vector<std::function<void(CompareOptions*)>> breaks = {
+      [](CompareOptions* o) { o->residual_lags = 0; },
+      [](CompareOptions* o) { o->trace_columns = 0; },
+      [](CompareOptions* o) { o->band_half_width_bins = 0; },
+      [](CompareOptions* o) { o->welch_segment_samples = 7; },
+  };
+  for (std::size_t k = 0; k < breaks.size(); ++k) {
+    SCOPED_TRACE(k);
+    CompareOptions options;
+    breaks[k](&options);
+    const Status status = options.Validate();
+    ASSERT_FALSE(status.ok());
+    EXPECT_EQ(status.message(),
+              "compare options: residual_lags, trace_columns and band_half_width_bins must be >= "
+              "1, welch_segment_samples >= 8");
+    auto comparison =
+        CompareLog((TempDir() / "absent.csv").string(), RigParams{}, SimulationOptions{}, options);
+    ASSERT_FALSE(comparison.ok());
+    EXPECT_EQ(comparison.status().message(), status.message());
+  }
 }
 
 }  // namespace

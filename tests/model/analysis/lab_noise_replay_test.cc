@@ -16,7 +16,8 @@
 
 #include <gtest/gtest.h>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/units.h"
 #include "model/identification/fit.h"
 #include "model/riglog/rig_log.h"

@@ -26,7 +26,8 @@
 
 #include <gtest/gtest.h>
 
-#include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/effects/effect.h"
 #include "model/identification/diagnose.h"
 #include "model/identification/synthetic_log.h"

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "model/analysis/compare.h"
 #include "model/common/units.h"
 #include "model/effects/param_by_key.h"
 #include "model/identification/synthetic_log.h"

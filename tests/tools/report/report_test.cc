@@ -17,6 +17,8 @@
 #include "tests/support/shell.h"
 
 #include "model/analysis/compare.h"
+#include "model/analysis/log_replay.h"
+#include "model/analysis/measured_log.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
