@@ -12,11 +12,11 @@
 
 #include "model/common/units.h"
 #include "model/sim/sensor_noise.h"
+#include "service/rig/log_playback.h"
+#include "service/rig/rig_service.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/hidden_effect.h"
 #include "tools/cli/model_options.h"
-#include "service/rig/log_playback.h"
-#include "service/rig/rig_service.h"
 
 namespace mpdrig::cli {
 namespace {

@@ -6,9 +6,9 @@
 #include <memory>
 #include <sstream>
 
+#include "service/shadow/shadow_service.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/model_options.h"
-#include "service/shadow/shadow_service.h"
 
 namespace mpdrig::cli {
 namespace {
