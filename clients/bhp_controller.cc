@@ -61,7 +61,7 @@ struct ControllerOptions {
   // Without a set point: command nothing (the choke stays where the rig has it), ignore the first
   // settle_s and two heave periods (the heave's start-up transient; the observer's start-up, when
   // the control reads its estimate), average the BHP and the choke's position over learn_s rounded
-  // up to whole heave periods (a part period biases the mean by up to the heave's amplitude over pi
+  // to whole heave periods (a part period biases the mean by up to the heave's amplitude over pi
   // periods), then hold that mean BHP, starting from that mean opening.
   double settle_s = 10.0;
   double learn_s = 10.0;
@@ -126,18 +126,18 @@ class BhpController {
     const double settle_s =
         std::max(o_.settle_s, frequency_hz > 0.0 ? kSettlePeriods / frequency_hz : 0.0);
     if (!learn_start_s_ && t_s - *first_t_s_ < settle_s) return false;
-    if (!learn_start_s_) learn_start_s_ = t_s;
-    const double elapsed_s = t_s - *learn_start_s_;
-    if (!learn_end_s_ && elapsed_s >= o_.learn_s) {
-      // The heave's frequency as it is when learn_s has passed (the estimate's: a commanded sine
-      // or the tracker's lock); unknown: learn_s as it is.
+    if (!learn_start_s_) {
+      // The window: learn_s rounded to whole periods of the heave's frequency as it is now (the
+      // estimate's: a commanded sine, or the tracker's lock after the settling), at least one;
+      // the frequency unknown: learn_s as it is.
+      learn_start_s_ = t_s;
       learn_end_s_ =
-          *learn_start_s_ + (frequency_hz > 0.0
-                                 ? std::ceil(o_.learn_s * frequency_hz - 1e-9) / frequency_hz
-                                 : o_.learn_s);
+          t_s + (frequency_hz > 0.0
+                     ? std::max(1.0, std::round(o_.learn_s * frequency_hz)) / frequency_hz
+                     : o_.learn_s);
     }
     // The samples in [start, end): the sample at the end belongs to the next period.
-    if (learn_end_s_ && t_s >= *learn_end_s_ - 1e-9) {
+    if (t_s >= *learn_end_s_ - 1e-9) {
       const double n = static_cast<double>(learn_n_);
       o_.setpoint_barg = learn_n_ > 0 ? learn_sum_ / n : bhp_barg;
       integral_deg_ = learn_n_ > 0 ? learn_choke_sum_ / n : choke_deg;
@@ -276,6 +276,7 @@ class HeaveFit {
 
   // Gaussian elimination with partial pivoting on the normal equations (7 x 7, well conditioned
   // over a window of a period or more); false if singular (a window much shorter than a period).
+  // Written out so that an example a student copies needs nothing but the client library.
   bool Solve(double* x) const {
     double a[kTerms][kTerms + 1];
     for (int i = 0; i < kTerms; ++i) {
@@ -500,7 +501,7 @@ int main(int argc, char** argv) {
                  "bottom-hole pressure to hold [barg] (default: with the choke left as it is, "
                  "watch --settle seconds, then hold the mean over the next --learn seconds)");
   app.add_option("--learn", c.learn_s,
-                 "without --setpoint-barg: watch this long [s], rounded up to whole heave "
+                 "without --setpoint-barg: watch this long [s], rounded to whole heave "
                  "periods when the heave's frequency is known")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();

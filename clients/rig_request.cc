@@ -70,7 +70,9 @@ int main(int argc, char** argv) {
   // The service's request reader must have matched (authentication, secure discovery) first.
   using Clock = std::chrono::steady_clock;
   const auto until = Clock::now() + std::chrono::duration<double>(timeout_s);
-  if (!dds::AwaitReader(writer->handle(), dds::DeadlineAfter(timeout_s)).ok()) {
+  const auto matched = dds::AwaitReader(writer->handle(), dds::DeadlineAfter(timeout_s));
+  if (!matched.ok()) return Fail(matched.status().message());
+  if (!*matched) {
     return Fail("no service takes private-rig requests for rig '" + rig_id + "' on domain " +
                 std::to_string(domain) + " (mpdrig serve --security ... --private-rigs N)");
   }

@@ -143,8 +143,9 @@ int main(int argc, char** argv) {
   if (!writer.ok()) return Fail(writer.status().message());
   // A command written before the shadow's reader has matched would be lost (volatile).
   const std::chrono::duration<double> left = deadline - std::chrono::steady_clock::now();
-  if (!dds::AwaitReader(writer->handle(), dds::DeadlineAfter(left.count())).ok())
-    return Fail("the shadow's command reader did not match within --timeout");
+  const auto matched = dds::AwaitReader(writer->handle(), dds::DeadlineAfter(left.count()));
+  if (!matched.ok()) return Fail(matched.status().message());
+  if (!*matched) return Fail("the shadow's command reader did not match within --timeout");
 
   mpdrig_ShadowCommand command{};
   command.rig_id = rig_id.data();

@@ -16,11 +16,18 @@ const ChannelMetrics* Comparison::Find(Channel channel) const {
 }
 
 Status CompareOptions::Validate() const {
-  if (residual_lags < 1 || trace_columns < 1 || band_half_width_bins < 1 ||
-      welch_segment_samples < 8) {
-    return Status::Error(
-        "compare options: residual_lags, trace_columns and band_half_width_bins must be >= 1, "
-        "welch_segment_samples >= 8");
+  const std::pair<const char*, int> at_least[] = {{"residual_lags", residual_lags},
+                                                  {"trace_columns", trace_columns},
+                                                  {"band_half_width_bins", band_half_width_bins}};
+  for (const auto& [name, value] : at_least) {
+    if (value < 1) {
+      return Status::Error("compare options: " + std::string(name) + " = " + std::to_string(value) +
+                           " must be >= 1");
+    }
+  }
+  if (welch_segment_samples < 8) {
+    return Status::Error("compare options: welch_segment_samples = " +
+                         std::to_string(welch_segment_samples) + " must be >= 8");
   }
   return Status::Ok();
 }

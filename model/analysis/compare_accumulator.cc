@@ -435,7 +435,7 @@ void ComparisonAccumulator::Add(const PipelineSample& sample, const double* mode
     UpdateRange(y, &s.envelope.measured_min[column], &s.envelope.measured_max[column]);
     UpdateRange(yhat, &s.envelope.model_min[column], &s.envelope.model_max[column]);
     UpdateRange(y - yhat, &s.envelope.residual_min[column], &s.envelope.residual_max[column]);
-    AddToCloseUp(&s, n, row.time_s, y, yhat);
+    AddToZoomRing(&s, n, row.time_s, y, yhat);
     AddLaggedSums(&s, y, yhat, u);
     s.measured_ring->Push(y);
     s.model_ring->Push(yhat);
@@ -475,8 +475,8 @@ std::array<double, kResidualInputCount> ComparisonAccumulator::AddResidualInputs
 
 // Sample n into the channel's ring of the last 2 B + 1 samples; the largest |residual| so far,
 // and its snapshot B samples after it.
-void ComparisonAccumulator::AddToCloseUp(ChannelState* s, long n, double time_s, double y,
-                                         double yhat) const {
+void ComparisonAccumulator::AddToZoomRing(ChannelState* s, long n, double time_s, double y,
+                                          double yhat) const {
   const long zoom_half = static_cast<long>(std::max(2, options_.max_zoom_samples));
   const std::size_t ring_size = static_cast<std::size_t>(2 * zoom_half + 1);
   const std::size_t ring_slot = static_cast<std::size_t>(n) % ring_size;

@@ -108,7 +108,7 @@ class ComparisonAccumulator {
   // Add's steps.
   void AddInputCloseUp(const LogRow& row);
   std::array<double, kResidualInputCount> AddResidualInputs(const PipelineSample& sample);
-  void AddToCloseUp(ChannelState* s, long n, double time_s, double y, double yhat) const;
+  void AddToZoomRing(ChannelState* s, long n, double time_s, double y, double yhat) const;
   void AddLaggedSums(ChannelState* s, double y, double yhat,
                      const std::array<double, kResidualInputCount>& u) const;
   void AddSegment(std::size_t length);

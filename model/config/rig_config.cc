@@ -119,8 +119,7 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
     // effect's name, or the parameter's line), not only once the whole file has been read.
     const EffectInfo* info = FindEffectInfo(effect.name());
     if (info == nullptr) {
-      return Status::Error(position + ": unknown effect '" + effect.name() +
-                           "'; valid effects: " + EffectNames());
+      return UnknownEffect(effect.name()).Within(position);
     }
     const pb::TextFormat::ParseInfoTree* effect_tree = locations.GetTreeForNested(effect_field, i);
     EffectSetting setting{effect.name(), {}};

@@ -69,12 +69,17 @@ std::string EffectNames() {
   return names;
 }
 
+Status UnknownEffect(std::string_view name) {
+  return Status::Error("unknown effect '" + std::string(name) +
+                       "'; valid effects: " + EffectNames());
+}
+
 Status ApplyEffectSpec(RigParams* params, std::string_view spec) {
   const std::size_t colon = spec.find(':');
   const std::string name(spec.substr(0, colon));
   const EffectInfo* info = FindEffectInfo(name);
   if (info == nullptr) {
-    return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
+    return UnknownEffect(name);
   }
   EffectSetting* setting = params->FindEffect(name);
   if (setting == nullptr) {
@@ -110,8 +115,7 @@ Status ValidateEffects(const RigParams& params) {
     const EffectSetting& setting = params.effects[i];
     const EffectInfo* info = FindEffectInfo(setting.name);
     if (info == nullptr) {
-      return Status::Error("unknown effect '" + setting.name +
-                           "'; valid effects: " + EffectNames());
+      return UnknownEffect(setting.name);
     }
     for (std::size_t j = 0; j < i; ++j) {
       if (params.effects[j].name == setting.name) {

@@ -105,6 +105,8 @@ std::span<const EffectInfo* const> EffectCatalogue();
 const EffectInfo* FindEffectInfo(std::string_view name);
 // "unsteady_friction, helical_friction, ..." for error messages.
 std::string EffectNames();
+// The error for a name the catalogue does not hold: "unknown effect 'NAME'; valid effects: ...".
+Status UnknownEffect(std::string_view name);
 
 // Switches an effect on from "NAME" or "NAME:key=value,key=value" (`--effect`). Switching on an
 // effect that is already on merges the values. Names, keys, numbers and bounds are checked.

@@ -32,19 +32,13 @@ Result<ParamByKey> FindParamByKey(std::string_view key) {
     auto info = LookUpParam(key, kEffectKeys);
     if (!info.ok()) return info.status();
     const ParamInfo& base = **info;
-    const auto [fit_min, fit_max] = base.FitRange();
-    return ParamByKey{.base = &base,
-                      .unit = base.unit,
-                      .min_value = base.min_value,
-                      .max_value = base.max_value,
-                      .fit_min = fit_min,
-                      .fit_max = fit_max};
+    return ParamByKey{
+        .base = &base, .unit = base.unit, .min_value = base.min_value, .max_value = base.max_value};
   }
   const std::string_view effect_name = key.substr(0, dot);
   const EffectInfo* effect = FindEffectInfo(effect_name);
   if (effect == nullptr) {
-    return Status::Error("unknown effect '" + std::string(effect_name) + "' in '" +
-                         std::string(key) + "'; effects: " + EffectNames());
+    return UnknownEffect(effect_name).Within(std::string(key));
   }
   const EffectParamInfo* param = effect->FindParam(key.substr(dot + 1));
   if (param == nullptr) {
@@ -55,9 +49,11 @@ Result<ParamByKey> FindParamByKey(std::string_view key) {
                     .effect_param = param,
                     .unit = param->unit,
                     .min_value = param->min_value,
-                    .max_value = param->max_value,
-                    .fit_min = param->min_value,
-                    .fit_max = param->max_value};
+                    .max_value = param->max_value};
+}
+
+std::pair<double, double> ParamByKey::FitRange() const {
+  return base != nullptr ? base->FitRange() : std::make_pair(min_value, max_value);
 }
 
 Result<double> GetParamValue(const RigParams& params, std::string_view key) {

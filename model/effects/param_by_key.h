@@ -10,6 +10,7 @@
 #pragma once
 
 #include <string_view>
+#include <utility>
 
 #include "model/common/status.h"
 #include "model/effects/effect.h"
@@ -25,10 +26,11 @@ struct ParamByKey {
   std::string_view unit;
   double min_value = 0.0;  // bounds, inclusive: what SetParamValue accepts
   double max_value = 0.0;
+
   // The range fit searches by default, within the bounds: ParamInfo::FitRange() for a base key,
-  // the bounds for an effect's.
-  double fit_min = 0.0;
-  double fit_max = 0.0;
+  // the bounds for an effect's. Computed when asked (a base key's may build the thesis's
+  // RigParams), not on every get or set inside a fit's replays.
+  std::pair<double, double> FitRange() const;
 };
 
 // What `key` names, or an error that names it and lists the valid keys (an unknown effect: the

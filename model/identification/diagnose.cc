@@ -134,8 +134,8 @@ struct ScanPoints {
   RigParams best;  // the search's start until a scan point fits better
 };
 
-void Consider(const SearchContext& context, const RigParams& trial, ScanPoints* scan,
-              int* replays) {
+void ReplayScanPoint(const SearchContext& context, const RigParams& trial, ScanPoints* scan,
+                     int* replays) {
   auto traces =
       ReplayModel(*context.fit_log, trial, context.simulation, context.fit_options.replay);
   ++*replays;
@@ -233,7 +233,7 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
           trial.wave_speed_mps =
               centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (speeds - 1));
         }
-        Consider(context, trial, &scan, replays);
+        ReplayScanPoint(context, trial, &scan, replays);
       }
     }
   }
@@ -245,7 +245,7 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
       trial.wave_speed_mps =
           around.wave_speed_mps *
           (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
-      Consider(context, trial, &scan, replays);
+      ReplayScanPoint(context, trial, &scan, replays);
     }
   }
   return FitFromTwoStarts(context, scan, parameters, replays);
@@ -396,7 +396,11 @@ std::vector<const EffectInfo*> CandidateEffects(const DiagnoseOptions& options) 
     for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
     return candidates;
   }
-  for (const std::string& name : options.candidates) candidates.push_back(FindEffectInfo(name));
+  for (const std::string& name : options.candidates) {
+    const EffectInfo* info = FindEffectInfo(name);
+    MPDRIG_CHECK(info != nullptr);  // DiagnoseOptions::Validate refused unknown names
+    candidates.push_back(info);
+  }
   return candidates;
 }
 
@@ -416,10 +420,10 @@ struct DiagnoseRun {
   double t_begin = 0.0, t_end = 0.0;  // the whole log
   double fit_end_s = 0.0;             // fitting data: [t_begin, fit_end_s)
   double score_begin = 0.0;           // scoring data: [score_begin, t_end]
-  double steps = 1.0;                 // progress: the baseline, then one per candidate
+  double progress_steps = 1.0;        // the baseline, then one per candidate
 
   void Report(std::string_view stage, double done) const {
-    if (options.progress) options.progress(stage, done / steps);
+    if (options.progress) options.progress(stage, done / progress_steps);
   }
 };
 
@@ -445,7 +449,7 @@ DiagnoseRun SplitLog(const MeasuredLog& measured, const DiagnoseOptions& options
   run.fit_options.window_end_s = run.fit_end_s;
   run.fit_options.max_iterations = options.max_iterations;
   run.fit_options.solver_log = options.solver_log;
-  run.steps = 1.0 + candidate_count;
+  run.progress_steps = 1.0 + candidate_count;
   return run;
 }
 
@@ -683,7 +687,7 @@ Status ScreenCandidates(const DiagnoseRun& run, const Baseline& baseline,
 // ranking is redone. A polished fit is kept when it fits the fitting data better (never chosen
 // by the scoring data, which must stay unseen).
 void PolishLeaders(const DiagnoseRun& run, const Baseline& baseline, Diagnosis* diagnosis) {
-  run.Report("polish", run.steps - 0.75);
+  run.Report("polish", run.progress_steps - 0.75);
   for (std::size_t i = 0; i < std::min(kPolishedCandidates, diagnosis->candidates.size()); ++i) {
     CandidateResult& candidate = diagnosis->candidates[i];
     if (!candidate.failure.empty()) continue;
@@ -741,7 +745,7 @@ void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis) {
     }
   }
   diagnosis->verdict = winner.effect;
-  run.Report("compare", run.steps - 0.5);
+  run.Report("compare", run.progress_steps - 0.5);
   auto traces = ReplayWithOwnLevels(run.measured, winner.fitted, run.simulation, run.options.replay,
                                     &diagnosis->replays);
   if (!traces.ok()) return;
@@ -758,7 +762,7 @@ Status DiagnoseOptions::Validate() const {
   if (baseline_only) return Status::Ok();  // the candidates are not tried
   for (const std::string& name : candidates) {
     if (FindEffectInfo(name) == nullptr) {
-      return Status::Error("unknown effect '" + name + "'; valid effects: " + EffectNames());
+      return UnknownEffect(name);
     }
   }
   return Status::Ok();
@@ -782,7 +786,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   MPDRIG_RETURN_IF_ERROR(ScreenCandidates(run, *baseline, candidates, &diagnosis));
   PolishLeaders(run, *baseline, &diagnosis);
   DecideVerdict(run, &diagnosis);
-  run.Report("done", run.steps);
+  run.Report("done", run.progress_steps);
   return diagnosis;
 }
 

@@ -528,7 +528,8 @@ Status FitOptions::Validate() const {
 Result<FitParameter> DefaultFitParameter(std::string_view key) {
   auto found = FindParamByKey(key);
   if (!found.ok()) return found.status();
-  return FitParameter{std::string(key), found->fit_min, found->fit_max};
+  const auto [lower, upper] = found->FitRange();
+  return FitParameter{std::string(key), lower, upper};
 }
 
 Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,

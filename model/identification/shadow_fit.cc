@@ -15,7 +15,7 @@ Result<std::vector<FitParameter>> ShadowFitParameters(const RigParams& params) {
   }
   for (const EffectSetting& effect : params.effects) {
     const EffectInfo* info = FindEffectInfo(effect.name);
-    if (info == nullptr) return Status::Error("unknown effect '" + effect.name + "'");
+    if (info == nullptr) return UnknownEffect(effect.name);
     for (const EffectParamInfo& param : info->params) {
       if (!param.fitted) continue;
       auto parameter = DefaultFitParameter(effect.name + "." + std::string(param.key));

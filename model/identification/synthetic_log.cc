@@ -119,8 +119,7 @@ Status SyntheticLogOptions::Validate() const {
   }
   if (sensor_noise) MPDRIG_RETURN_IF_ERROR(sensor_noise->Validate().Within("synthetic log"));
   if (hidden_effect && FindEffectInfo(*hidden_effect) == nullptr) {
-    return Status::Error("unknown effect '" + *hidden_effect +
-                         "'; valid effects: " + EffectNames());
+    return UnknownEffect(*hidden_effect);
   }
   return Status::Ok();
 }
@@ -139,6 +138,7 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   // Hidden effect.
   if (options.hidden_effect) {
     const EffectInfo* info = FindEffectInfo(*options.hidden_effect);
+    MPDRIG_CHECK(info != nullptr);  // SyntheticLogOptions::Validate refused an unknown name
     EffectSetting setting{std::string(info->name), {}};
     description << info->name;
     for (const EffectParamInfo& param : info->params) {

@@ -131,13 +131,17 @@ class Writer {
   Entity entity_;
 };
 
-// Waits on a waitset until `writer` has matched at least one reader, or until `deadline` (then:
-// "no reader of the topic (is the service running?)"). A sample written before the match reaches
-// no one: a volatile one is lost, and a process that exits takes a transient-local one with it.
-Status AwaitReader(dds_entity_t writer, dds_time_t deadline);
-// The DDS time `seconds` from now (at least now), for AwaitReader and the waitsets' deadlines.
+// Waits on a waitset until `writer` has matched at least one reader (true) or until `deadline`
+// (false); a DDS failure is an error. A sample written before the match reaches no one: a
+// volatile one is lost, and a process that exits takes a transient-local one with it.
+Result<bool> AwaitReader(dds_entity_t writer, dds_time_t deadline);
+// The DDS time `seconds` from now (at least now; DDS_NEVER for a wait as long as DDS can express),
+// for AwaitReader and the waitsets' deadlines.
 inline dds_time_t DeadlineAfter(double seconds) {
-  return dds_time() + static_cast<dds_duration_t>(std::max(seconds, 0.0) * 1e9);
+  const dds_time_t now = dds_time();
+  const double left_ns = std::max(seconds, 0.0) * 1e9;
+  if (!(left_ns < static_cast<double>(DDS_NEVER - now))) return DDS_NEVER;
+  return now + static_cast<dds_duration_t>(left_ns);
 }
 
 // Sends one command (CommandQos, `strength`) from a writer of its own, the way a script or a
@@ -153,7 +157,9 @@ Status SendOnce(dds_entity_t participant, dds_entity_t topic, const T& sample,
   Entity writer(dds_create_writer(participant, topic, CommandQos(strength).get(), nullptr));
   if (writer.handle() < 0) return Check(writer.handle(), "dds_create_writer");
   const dds_time_t deadline = dds_time() + timeout;
-  MPDRIG_RETURN_IF_ERROR(AwaitReader(writer.handle(), deadline));
+  auto matched = AwaitReader(writer.handle(), deadline);
+  if (!matched.ok()) return matched.status();
+  if (!*matched) return Status::Error("no reader of the topic (is the service running?)");
   MPDRIG_RETURN_IF_ERROR(Check(dds_write(writer.handle(), &sample), "dds_write"));
   const dds_duration_t left = std::max<dds_duration_t>(deadline - dds_time(), DDS_MSECS(1));
   MPDRIG_RETURN_IF_ERROR(Check(dds_wait_for_acks(writer.handle(), left), "dds_wait_for_acks"));

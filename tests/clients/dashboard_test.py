@@ -71,7 +71,7 @@ class Processes:
         print("+ " + " ".join(args), flush=True)
         # The domain's lock goes to the child too: a child left running keeps the domain claimed
         # (tests/support/test_domain.h).
-        proc = subprocess.Popen(args, pass_fds=tuple(claims), **kw)
+        proc = subprocess.Popen(args, pass_fds=tuple(claims.values()), **kw)
         self.procs.append(proc)
         return proc
 

@@ -73,9 +73,7 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
   auto topic =
       dds::CreateTopic(participant->handle(), &mpdrig_StepRequest_desc, "mpdrig_step_request");
   ASSERT_TRUE(topic.ok());
-  dds::Qos qos;
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  const dds::Qos qos = dds::RequestQos();  // as the service reads requests
   auto steps = dds::Writer<mpdrig_StepRequest>::Create(participant->handle(), topic->handle(), qos);
   ASSERT_TRUE(steps.ok());
   bool matched = false;

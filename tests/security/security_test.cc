@@ -469,9 +469,7 @@ TEST_F(SecureClass, InstructorTakesOverAStudentsRig) {
 
 // A student asks for private rigs in their own partition (mpdrig serve --private-rigs).
 void AskForPrivateRigs(Peer& student, const std::string& rig, std::uint32_t how_many) {
-  dds::Qos qos;
-  dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-  dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+  const dds::Qos qos = dds::RequestQos();  // as the service reads requests
   auto writer = student.MakeWriter<mpdrig_RigRequest>(
       dds::RigPartition(rig), &mpdrig_RigRequest_desc, "mpdrig_rig_request", qos);
   ASSERT_TRUE(writer.ok()) << writer.status().message();

@@ -188,6 +188,7 @@ class ChildProcess {
     posix_spawnattr_setsigdefault(&attributes, &defaults);
     posix_spawnattr_setsigmask(&attributes, &none);
     posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+    if (!ok && error_.empty()) error_ = "cannot set up the output of " + args[0];
     if (ok) {
       const int spawned =
           posix_spawn(&pid_, argv[0], &actions, &attributes, argv.data(), envp.data());

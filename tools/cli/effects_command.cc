@@ -17,8 +17,7 @@ void Print(std::string_view label, std::string_view text) {
 
 int RunEffects(const std::string& only) {
   if (!only.empty() && FindEffectInfo(only) == nullptr) {
-    return Fail("effects",
-                Status::Error("unknown effect '" + only + "'; valid effects: " + EffectNames()));
+    return Fail("effects", UnknownEffect(only));
   }
   for (const EffectInfo* info : EffectCatalogue()) {
     if (!only.empty() && info->name != only) continue;

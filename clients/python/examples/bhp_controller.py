@@ -48,7 +48,7 @@ class Gains:
     choke_max_deg: float = 88.0
     # Without a set point: command nothing, watch at least settle_s and two heave periods (the
     # heave's start-up, the observer's convergence), then average the BHP and the choke over
-    # learn_s rounded up to whole heave periods, and hold that mean BHP from that mean opening.
+    # learn_s rounded to whole heave periods, and hold that mean BHP from that mean opening.
     settle_s: float = 10.0
     learn_s: float = 10.0
 
@@ -84,8 +84,8 @@ class BhpController:
         if self._learn_end is None and t_s - self._learn_start >= g.learn_s:
             # Whole heave periods: a part period biases the mean.
             learn_s = g.learn_s
-            if frequency_hz > 0.0:
-                learn_s = math.ceil(g.learn_s * frequency_hz - 1e-9) / frequency_hz
+            if frequency_hz > 0.0:  # the nearest whole number of periods, at least one
+                learn_s = max(1.0, round(g.learn_s * frequency_hz)) / frequency_hz
             self._learn_end = self._learn_start + learn_s
         if self._learn_end is not None and t_s >= self._learn_end - 1e-9:
             n = max(self._learn_n, 1)
@@ -150,10 +150,10 @@ class Swing:
     def mean_barg(self) -> float:
         return sum(self.values) / len(self.values)
 
-    @property
-    def periodic_rms_bar(self) -> float:
+    def _harmonics(self) -> Optional[np.ndarray]:
+        """Least-squares coefficients c0, a1, b1, a2, b2, a3, b3; None without a frequency."""
         if self.frequency_hz <= 0.0 or self.n < 28:
-            return math.nan
+            return None
         t = np.asarray(self.times)
         columns = [np.ones_like(t)]
         for k in (1, 2, 3):
@@ -161,7 +161,19 @@ class Swing:
             columns += [np.cos(w * t), np.sin(w * t)]
         coefficients, *_ = np.linalg.lstsq(np.column_stack(columns), np.asarray(self.values),
                                            rcond=None)
-        return math.sqrt(float(np.sum(coefficients[1:] ** 2)) / 2.0)
+        return coefficients
+
+    @property
+    def heave_bar(self) -> float:
+        """Amplitude of PT1's component at the heave frequency."""
+        c = self._harmonics()
+        return math.nan if c is None else math.hypot(c[1], c[2])
+
+    @property
+    def periodic_rms_bar(self) -> float:
+        """RMS of PT1's periodic part (harmonics 1-3 of the heave)."""
+        c = self._harmonics()
+        return math.nan if c is None else math.sqrt(float(np.sum(c[1:] ** 2)) / 2.0)
 
 
 def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop: bool = False,
@@ -173,19 +185,49 @@ def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop:
     controlled before the next step; in real time the controller acts on each sample it gets.
     """
     gains = gains or Gains()
-    wants_estimate = use_estimate or gains.feedforward
+    wants_estimate = not open_loop and (use_estimate or gains.feedforward)
     swing = Swing()
     controller = BhpController(gains, setpoint_barg)
+
+    def heave_frequency_hz() -> float:
+        """The observer's heave frequency, for the swing's fit; 0 (RMS NaN) without an observer."""
+        try:
+            return rig.estimate().disturbance_frequency_hz
+        except (TimeoutError, mpdrig.RigError):
+            return 0.0
+
     if open_loop and rig.lockstep:
         # Nothing to decide between samples: step a second at a time and read them all.
         while True:
             rig.step(100)
             for s in rig.pending():
                 if s.time_s > duration_s - measure_last_s and s.time_s <= duration_s + 1e-9:
+                    if swing.n == 0:
+                        swing.frequency_hz = heave_frequency_hz()
                     swing.add(s.time_s, s.PT1_barg)
                 if s.time_s >= duration_s - 1e-9:
-                    swing.frequency_hz = rig.estimate().disturbance_frequency_hz
                     return swing
+    for s in rig.stream():
+        z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
+        if wants_estimate:
+            # Lockstep: the estimate of this very sample; real time: the newest one.
+            est = rig.estimate(s.sample_counter if rig.lockstep else None)
+            z = complex(est.piston_velocity_est_mps,
+                        2.0 * math.pi * est.disturbance_frequency_hz * est.piston_position_est_m)
+            frequency_hz = est.disturbance_frequency_hz
+            if use_estimate:
+                bhp = est.BHP_est_barg
+        if not open_loop:
+            command = controller.update(s.time_s, bhp, s.choke_position_deg, z, frequency_hz)
+            if command is not None:
+                rig.choke(command)
+        if s.time_s > duration_s - measure_last_s:
+            if swing.n == 0:  # the window's first frequency, as the C++ controller takes it
+                swing.frequency_hz = frequency_hz if wants_estimate else heave_frequency_hz()
+            swing.add(s.time_s, s.PT1_barg)
+        if s.time_s >= duration_s - 1e-9:
+            break
+    return swing
     for s in rig.stream():
         z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
         if wants_estimate:
@@ -243,7 +285,7 @@ def main() -> int:
             else "pi+ff(estimate)" if args.use_estimate else "pi+ff")
     print(f"rig={args.rig} mode={mode} window_s={args.measure_last:g} samples={swing.n} "
           f"PT1_amplitude_bar={swing.amplitude_bar:.5f} PT1_mean_barg={swing.mean_barg:.5f} "
-          f"PT1_periodic_rms_bar={swing.periodic_rms_bar:.5f}")
+          f"PT1_heave_bar={swing.heave_bar:.5f} PT1_periodic_rms_bar={swing.periodic_rms_bar:.5f}")
     return 0
 
 

@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
 
 import pytest
 
@@ -23,10 +22,11 @@ class Service:
         if not exe:
             pytest.skip("MPDRIG_EXE is not set (run through ctest)")
         self.domain = claim_test_domain()
-        # The domain's lock goes to the service too: one left running keeps the domain claimed.
+        # The domain's lock goes to the service too (its own domain's only): one left running
+        # keeps the domain claimed. Its output is not read: discarded, so it never fills a pipe.
         self.process = subprocess.Popen([exe, "serve", "--domain", str(self.domain), *args],
-                                        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                        pass_fds=tuple(claims))
+                                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                        pass_fds=(claims[self.domain],))
 
     def stop(self) -> None:
         if self.process.poll() is None:

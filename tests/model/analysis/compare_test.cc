@@ -16,6 +16,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -779,21 +780,22 @@ TEST(CompareTest, UnmeasuredInputSampleIsRefusedWithLine) {
 // CompareLog with the same message, before it would look at the (missing) file.
 TEST(CompareTest, BadOptionsAreRefusedUpFront) {
   EXPECT_TRUE(CompareOptions{}.Validate().ok());
-  const std::vector<std::function<void(CompareOptions*)>> breaks = {
-      [](CompareOptions* o) { o->residual_lags = 0; },
-      [](CompareOptions* o) { o->trace_columns = 0; },
-      [](CompareOptions* o) { o->band_half_width_bins = 0; },
-      [](CompareOptions* o) { o->welch_segment_samples = 7; },
+  // Each bad field is named, with its value.
+  const std::vector<std::pair<std::function<void(CompareOptions*)>, std::string>> breaks = {
+      {[](CompareOptions* o) { o->residual_lags = 0; }, "residual_lags = 0 must be >= 1"},
+      {[](CompareOptions* o) { o->trace_columns = 0; }, "trace_columns = 0 must be >= 1"},
+      {[](CompareOptions* o) { o->band_half_width_bins = -1; },
+       "band_half_width_bins = -1 must be >= 1"},
+      {[](CompareOptions* o) { o->welch_segment_samples = 7; },
+       "welch_segment_samples = 7 must be >= 8"},
   };
-  for (std::size_t k = 0; k < breaks.size(); ++k) {
-    SCOPED_TRACE(k);
+  for (const auto& [make_bad, says] : breaks) {
+    SCOPED_TRACE(says);
     CompareOptions options;
-    breaks[k](&options);
+    make_bad(&options);
     const Status status = options.Validate();
     ASSERT_FALSE(status.ok());
-    EXPECT_EQ(status.message(),
-              "compare options: residual_lags, trace_columns and band_half_width_bins must be >= "
-              "1, welch_segment_samples >= 8");
+    EXPECT_EQ(status.message(), "compare options: " + says);
     auto comparison =
         CompareLog((TempDir() / "absent.csv").string(), RigParams{}, SimulationOptions{}, options);
     ASSERT_FALSE(comparison.ok());

@@ -5,6 +5,7 @@
 
 #include <limits>
 #include <string>
+#include <utility>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -41,13 +42,12 @@ TEST(ParamByKey, ABaseKeyIsItsFieldOfRigParams) {
   EXPECT_EQ(found->min_value, 10.0);
   EXPECT_EQ(found->max_value, 5000.0);
   // The thesis's tuning range (ParamInfo::fit_min, fit_max).
-  EXPECT_EQ(found->fit_min, 300.0);
-  EXPECT_EQ(found->fit_max, 1500.0);
+  EXPECT_EQ(found->FitRange(), std::make_pair(300.0, 1500.0));
   // No tuning range given: a factor of 3 either way around the thesis value, 0.1 s (5.3).
   auto lag = FindParamByKey("choke_time_constant_s");
   ASSERT_TRUE(lag.ok());
-  EXPECT_DOUBLE_EQ(lag->fit_min, 0.1 / 3.0);
-  EXPECT_DOUBLE_EQ(lag->fit_max, 0.1 * 3.0);
+  EXPECT_DOUBLE_EQ(lag->FitRange().first, 0.1 / 3.0);
+  EXPECT_DOUBLE_EQ(lag->FitRange().second, 0.1 * 3.0);
 }
 
 TEST(ParamByKey, AnEffectKeyIsItsSettingWithTheCataloguesDefault) {
@@ -74,8 +74,7 @@ TEST(ParamByKey, AnEffectKeyIsItsSettingWithTheCataloguesDefault) {
   // An effect's fit range is its bounds.
   EXPECT_EQ(found->min_value, 0.0);
   EXPECT_EQ(found->max_value, 1.0);
-  EXPECT_EQ(found->fit_min, 0.0);
-  EXPECT_EQ(found->fit_max, 1.0);
+  EXPECT_EQ(found->FitRange(), std::make_pair(0.0, 1.0));
 }
 
 TEST(ParamByKey, AnEffectThatIsNotSwitchedOnIsAnError) {
@@ -104,7 +103,8 @@ TEST(ParamByKey, AnUnknownKeyListsTheValidOnes) {
   // An unknown effect: the effects.
   const Status effect = SetParamValue(&params, "no_such_effect.k", 1.0);
   ASSERT_FALSE(effect.ok());
-  EXPECT_THAT(effect.message(), HasSubstr("unknown effect 'no_such_effect' in 'no_such_effect.k'"));
+  EXPECT_THAT(effect.message(),
+              HasSubstr("no_such_effect.k: unknown effect 'no_such_effect'; valid effects: "));
   for (const EffectInfo* info : EffectCatalogue()) {
     EXPECT_THAT(effect.message(), HasSubstr(std::string(info->name)));
   }

@@ -156,9 +156,7 @@ class PlaybackServiceTest : public ::testing::Test {
         *dds::Reader<mpdrig_RigStatus>::Create(p, status_topic_.handle(), dds::StatusQos()));
     choke_.emplace(
         *dds::Writer<mpdrig_ChokeCommand>::Create(p, choke_topic_.handle(), dds::CommandQos()));
-    dds::Qos step_qos;
-    dds_qset_reliability(step_qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-    dds_qset_history(step_qos.get(), DDS_HISTORY_KEEP_ALL, 0);
+    const dds::Qos step_qos = dds::RequestQos();  // as the service reads requests
     step_.emplace(*dds::Writer<mpdrig_StepRequest>::Create(p, step_topic_.handle(), step_qos));
     // The service's readers must have matched before a step request goes out.
     for (int i = 0; i < 100; ++i) {

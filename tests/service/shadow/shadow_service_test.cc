@@ -109,12 +109,10 @@ class ShadowServiceTest : public ::testing::Test {
         *dds::Reader<mpdrig_RigStatus>::Create(p, rig_status_topic_.handle(), dds::StatusQos()));
     shadow_reader_.emplace(*dds::Reader<mpdrig_ShadowStatus>::Create(
         p, shadow_status_topic_.handle(), dds::StatusQos()));
-    dds::Qos keep_all;
-    dds_qset_reliability(keep_all.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
-    dds_qset_history(keep_all.get(), DDS_HISTORY_KEEP_ALL, 0);
-    step_.emplace(*dds::Writer<mpdrig_StepRequest>::Create(p, step_topic_.handle(), keep_all));
+    const dds::Qos requests = dds::RequestQos();  // as the service reads them
+    step_.emplace(*dds::Writer<mpdrig_StepRequest>::Create(p, step_topic_.handle(), requests));
     command_.emplace(
-        *dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic_.handle(), keep_all));
+        *dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic_.handle(), requests));
     // Discovery: the rig takes step requests, the shadow commands and (through the rig's
     // writer) samples only once matched.
     for (int i = 0; i < 100; ++i) {
