@@ -234,9 +234,15 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
     beta_next_[n] = 2.0 * u_l - alpha_l;
   }
 
+  return AdvanceToNewLevel(violation);
+}
+
+// Both paths end alike: the new level becomes the state, checked for NaN and for the model's
+// range.
+Status CharacteristicsSolver::AdvanceToNewLevel(RangeViolation* violation) {
   alpha_.swap(alpha_next_);
   beta_.swap(beta_next_);
-  if (!std::isfinite(alpha_[n]) || !std::isfinite(beta_[0])) {
+  if (!std::isfinite(alpha_.back()) || !std::isfinite(beta_.front())) {
     return Status::Error("pipe state is no longer finite (check the inputs for NaN)");
   }
   CheckRange(violation);
@@ -397,7 +403,6 @@ struct CharacteristicsSolver::GeneralStep {
 };
 
 Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation) {
-  const int n = config_.cells;
   const bool cavitation = vapour_pressure_pa_ > 0.0;
   const PressureFunction fn(law_, mixture_.get());
   const bool has_sources = EvaluateMomentumSources();
@@ -413,13 +418,7 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeVio
   StepGeneralInterior(step);
   StepGeneralInlet(step, inputs);
   StepGeneralOutlet(step, inputs);
-  alpha_.swap(alpha_next_);
-  beta_.swap(beta_next_);
-  if (!std::isfinite(alpha_[n]) || !std::isfinite(beta_[0])) {
-    return Status::Error("pipe state is no longer finite (check the inputs for NaN)");
-  }
-  CheckRange(violation);
-  return Status::Ok();
+  return AdvanceToNewLevel(violation);
 }
 
 // The old level in the mixture's invariants, each side of a cavity node separately.

@@ -74,6 +74,8 @@ class CharacteristicsSolver final : public PipeSolver {
   Foot BetaFoot(int i) const;   // beta characteristic arriving at node i (from the right)
   void StepInteriorLinear();
   void StepInteriorQuasiLinear();
+  // The step's last part, on either path: alpha_next_, beta_next_ become the state.
+  Status AdvanceToNewLevel(RangeViolation* violation);
   // The general path (see the header comment), in its steps; GeneralStep holds what they share.
   struct GeneralStep;
   Status StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation);
