@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <sstream>
+#include <string>
 
 #include "model/analysis/measured_log.h"
 #include "model/effects/effect.h"
@@ -98,6 +100,119 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
   return value;
 }
 
+// The hidden effect at a random strength (drawn from its own stream), written into `truth`; its
+// part of the description.
+std::string DrawHiddenEffect(const std::string& name, Random& random, RigParams& truth) {
+  const EffectInfo* info = FindEffectInfo(name);
+  MPDRIG_CHECK(info != nullptr);  // SyntheticLogOptions::Validate refused an unknown name
+  EffectSetting setting{std::string(info->name), {}};
+  std::ostringstream description;
+  description.precision(4);
+  description << info->name;
+  for (const EffectParamInfo& param : info->params) {
+    if (!param.fitted) continue;
+    double lo = param.default_value / 2.0, hi = param.default_value * 2.0;
+    if (param.default_value == 0.0)
+      lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
+    lo = std::max(lo, param.min_value);
+    hi = std::min(hi, param.max_value);
+    double value = random.Uniform(lo, hi);
+    if (param.plausible_min > 0.0 && param.plausible_min < param.plausible_max) {
+      // Log-uniform over the plausible range (it spans decades).
+      value = param.plausible_min *
+              std::pow(param.plausible_max / param.plausible_min, random.Uniform(0.0, 1.0));
+    }
+    setting.values.emplace_back(std::string(param.key), value);
+    description << " " << param.key << "=" << value;
+  }
+  truth.effects.push_back(std::move(setting));
+  return description.str();
+}
+
+Excitation DrawExcitation(bool low_pressure, double duration_s, Random& random) {
+  Excitation excitation;
+  excitation.piston_amp_m = low_pressure ? random.Uniform(0.06, 0.1) : random.Uniform(0.03, 0.05);
+  excitation.sine_hz[0] = random.Uniform(0.1, 0.2);
+  excitation.sine_hz[1] = random.Uniform(0.3, 0.5);
+  // Step tests: the choke and the pump alternate between a low and a high band every 8-14 s
+  // (the pump a few seconds after the choke), so every step is a step of a few degrees or L/min
+  // (uniform levels in one band could step by nothing, and a log without a real choke step says
+  // nothing about the choke's dynamics).
+  const double choke_bands[2][2] = {{low_pressure ? 40.0 : 28.0, low_pressure ? 48.0 : 30.0},
+                                    {low_pressure ? 52.0 : 31.0, low_pressure ? 60.0 : 33.0}};
+  const double pump_bands[2][2] = {{low_pressure ? 2.0 : 6.0, low_pressure ? 2.8 : 7.5},
+                                   {low_pressure ? 3.2 : 8.5, low_pressure ? 4.0 : 10.0}};
+  int band = 0;
+  for (double t = 0.0; t < duration_s; t += random.Uniform(8.0, 14.0), band ^= 1) {
+    excitation.choke_steps.emplace_back(t,
+                                        random.Uniform(choke_bands[band][0], choke_bands[band][1]));
+    excitation.pump_steps.emplace_back(t + random.Uniform(3.0, 6.0),
+                                       random.Uniform(pump_bands[band][0], pump_bands[band][1]));
+  }
+  excitation.pump_steps.insert(excitation.pump_steps.begin(), {0.0, low_pressure ? 3.0 : 8.0});
+  return excitation;
+}
+
+// The inputs as commanded, column by column, and the model's run on them.
+struct CommandedRun {
+  std::vector<std::pair<Channel, std::vector<double>>> inputs;
+  RunResult run;
+};
+
+// Runs `truth` on the excitation's inputs as commanded (noise-free: the model sees the true
+// inputs). A heave that would take the pressure below zero absolute (outside the model's range,
+// thesis 11.5) is scaled down until it does not, as an operator would (column_separation logs
+// keep the first try).
+Result<CommandedRun> RunCommanded(const RigParams& truth, Excitation excitation,
+                                  const riglog::RigLog& log, double duration_s, int cells) {
+  SimulationOptions simulation;
+  simulation.cells = cells;
+  simulation.choke_input = ChokeInput::kMeasured;
+  std::vector<double> position, choke, pump, outlet;
+  Result<RunResult> run = Status::Error("not run");
+  for (int attempt = 0; attempt < 6; ++attempt) {
+    position.clear(), choke.clear(), pump.clear(), outlet.clear();
+    for (double t : log.time_s) {
+      position.push_back(PistonAt(excitation, duration_s, t));
+      choke.push_back(units::ChokeDegToFrac(Stepped(excitation.choke_steps, t, kChokeTransitionS)));
+      pump.push_back(units::LpmToM3ps(Stepped(excitation.pump_steps, t, kPumpTransitionS)));
+      outlet.push_back(log.atmospheric_pressure_pa);
+    }
+    riglog::RigLog inputs = log;
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
+    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
+    // The generator's inputs are exact: replayed as they are (no reconstruction).
+    InputReplayOptions exact;
+    exact.reconstruct_inputs = false;
+    auto signals = SignalsFromLog(inputs, "synthetic", exact);
+    if (!signals.ok()) return signals.status();
+    run = Simulate(truth, simulation, *signals, log.time_s);
+    if (run.ok() || run.status().code() != Status::Code::kModelRange) break;
+    excitation.piston_amp_m *= 0.6;
+  }
+  if (!run.ok()) return run.status();
+  return CommandedRun{{{Channel::kPistonPosition, std::move(position)},
+                       {Channel::kChokePosition, std::move(choke)},
+                       {Channel::kFT2, std::move(pump)},
+                       {Channel::kC1, std::move(outlet)}},
+                      *std::move(run)};
+}
+
+// The quiet per-kind sigmas of SyntheticLogOptions, drawn in the columns' order from the
+// excitation's stream (the logs the identification tests were tuned on).
+void AddQuietNoise(const SyntheticLogOptions& options, Channel channel, std::vector<double>& values,
+                   Random& random) {
+  const riglog::Quantity quantity = riglog::QuantityOf(channel);
+  const double sigma = quantity == riglog::Quantity::kFlow       ? options.flow_noise_m3ps
+                       : quantity == riglog::Quantity::kPosition ? options.piston_noise_m
+                       : quantity == riglog::Quantity::kChokeOpening
+                           ? units::ChokeDegToFrac(options.choke_noise_deg)
+                           : options.pressure_noise_pa;
+  for (double& v : values) v += sigma * random.Normal();
+}
+
 }  // namespace
 
 Status SyntheticLogOptions::Validate() const {
@@ -134,33 +249,9 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   RigParams& truth = result.truth;
   std::ostringstream description;
   description.precision(4);
-
-  // Hidden effect.
-  if (options.hidden_effect) {
-    const EffectInfo* info = FindEffectInfo(*options.hidden_effect);
-    MPDRIG_CHECK(info != nullptr);  // SyntheticLogOptions::Validate refused an unknown name
-    EffectSetting setting{std::string(info->name), {}};
-    description << info->name;
-    for (const EffectParamInfo& param : info->params) {
-      if (!param.fitted) continue;
-      double lo = param.default_value / 2.0, hi = param.default_value * 2.0;
-      if (param.default_value == 0.0)
-        lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
-      lo = std::max(lo, param.min_value);
-      hi = std::min(hi, param.max_value);
-      double value = effect_random.Uniform(lo, hi);
-      if (param.plausible_min > 0.0 && param.plausible_min < param.plausible_max) {
-        // Log-uniform over the plausible range (it spans decades).
-        value = param.plausible_min * std::pow(param.plausible_max / param.plausible_min,
-                                               effect_random.Uniform(0.0, 1.0));
-      }
-      setting.values.emplace_back(std::string(param.key), value);
-      description << " " << param.key << "=" << value;
-    }
-    truth.effects.push_back(std::move(setting));
-  } else {
-    description << "no hidden effect";
-  }
+  description << (options.hidden_effect
+                      ? DrawHiddenEffect(*options.hidden_effect, effect_random, truth)
+                      : "no hidden effect");
   if (options.perturb_base) {
     truth.wave_speed_mps *= random.Uniform(0.9, 1.1);
     truth.friction_f1_per_s *= random.Uniform(0.7, 1.3);
@@ -170,78 +261,28 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
               << " 1/s, choke leak " << truth.choke_leak_m2 << " m^2";
   result.description = description.str();
 
-  // Excitation.
-  Excitation excitation;
   // Column separation needs low pressure to show: an open choke and little pump flow, as in the
   // runs where the thesis's model went below zero absolute pressure (11.5).
   const bool low_pressure = options.low_pressure.value_or(
       options.hidden_effect && *options.hidden_effect == "column_separation");
-  excitation.piston_amp_m = low_pressure ? random.Uniform(0.06, 0.1) : random.Uniform(0.03, 0.05);
-  excitation.sine_hz[0] = random.Uniform(0.1, 0.2);
-  excitation.sine_hz[1] = random.Uniform(0.3, 0.5);
-  // Step tests: the choke and the pump alternate between a low and a high band every 8-14 s
-  // (the pump a few seconds after the choke), so every step is a step of a few degrees or L/min
-  // (uniform levels in one band could step by nothing, and a log without a real choke step says
-  // nothing about the choke's dynamics).
-  const double choke_bands[2][2] = {{low_pressure ? 40.0 : 28.0, low_pressure ? 48.0 : 30.0},
-                                    {low_pressure ? 52.0 : 31.0, low_pressure ? 60.0 : 33.0}};
-  const double pump_bands[2][2] = {{low_pressure ? 2.0 : 6.0, low_pressure ? 2.8 : 7.5},
-                                   {low_pressure ? 3.2 : 8.5, low_pressure ? 4.0 : 10.0}};
-  int band = 0;
-  for (double t = 0.0; t < options.duration_s; t += random.Uniform(8.0, 14.0), band ^= 1) {
-    excitation.choke_steps.emplace_back(t,
-                                        random.Uniform(choke_bands[band][0], choke_bands[band][1]));
-    excitation.pump_steps.emplace_back(t + random.Uniform(3.0, 6.0),
-                                       random.Uniform(pump_bands[band][0], pump_bands[band][1]));
-  }
-  excitation.pump_steps.insert(excitation.pump_steps.begin(), {0.0, low_pressure ? 3.0 : 8.0});
+  const Excitation excitation = DrawExcitation(low_pressure, options.duration_s, random);
 
   riglog::RigLog& log = result.log;
   log.metadata.push_back({"source", "mpdrig synthetic log, seed " + std::to_string(options.seed)});
   const long count = std::lround(options.duration_s * options.rate_hz);
   for (long i = 0; i <= count; ++i) log.time_s.push_back(i / options.rate_hz);
-  SimulationOptions simulation;
-  simulation.cells = options.cells;
-  simulation.choke_input = ChokeInput::kMeasured;
-  // The inputs as commanded (noise-free: the model sees the true inputs). A heave that would
-  // take the pressure below zero absolute (outside the model's range, thesis 11.5) is scaled
-  // down until it does not, as an operator would (column_separation logs keep the first try).
-  std::vector<double> position, choke, pump, outlet;
-  Result<RunResult> run = Status::Error("not run");
-  for (int attempt = 0; attempt < 6; ++attempt) {
-    position.clear(), choke.clear(), pump.clear(), outlet.clear();
-    for (double t : log.time_s) {
-      position.push_back(PistonAt(excitation, options.duration_s, t));
-      choke.push_back(units::ChokeDegToFrac(Stepped(excitation.choke_steps, t, kChokeTransitionS)));
-      pump.push_back(units::LpmToM3ps(Stepped(excitation.pump_steps, t, kPumpTransitionS)));
-      outlet.push_back(log.atmospheric_pressure_pa);
-    }
-    riglog::RigLog inputs = log;
-    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kPistonPosition), position));
-    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kChokePosition), choke));
-    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kFT2), pump));
-    MPDRIG_RETURN_IF_ERROR(inputs.AddColumn(riglog::LabColumn(Channel::kC1), outlet));
-    // The generator's inputs are exact: replayed as they are (no reconstruction).
-    InputReplayOptions exact;
-    exact.reconstruct_inputs = false;
-    auto signals = SignalsFromLog(inputs, "synthetic", exact);
-    if (!signals.ok()) return signals.status();
-    run = Simulate(truth, simulation, *signals, log.time_s);
-    if (run.ok() || run.status().code() != Status::Code::kModelRange) break;
-    excitation.piston_amp_m *= 0.6;
+  Result<CommandedRun> commanded =
+      RunCommanded(truth, excitation, log, options.duration_s, options.cells);
+  if (!commanded.ok()) {
+    return commanded.status().Within("synthetic log (" + result.description + ")");
   }
-  if (!run.ok()) return run.status().Within("synthetic log (" + result.description + ")");
 
   // The truth: the same run without sensor noise, column for column.
-  std::vector<std::pair<Channel, std::vector<double>>> clean = {
-      {Channel::kPistonPosition, std::move(position)},
-      {Channel::kChokePosition, std::move(choke)},
-      {Channel::kFT2, std::move(pump)},
-      {Channel::kC1, std::move(outlet)}};
+  std::vector<std::pair<Channel, std::vector<double>>> clean = std::move(commanded->inputs);
   for (Channel channel : ComparedChannels()) {
     std::vector<double> values;
-    values.reserve(run->samples.size());
-    for (const RigSample& sample : run->samples) values.push_back(sample[channel]);
+    values.reserve(commanded->run.samples.size());
+    for (const RigSample& sample : commanded->run.samples) values.push_back(sample[channel]);
     clean.emplace_back(channel, std::move(values));
   }
   result.truth_log = log;
@@ -250,24 +291,14 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   }
 
   // ...and measured with noise (inputs too: the lab measures them).
-  if (options.sensor_noise) {
-    SensorNoiseApplier sensors(*options.sensor_noise, options.seed);
-    for (auto& [channel, values] : clean) {
-      sensors.MeasureColumn(channel, values);
-      MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(channel), std::move(values)));
-    }
-    return result;
-  }
-  // The quiet per-kind sigmas, drawn in this order from the excitation's stream (the logs the
-  // identification tests were tuned on).
+  std::optional<SensorNoiseApplier> sensors;
+  if (options.sensor_noise) sensors.emplace(*options.sensor_noise, options.seed);
   for (auto& [channel, values] : clean) {
-    const riglog::Quantity quantity = riglog::QuantityOf(channel);
-    const double sigma = quantity == riglog::Quantity::kFlow       ? options.flow_noise_m3ps
-                         : quantity == riglog::Quantity::kPosition ? options.piston_noise_m
-                         : quantity == riglog::Quantity::kChokeOpening
-                             ? units::ChokeDegToFrac(options.choke_noise_deg)
-                             : options.pressure_noise_pa;
-    for (double& v : values) v += sigma * random.Normal();
+    if (sensors) {
+      sensors->MeasureColumn(channel, values);
+    } else {
+      AddQuietNoise(options, channel, values, random);
+    }
     MPDRIG_RETURN_IF_ERROR(log.AddColumn(riglog::LabColumn(channel), std::move(values)));
   }
   return result;
