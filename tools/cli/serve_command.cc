@@ -1,5 +1,6 @@
 // mpdrig serve: the virtual rig as a DDS service (service/rig/rig_service.h).
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <csignal>
 #include <cstdint>
@@ -8,7 +9,10 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "model/common/units.h"
 #include "model/sim/sensor_noise.h"
@@ -59,57 +63,126 @@ struct ServeArgs {
   std::uint64_t seed = 1;     // of --hidden-effect random
 };
 
-int RunServe(const ServeArgs& args) {
-  const std::string name = "serve";
-  auto params = args.model.LoadParams();
-  if (!params.ok()) return Fail(name, params.status());
-  if (!args.hidden_effect.empty()) {
-    const Status hidden =
-        ApplyEffectSpec(&*params, ResolveHiddenEffect(args.hidden_effect, args.seed));
-    if (!hidden.ok()) return Fail(name, hidden.Within("--hidden-effect"));
+// What every rig of the service starts from: the model, its options, the sensors and the heave.
+struct RigTemplate {
+  RigParams params;
+  SimulationOptions options;
+  service::SensorOptions sensors;
+  service::InitialCommands initial;
+  std::optional<service::PistonCommandIn> heave;  // none: the piston rests
+
+  Result<service::RigHost> Create(const std::string& id, double rate_hz) const {
+    auto rig = service::RigHost::Create(id, params, options, rate_hz, initial, {}, sensors);
+    if (!rig.ok()) return rig.status();
+    if (heave) MPDRIG_RETURN_IF_ERROR(rig->SetPiston(*heave).Within("--heave-amp-m/--heave-hz"));
+    return rig;
   }
-  if (args.loop && args.playback.empty()) {
-    return Fail(name, Status::Error("--loop needs --playback LOG"));
+};
+
+Result<RigTemplate> MakeRigTemplate(const ServeArgs& args) {
+  auto params = args.model.LoadParams();
+  if (!params.ok()) return params.status();
+  if (!args.hidden_effect.empty()) {
+    MPDRIG_RETURN_IF_ERROR(
+        ApplyEffectSpec(&*params, ResolveHiddenEffect(args.hidden_effect, args.seed))
+            .Within("--hidden-effect"));
   }
   auto options = args.model.LoadSimulationOptions();
-  if (!options.ok()) return Fail(name, options.status());
+  if (!options.ok()) return options.status();
   for (int i = 0; i < args.profile_points; ++i) {
     options->pressure_positions_m.push_back(params->pipe_length_m * i / (args.profile_points - 1));
   }
   auto noise = ParseSensorNoise(args.sensor_noise);
-  if (!noise.ok()) return Fail(name, noise.status().Within("--sensor-noise"));
-  const service::SensorOptions sensors{*noise, args.noise_seed};
-  service::PistonCommandIn heave;
+  if (!noise.ok()) return noise.status().Within("--sensor-noise");
+  RigTemplate rig{*std::move(params),
+                  *std::move(options),
+                  {*noise, args.noise_seed},
+                  {args.choke_deg, args.pump_lpm, args.outlet_barg},
+                  std::nullopt};
   if (args.heave_amp_m != 0.0) {
+    service::PistonCommandIn heave;
     heave.mode = service::PistonCommandIn::Mode::kSine;
     heave.amplitude_m = args.heave_amp_m;
     heave.frequency_hz = args.heave_hz;
+    rig.heave = heave;
   }
+  return rig;
+}
 
+// The rigs named by --rig, or the one rig that plays a log back.
+Result<std::vector<service::RigHost>> MakeRigs(const ServeArgs& args, const RigTemplate& from) {
   std::vector<service::RigHost> rigs;
   if (!args.playback.empty()) {
     if (args.rigs.size() != 1) {
-      return Fail(name, Status::Error("--playback plays one log as one rig: give one --rig"));
+      return Status::Error("--playback plays one log as one rig: give one --rig");
     }
     auto playback = service::LogPlayback::Open(args.playback, args.loop);
-    if (!playback.ok()) return Fail(name, playback.status().Within("--playback"));
-    auto rig = service::RigHost::CreatePlayback(args.rigs.front(), *params, *options,
+    if (!playback.ok()) return playback.status().Within("--playback");
+    auto rig = service::RigHost::CreatePlayback(args.rigs.front(), from.params, from.options,
                                                 std::move(playback).value());
-    if (!rig.ok()) return Fail(name, rig.status());
+    if (!rig.ok()) return rig.status();
     rigs.push_back(std::move(rig).value());
+    return rigs;
   }
   for (const std::string& id : args.rigs) {
-    if (!args.playback.empty()) break;  // the playback is the one rig
-    auto rig =
-        service::RigHost::Create(id, *params, *options, args.rate_hz,
-                                 {args.choke_deg, args.pump_lpm, args.outlet_barg}, {}, sensors);
-    if (!rig.ok()) return Fail(name, rig.status().Within("rig '" + id + "'"));
-    if (args.heave_amp_m != 0.0) {
-      const Status set = rig->SetPiston(heave);
-      if (!set.ok()) return Fail(name, set.Within("--heave-amp-m/--heave-hz"));
-    }
+    auto rig = from.Create(id, args.rate_hz);
+    if (!rig.ok()) return rig.status().Within("rig '" + id + "'");
     rigs.push_back(std::move(rig).value());
   }
+  return rigs;
+}
+
+// --dds-config names a file or is the XML itself.
+std::string ReadDdsConfig(const std::string& file_or_xml) {
+  std::ifstream file(file_or_xml);
+  if (!file) return file_or_xml;
+  std::ostringstream text;
+  text << file.rdbuf();
+  return text.str();
+}
+
+void SetObserverOptions(const ServeArgs& args, double sensor_period_s,
+                        service::ServeOptions& serve) {
+  serve.observer = !args.no_observer;
+  serve.estimate_hz = args.estimate_hz;
+  observer::ObserverOptions& observer = serve.observer_options.observer;
+  observer.disturbance_hz = args.observer_start_hz;
+  observer.pole = {args.observer_pole[0], args.observer_pole[1]};
+  if (args.observer_pole_given) observer.gain_design = observer::GainDesign::kPoles;
+  observer.noise.outlet_pressure_pa = units::BarToPa(args.observer_noise[0]);
+  observer.noise.outlet_flow_m3ps = units::LpmToM3ps(args.observer_noise[1]);
+  observer.noise.sample_period_s = sensor_period_s;
+  observer.quadratic_friction = !args.observer_linear_friction;
+  serve.observer_options.noise_window_s = args.observer_noise_window_s;
+}
+
+// Private rigs (--private-rigs): how many a service may hold and how each is made.
+Status SetPrivateRigs(const ServeArgs& args, const RigTemplate& from,
+                      service::ServeOptions& serve) {
+  if (args.security.empty()) {
+    return Status::Error(
+        "--private-rigs needs --security (a student asks for private rigs in their own rig's "
+        "partition)");
+  }
+  serve.private_rigs = args.private_rigs;
+  // Measured (docs/service.md, "Measured timing and capacity"): 120 rigs at 100 Hz with the
+  // observer took about 20 % of one core; the default keeps a service below that many rig samples
+  // per second.
+  constexpr double kRigSamplesPerSecond = 12000.0;
+  serve.max_rigs =
+      args.max_rigs > 0
+          ? args.max_rigs
+          : std::max<std::size_t>(args.rigs.size(),
+                                  static_cast<std::size_t>(kRigSamplesPerSecond / args.rate_hz));
+  // A private rig starts as the others did: the same model, initial commands, heave, noise.
+  serve.make_rig = [from, rate = args.rate_hz](const std::string& id) {
+    return from.Create(id, rate);
+  };
+  return Status::Ok();
+}
+
+Result<service::ServeOptions> MakeServeOptions(const ServeArgs& args, const RigTemplate& from,
+                                               double sensor_period_s) {
   service::ServeOptions serve;
   serve.clock = args.clock == "fast"       ? service::ClockMode::kFast
                 : args.clock == "lockstep" ? service::ClockMode::kLockstep
@@ -119,68 +192,23 @@ int RunServe(const ServeArgs& args) {
   serve.safe_choke_deg = args.safe_choke_deg;
   serve.hide_effects = !args.hidden_effect.empty();
   serve.catch_up = !args.playback.empty();
-  serve.observer = !args.no_observer;
-  serve.estimate_hz = args.estimate_hz;
   serve.profile_hz = args.profile_hz;
-  serve.observer_options.observer.disturbance_hz = args.observer_start_hz;
-  serve.observer_options.observer.pole = {args.observer_pole[0], args.observer_pole[1]};
-  if (args.observer_pole_given) {
-    serve.observer_options.observer.gain_design = observer::GainDesign::kPoles;
-  }
-  serve.observer_options.observer.noise.outlet_pressure_pa = units::BarToPa(args.observer_noise[0]);
-  serve.observer_options.observer.noise.outlet_flow_m3ps = units::LpmToM3ps(args.observer_noise[1]);
-  serve.observer_options.observer.noise.sample_period_s = rigs.front().sensor_period_s();
-  serve.observer_options.noise_window_s = args.observer_noise_window_s;
-  serve.observer_options.observer.quadratic_friction = !args.observer_linear_friction;
-  if (!args.dds_config.empty()) {
-    std::ifstream file(args.dds_config);
-    if (file) {
-      std::ostringstream text;
-      text << file.rdbuf();
-      serve.dds_config = text.str();
-    } else {
-      serve.dds_config = args.dds_config;  // inline XML
-    }
-  }
+  SetObserverOptions(args, sensor_period_s, serve);
+  if (!args.dds_config.empty()) serve.dds_config = ReadDdsConfig(args.dds_config);
   if (!args.security.empty()) {
     auto security = dds::LoadSecurityDirectory(args.security);
-    if (!security.ok()) return Fail(name, security.status().Within("--security"));
+    if (!security.ok()) return security.status().Within("--security");
     serve.security = std::move(security).value();
   }
-  if (args.private_rigs > 0) {
-    if (args.security.empty()) {
-      return Fail(name, Status::Error("--private-rigs needs --security (a student asks for "
-                                      "private rigs in their own rig's partition)"));
-    }
-    serve.private_rigs = args.private_rigs;
-    // Measured (docs/service.md, "Measured timing and capacity"): 120 rigs at 100 Hz with the
-    // observer took about 20 % of one core; the default keeps a service below that many rig samples
-    // per second.
-    constexpr double kRigSamplesPerSecond = 12000.0;
-    serve.max_rigs =
-        args.max_rigs > 0
-            ? args.max_rigs
-            : std::max<std::size_t>(args.rigs.size(),
-                                    static_cast<std::size_t>(kRigSamplesPerSecond / args.rate_hz));
-    // A private rig starts as the others did: the same model, initial commands, heave, noise.
-    serve.make_rig =
-        [params = *params, options = *options, rate = args.rate_hz,
-         initial = service::InitialCommands{args.choke_deg, args.pump_lpm, args.outlet_barg},
-         sensors, heave,
-         heaved = args.heave_amp_m != 0.0](const std::string& id) -> Result<service::RigHost> {
-      auto rig = service::RigHost::Create(id, params, options, rate, initial, {}, sensors);
-      if (!rig.ok()) return rig.status();
-      if (heaved) MPDRIG_RETURN_IF_ERROR(rig->SetPiston(heave));
-      return rig;
-    };
-  }
-  auto service = service::RigService::Create(std::move(rigs), serve);
-  if (!service.ok()) return Fail(name, service.status());
+  if (args.private_rigs > 0) MPDRIG_RETURN_IF_ERROR(SetPrivateRigs(args, from, serve));
+  return serve;
+}
 
-  std::signal(SIGINT, OnSignal);
-  std::signal(SIGTERM, OnSignal);
+void PrintBanner(const ServeArgs& args, const service::ServeOptions& serve,
+                 const service::RigService& service) {
   std::string ids;
   for (const std::string& id : args.rigs) ids += (ids.empty() ? "" : ", ") + id;
+  const service::RigHost& first = service.rigs().front();
   std::fprintf(
       stderr,
       "mpdrig serve: rigs %s on DDS domain %d (%s), %s clock, sensors at %g Hz\n"
@@ -189,20 +217,53 @@ int RunServe(const ServeArgs& args) {
       "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
       "mpdrig_step_request (in)\n  sensor noise: %s\n  security: %s\n  stop with Ctrl-C\n",
       ids.c_str(), args.domain, args.dds_config.empty() ? "loopback only" : "configured network",
-      args.clock.c_str(), args.rate_hz, (*service)->rigs().front().DescribeSensorNoise().c_str(),
+      args.clock.c_str(), args.rate_hz, first.DescribeSensorNoise().c_str(),
       args.security.empty() ? "none (any participant on the domain may command any rig)"
                             : ("DDS Security with " + serve.security->dir +
                                "; each rig's topics in partition rig.<rig id>")
                                   .c_str());
   if (!args.playback.empty()) {
     std::fprintf(stderr, "  playback: %s at %g Hz; commands are refused (a recording)\n",
-                 (*service)->rigs().front().playback()->Describe().c_str(),
-                 1.0 / (*service)->rigs().front().sensor_period_s());
+                 first.playback()->Describe().c_str(), 1.0 / first.sensor_period_s());
   }
   if (!args.hidden_effect.empty()) {
     std::fprintf(stderr, "  a hidden effect is active%s\n",
                  args.hidden_effect == "random" ? " (mpdrig reveal --seed S tells which)" : "");
   }
+}
+
+void PrintRunSummary(const service::RigService& service, double wall_s, double cpu_s) {
+  std::fprintf(stderr,
+               "mpdrig serve: %.3f s wall, %.3f s CPU (%.0f%% of one core), %llu deadline misses, "
+               "%llu periods lost, longest stall %.3f s\n",
+               wall_s, cpu_s, wall_s > 0 ? 100.0 * cpu_s / wall_s : 0.0,
+               static_cast<unsigned long long>(service.deadline_misses()),
+               static_cast<unsigned long long>(service.lost_periods()), service.longest_stall_s());
+  for (const service::RigHost& rig : service.rigs()) {
+    std::fprintf(
+        stderr, "mpdrig serve: %s ran %.3f s of rig time, %llu samples, %llu commands refused\n",
+        rig.rig_id().c_str(), rig.time_s(), static_cast<unsigned long long>(rig.counters().samples),
+        static_cast<unsigned long long>(rig.counters().rejected_commands));
+  }
+}
+
+int RunServe(const ServeArgs& args) {
+  const std::string name = "serve";
+  if (args.loop && args.playback.empty()) {
+    return Fail(name, Status::Error("--loop needs --playback LOG"));
+  }
+  auto from = MakeRigTemplate(args);
+  if (!from.ok()) return Fail(name, from.status());
+  auto rigs = MakeRigs(args, *from);
+  if (!rigs.ok()) return Fail(name, rigs.status());
+  auto serve = MakeServeOptions(args, *from, rigs->front().sensor_period_s());
+  if (!serve.ok()) return Fail(name, serve.status());
+  auto service = service::RigService::Create(*std::move(rigs), *serve);
+  if (!service.ok()) return Fail(name, service.status());
+
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  PrintBanner(args, *serve, **service);
   const auto started = std::chrono::steady_clock::now();
   const std::clock_t cpu_started = std::clock();
   const Status run = (*service)->Run(g_stop);
@@ -210,19 +271,7 @@ int RunServe(const ServeArgs& args) {
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
   const double cpu_s = static_cast<double>(std::clock() - cpu_started) / CLOCKS_PER_SEC;
-  std::fprintf(stderr,
-               "mpdrig serve: %.3f s wall, %.3f s CPU (%.0f%% of one core), %llu deadline misses, "
-               "%llu periods lost, longest stall %.3f s\n",
-               wall_s, cpu_s, wall_s > 0 ? 100.0 * cpu_s / wall_s : 0.0,
-               static_cast<unsigned long long>((*service)->deadline_misses()),
-               static_cast<unsigned long long>((*service)->lost_periods()),
-               (*service)->longest_stall_s());
-  for (const service::RigHost& rig : (*service)->rigs()) {
-    std::fprintf(
-        stderr, "mpdrig serve: %s ran %.3f s of rig time, %llu samples, %llu commands refused\n",
-        rig.rig_id().c_str(), rig.time_s(), static_cast<unsigned long long>(rig.counters().samples),
-        static_cast<unsigned long long>(rig.counters().rejected_commands));
-  }
+  PrintRunSummary(**service, wall_s, cpu_s);
   return 0;
 }
 
