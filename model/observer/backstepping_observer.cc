@@ -109,86 +109,105 @@ Status BacksteppingObserver::Step(const TopsideMeasurement& raw) {
   TopsideMeasurement at_end;
   at_end.outlet_pressure_pa = pressure_filter_.Step(raw.outlet_pressure_pa, dt_s_, tau);
   at_end.outlet_flow_m3ps = flow_filter_.Step(raw.outlet_flow_m3ps, dt_s_, tau);
+  const double y = MeasuredUp(at_end);
+  const double e_old = error_;
+  for (int i = 0; i <= options_.cells; ++i) q_[i] = u_[i] * e_minus_[i] + v_[i] * e_plus_[i];
+
+  const double e_new = StepOutletNode(y, MeasuredDown(at_end), e_old);
+  StepInteriorNodes(e_old, e_new);
+  StepDisturbanceModel(e_old, e_new);
+  StepInletNode(e_old,
+                e_new);  // after the disturbance model: its boundary is C X^ at the new level
+  u_.swap(u_next_);
+  v_.swap(v_next_);
+  error_ = e_new;
+  ++steps_;
+  if (tracker_) MPDRIG_RETURN_IF_ERROR(TrackFrequency(y));
+  if (!std::isfinite(u_[0]) || !std::isfinite(x_hat_(0)) || !std::isfinite(x_hat_(1))) {
+    std::ostringstream out;
+    out << "observer state is no longer finite at t = " << time_s() << " s";
+    return Status::Error(out.str());
+  }
+  return Status::Ok();
+}
+
+// Old-level source terms at a foot (q_ holds the old level's q^):
+// S_u = c_1 v + p1 e - kf q|q| e^{sigma x}, S_v = c_2 u + p2 e - kf q|q| e^{-sigma x}.
+double BacksteppingObserver::OldSourceU(int i, double e_old) const {
+  return c1_[i] * v_[i] + gains_.p1[i] * e_old -
+         half_f2_over_a_ * q_[i] * std::fabs(q_[i]) * e_plus_[i];
+}
+double BacksteppingObserver::OldSourceV(int i, double e_old) const {
+  return c2_[i] * u_[i] + gains_.p2[i] * e_old -
+         half_f2_over_a_ * q_[i] * std::fabs(q_[i]) * e_minus_[i];
+}
+
+// Outlet node: v^(1) = U (10.1.4); u^(1) from its characteristic, implicit in the new error.
+// New-level friction kappa q_new e^{sigma} with q_new = u e^{-sigma} + U e^{sigma}. Returns the
+// new error y - u^(1).
+double BacksteppingObserver::StepOutletNode(double y, double big_u, double e_old) {
   const int n = options_.cells;
   const double hdt = 0.5 * dt_s_;
-  const std::vector<double>& p1 = gains_.p1;
-  const std::vector<double>& p2 = gains_.p2;
-  const double y = MeasuredUp(at_end);
-  const double big_u = MeasuredDown(at_end);
-  const double e_old = error_;
+  const double kappa = half_f2_over_a_ * std::fabs(q_[n]);
+  const double ep = e_plus_[n];
+  v_next_[n] = big_u;
+  u_next_[n] = (u_[n - 1] + hdt * OldSourceU(n - 1, e_old) +
+                hdt * ((c1_[n] - kappa * ep * ep) * big_u + gains_.p1[n] * y)) /
+               (1.0 + hdt * (gains_.p1[n] + kappa));
+  return y - u_next_[n];
+}
+
+// Interior nodes: u from the left, v from the right; the new-level coupling is a 2x2 solve:
+//   u (1 + hdt kappa) = fu + hdt (c_1 - kappa e^{2 sigma x}) v
+//   v (1 + hdt kappa) = fv + hdt (c_2 - kappa e^{-2 sigma x}) u
+void BacksteppingObserver::StepInteriorNodes(double e_old, double e_new) {
+  const double hdt = 0.5 * dt_s_;
   const double* ep = e_plus_.data();
   const double* em = e_minus_.data();
-  const double kf = half_f2_over_a_;
-  for (int i = 0; i <= n; ++i) q_[i] = u_[i] * em[i] + v_[i] * ep[i];
-  // Old-level source terms at the feet: S_u = c_1 v + p1 e - kf q|q| e^{sigma x},
-  // S_v = c_2 u + p2 e - kf q|q| e^{-sigma x}.
-  auto su_old = [&](int i) {
-    return c1_[i] * v_[i] + p1[i] * e_old - kf * q_[i] * std::fabs(q_[i]) * ep[i];
-  };
-  auto sv_old = [&](int i) {
-    return c2_[i] * u_[i] + p2[i] * e_old - kf * q_[i] * std::fabs(q_[i]) * em[i];
-  };
-
-  // Outlet node: v^(1) = U (10.1.4); u^(1) from its characteristic, implicit in the new error.
-  // New-level friction kappa q_new e^{sigma} with q_new = u e^{-sigma} + U e^{sigma}.
-  v_next_[n] = big_u;
-  {
-    const double kappa = kf * std::fabs(q_[n]);
-    u_next_[n] = (u_[n - 1] + hdt * su_old(n - 1) +
-                  hdt * ((c1_[n] - kappa * ep[n] * ep[n]) * big_u + p1[n] * y)) /
-                 (1.0 + hdt * (p1[n] + kappa));
-  }
-  const double e_new = y - u_next_[n];
-
-  // Interior nodes: u from the left, v from the right; the new-level coupling is a 2x2 solve:
-  //   u (1 + hdt kappa) = fu + hdt (c_1 - kappa e^{2 sigma x}) v
-  //   v (1 + hdt kappa) = fv + hdt (c_2 - kappa e^{-2 sigma x}) u
-  for (int i = 1; i < n; ++i) {
-    const double kappa = kf * std::fabs(q_[i]);
+  const std::vector<double>& p1 = gains_.p1;
+  const std::vector<double>& p2 = gains_.p2;
+  for (int i = 1; i < options_.cells; ++i) {
+    const double kappa = half_f2_over_a_ * std::fabs(q_[i]);
     const double damp = 1.0 / (1.0 + hdt * kappa);
-    const double fu = (u_[i - 1] + hdt * su_old(i - 1) + hdt * p1[i] * e_new) * damp;
-    const double fv = (v_[i + 1] + hdt * sv_old(i + 1) + hdt * p2[i] * e_new) * damp;
+    const double fu = (u_[i - 1] + hdt * OldSourceU(i - 1, e_old) + hdt * p1[i] * e_new) * damp;
+    const double fv = (v_[i + 1] + hdt * OldSourceV(i + 1, e_old) + hdt * p2[i] * e_new) * damp;
     const double a = hdt * (c1_[i] - kappa * ep[i] * ep[i]) * damp;
     const double b = hdt * (c2_[i] - kappa * em[i] * em[i]) * damp;
     const double u_new = (fu + a * fv) / (1.0 - a * b);
     u_next_[i] = u_new;
     v_next_[i] = fv + b * u_new;
   }
+}
 
-  // Disturbance model (10.1.5), Crank-Nicolson.
+// Disturbance model (10.1.5), Crank-Nicolson.
+void BacksteppingObserver::StepDisturbanceModel(double e_old, double e_new) {
+  const double hdt = 0.5 * dt_s_;
   const SinusoidDisturbance& d = gains_.disturbance;
   const Eigen::Matrix2d identity = Eigen::Matrix2d::Identity();
   const Eigen::Vector2d rhs =
       (identity + hdt * d.a) * x_hat_ + hdt * gains_.disturbance_gain * (e_old + e_new);
   x_hat_ = (identity - hdt * d.a).partialPivLu().solve(rhs);
+}
 
-  // Inlet node: u^(0) = -v^(0) + C X^ (10.1.3), so q^(0) = C X^ is known; v^(0) from its
-  // characteristic.
-  {
-    const double cx = d.c * x_hat_;
-    const double fv = v_[1] + hdt * sv_old(1) + hdt * p2[0] * e_new - hdt * kf * cx * std::fabs(cx);
-    const double b = hdt * c2_[0];
-    const double v0 = (fv + b * cx) / (1.0 + b);
-    v_next_[0] = v0;
-    u_next_[0] = -v0 + cx;
-  }
+// Inlet node: u^(0) = -v^(0) + C X^ (10.1.3), so q^(0) = C X^ is known; v^(0) from its
+// characteristic.
+void BacksteppingObserver::StepInletNode(double e_old, double e_new) {
+  const double hdt = 0.5 * dt_s_;
+  const double cx = gains_.disturbance.c * x_hat_;
+  const double fv = v_[1] + hdt * OldSourceV(1, e_old) + hdt * gains_.p2[0] * e_new -
+                    hdt * half_f2_over_a_ * cx * std::fabs(cx);
+  const double b = hdt * c2_[0];
+  const double v0 = (fv + b * cx) / (1.0 + b);
+  v_next_[0] = v0;
+  u_next_[0] = -v0 + cx;
+}
 
-  u_.swap(u_next_);
-  v_.swap(v_next_);
-  error_ = e_new;
-  ++steps_;
-  if (tracker_) {
-    tracker_->Update(time_s(), y);
-    const double f = tracker_->frequency_hz();
-    if (std::fabs(f - options_.disturbance_hz) >
-        options_.retune_fraction * options_.disturbance_hz) {
-      MPDRIG_RETURN_IF_ERROR(SetDisturbanceFrequency(f));
-    }
-  }
-  if (!std::isfinite(u_[0]) || !std::isfinite(x_hat_(0)) || !std::isfinite(x_hat_(1))) {
-    std::ostringstream out;
-    out << "observer state is no longer finite at t = " << time_s() << " s";
-    return Status::Error(out.str());
+// Retunes the gains when the tracked heave frequency has moved by more than retune_fraction.
+Status BacksteppingObserver::TrackFrequency(double y) {
+  tracker_->Update(time_s(), y);
+  const double f = tracker_->frequency_hz();
+  if (std::fabs(f - options_.disturbance_hz) > options_.retune_fraction * options_.disturbance_hz) {
+    return SetDisturbanceFrequency(f);
   }
   return Status::Ok();
 }

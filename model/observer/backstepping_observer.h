@@ -97,6 +97,14 @@ class BacksteppingObserver {
                        KernelSolution kernel);
   double MeasuredUp(const TopsideMeasurement& m) const;    // y = u(1)
   double MeasuredDown(const TopsideMeasurement& m) const;  // U = v(1)
+  // Step's parts, in their order (thesis 10.1.3-10.1.5 on the characteristics' grid).
+  double OldSourceU(int i, double e_old) const;
+  double OldSourceV(int i, double e_old) const;
+  double StepOutletNode(double y, double big_u, double e_old);
+  void StepInteriorNodes(double e_old, double e_new);
+  void StepDisturbanceModel(double e_old, double e_new);
+  void StepInletNode(double e_old, double e_new);
+  Status TrackFrequency(double y);
 
   RigParams params_;
   ObserverOptions options_;
