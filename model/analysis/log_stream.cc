@@ -355,19 +355,12 @@ double RowPipeline::InterpolateRow(double t, double LogRow::*value) const {
   return InterpolateLinear(t, a.time_s, a.*value, b.time_s, b.*value);
 }
 
-// As SimulateEach's step inputs: the piston velocity at a step's end t_b is the centred
-// difference of the position over [t_b - dt/2, t_b + dt/2], slid inside [t0, t_end] at the ends.
+// As SimulateEach's step inputs (PistonVelocityAtStepEnd: the same window, slid inside the log).
 StepInputs RowPipeline::StepInputsAt(double t_b, double dt) const {
-  const double t0 = first_.row.time_s;
-  const double t_end = replay_->end_time_s;
   StepInputs step;
-  double t_lo = t_b - 0.5 * dt;
-  double t_hi = t_b + 0.5 * dt;
-  if (t_hi > t_end) t_lo -= t_hi - t_end, t_hi = t_end;
-  if (t_lo < t0) t_hi = std::min(t_end, t_hi + (t0 - t_lo)), t_lo = t0;
-  const double p_hi = Interpolate(t_hi, &Entry::smoothed_m);
-  const double p_lo = Interpolate(t_lo, &Entry::smoothed_m);
-  step.piston_velocity_mps = t_hi > t_lo ? (p_hi - p_lo) / (t_hi - t_lo) : 0.0;
+  step.piston_velocity_mps =
+      PistonVelocityAtStepEnd(t_b, dt, first_.row.time_s, replay_->end_time_s,
+                              [this](double t) { return Interpolate(t, &Entry::smoothed_m); });
   step.piston_position_m = Interpolate(t_b, &Entry::smoothed_m);
   step.rig.choke_opening_frac = InterpolateRow(t_b, &LogRow::choke_opening_frac);
   step.rig.pump_flow_m3ps = InterpolateRow(t_b, &LogRow::pump_flow_m3ps);

@@ -20,11 +20,11 @@
 // folder in model/'s layer order, and a stream of rows cannot answer a time function; the other
 // way, time functions hold every input column whole (at least 40 bytes a row: 144 MB for an hour
 // at 1 kHz, where the stream holds a few thousand rows). What they can share they share (the
-// smoothing, the reconstruction, InitialInputs, InterpolateLinear); each still repeats by hand
-// the piston velocity's window slid inside the log (SimulateEach's step inputs, StepInputsAt
-// here) and the bracket search between samples. tests/model/analysis/compare_test.cc holds them
-// together: ReplayGivesExactlyWhatSimulateGives (the same doubles) and
-// ReplayStartsFromTheMeanOfTheFirstInputs (the same start). A change to one is a change to both.
+// smoothing, the reconstruction, InitialInputs, InterpolateLinear, the piston velocity's window
+// PistonVelocityAtStepEnd); each still repeats by hand the bracket search between samples.
+// tests/model/analysis/compare_test.cc holds them together: ReplayGivesExactlyWhatSimulateGives
+// (the same doubles) and ReplayStartsFromTheMeanOfTheFirstInputs (the same start). A change to one
+// is a change to both.
 #pragma once
 
 #include <algorithm>

@@ -293,21 +293,11 @@ Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions
   const double t0 = output_times.front();
   const double t_end = output_times.back();
 
-  // Inputs at the end of each step. The piston velocity there is the centred difference of the
-  // position over [t_b - dt/2, t_b + dt/2]: second order, and the trapezoidal sum of these
-  // velocities displaces exactly the position's change. Near the ends of the run the window
-  // slides inside [t0, t_end] (a one-sided difference): a replayed log's inputs are not known
-  // beyond its ends.
+  // Inputs at the end of each step.
   const auto step_inputs = [&](double t_b, double dt) {
     StepInputs step;
-    double t_lo = t_b - 0.5 * dt;
-    double t_hi = t_b + 0.5 * dt;
-    if (t_hi > t_end) t_lo -= t_hi - t_end, t_hi = t_end;
-    if (t_lo < t0) t_hi = std::min(t_end, t_hi + (t0 - t_lo)), t_lo = t0;
     step.piston_velocity_mps =
-        t_hi > t_lo
-            ? (inputs.piston_position_m(t_hi) - inputs.piston_position_m(t_lo)) / (t_hi - t_lo)
-            : 0.0;
+        PistonVelocityAtStepEnd(t_b, dt, t0, t_end, inputs.piston_position_m);
     step.piston_position_m = inputs.piston_position_m(t_b);
     step.rig = inputs.rig(t_b);
     return step;

@@ -10,6 +10,7 @@
 // and the hydrostatic profile below it (6.5.3).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <memory>
@@ -64,6 +65,25 @@ struct StepInputs {
   double piston_position_m = 0.0;    // reported as a channel
   RigInputs rig;
 };
+
+// The piston velocity at a step's end t_b: the centred difference of the position over
+// [t_b - dt/2, t_b + dt/2], second order, and the trapezoidal sum of these velocities displaces
+// exactly the position's change. Near the ends of a run the window slides inside [t0, t_end] (a
+// one-sided difference): a replayed log's inputs are not known beyond its ends. The one formula of
+// both replays of a log (SimulateEach; RowPipeline, model/analysis/log_stream.h), so they give the
+// same doubles; `position_m(t)` is the run's piston position at t.
+template <typename PositionAt>
+double PistonVelocityAtStepEnd(double t_b, double dt, double t0, double t_end,
+                               const PositionAt& position_m) {
+  double t_lo = t_b - 0.5 * dt;
+  double t_hi = t_b + 0.5 * dt;
+  if (t_hi > t_end) t_lo -= t_hi - t_end, t_hi = t_end;
+  if (t_lo < t0) t_hi = std::min(t_end, t_hi + (t0 - t_lo)), t_lo = t0;
+  if (!(t_hi > t_lo)) return 0.0;
+  const double p_hi = position_m(t_hi);
+  const double p_lo = position_m(t_lo);
+  return (p_hi - p_lo) / (t_hi - t_lo);
+}
 
 struct RigSample {
   double time_s = 0.0;
