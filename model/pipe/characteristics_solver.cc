@@ -160,81 +160,84 @@ class OutletRelation final : public BoundaryRelation {
 
 Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation* violation) {
   if (general_) return StepGeneral(inputs, violation);
-  const int n = config_.cells;
-  const double h = dt_s_;
-  const double gs = config_.gravity_slope_mps2;
   // Extra momentum sources from the state before the step (pipe_extension.h); none by default.
   const bool has_sources = EvaluateMomentumSources();
-  // S = a + b u at a boundary node whose new velocity is u.
-  const auto source_at = [&](int i, double u) {
-    return has_sources ? source_explicit_[i] + source_implicit_[i] * u : 0.0;
-  };
-
   if (config_.model == PipeModel::kLinear) {
     StepInteriorLinear();
   } else {
     StepInteriorQuasiLinear();
   }
-  if (has_sources) {
-    // The node update without S gave u_P0 with 2 u_P0 D = alpha_A + beta_B - ..., D = 2 + h lambda
-    // (NodeUpdate). With S = a + b u_P in both characteristic equations:
-    //   u_P = (D u_P0 - 2 h a) / (D + 2 h b),
-    //   alpha_P = alpha_P0 - h lambda (u_P - u_P0)/2 - h (a + b u_P), beta_P likewise,
-    // which keeps alpha_P + beta_P = 2 u_P.
-    for (int i = 1; i < n; ++i) {
-      const double u_old = 0.5 * (alpha_[i] + beta_[i]);
-      const double lambda =
-          config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(u_old);
-      const double d = 2.0 + h * lambda;
-      const double u_p0 = 0.5 * (alpha_next_[i] + beta_next_[i]);
-      const double a = source_explicit_[i];
-      const double b = source_implicit_[i];
-      const double u_p = (d * u_p0 - 2.0 * h * a) / (d + 2.0 * h * b);
-      const double change = 0.5 * h * lambda * (u_p - u_p0) + h * (a + b * u_p);
-      alpha_next_[i] -= change;
-      beta_next_[i] -= change;
-    }
-  }
-
-  // Inlet, x = 0 (6.7.1): the beta characteristic arrives from node 1; u(0) is imposed by the
-  // piston, or by an extension's closure. With a closure the friction at the new point needs
-  // u(0), which needs beta(0): two passes settle it, as at the outlet.
-  {
-    const Foot fb = BetaFoot(0);
-    const double f_b = config_.Friction(fb.velocity);
-    double u0 = inputs.end.inlet_velocity_mps;
-    if (inlet_closure_ != nullptr) u0 = 0.5 * (alpha_[0] + beta_[0]);
-    const InletInputs inlet{inputs.end.inlet_velocity_mps * config_.area_m2, config_.area_m2, h};
-    for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
-      beta_next_[0] =
-          fb.invariant - 0.5 * h * (f_b + config_.Friction(u0)) - h * gs - h * source_at(0, u0);
-      if (inlet_closure_ != nullptr) {
-        u0 = inlet_closure_->SolveInletVelocity(InletRelation(law_, beta_next_[0]), inlet);
-      }
-    }
-    alpha_next_[0] = 2.0 * u0 - beta_next_[0];
-  }
-
-  // Outlet, x = L (6.6.1): the alpha characteristic arrives from node N-1; the choke sets u(L).
-  // The friction at the new point needs u(L), which needs alpha(L): two passes settle it.
-  {
-    const Foot fa = AlphaFoot(n);
-    const double f_a = config_.Friction(fa.velocity);
-    double u_l = 0.5 * (alpha_[n] + beta_[n]);
-    double alpha_l = 0.0;
-    for (int pass = 0; pass < 2; ++pass) {
-      alpha_l =
-          fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) - h * gs - h * source_at(n, u_l);
-      u_l = outlet_closure_ != nullptr
-                ? outlet_closure_->SolveOutletVelocity(OutletRelation(law_, alpha_l),
-                                                       inputs.end.choke, h, u_l)
-                : choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
-    }
-    alpha_next_[n] = alpha_l;
-    beta_next_[n] = 2.0 * u_l - alpha_l;
-  }
-
+  if (has_sources) AddSourcesToInterior();
+  StepInletNode(inputs, has_sources);
+  StepOutletNode(inputs, has_sources);
   return AdvanceToNewLevel(violation);
+}
+
+// S = a + b u at a boundary node whose new velocity is u.
+double CharacteristicsSolver::SourceAt(bool has_sources, int i, double u) const {
+  return has_sources ? source_explicit_[i] + source_implicit_[i] * u : 0.0;
+}
+
+// The node update without S gave u_P0 with 2 u_P0 D = alpha_A + beta_B - ..., D = 2 + h lambda
+// (NodeUpdate). With S = a + b u_P in both characteristic equations:
+//   u_P = (D u_P0 - 2 h a) / (D + 2 h b),
+//   alpha_P = alpha_P0 - h lambda (u_P - u_P0)/2 - h (a + b u_P), beta_P likewise,
+// which keeps alpha_P + beta_P = 2 u_P.
+void CharacteristicsSolver::AddSourcesToInterior() {
+  const double h = dt_s_;
+  for (int i = 1; i < config_.cells; ++i) {
+    const double u_old = 0.5 * (alpha_[i] + beta_[i]);
+    const double lambda = config_.friction_f1_per_s + config_.friction_f2_per_m * std::fabs(u_old);
+    const double d = 2.0 + h * lambda;
+    const double u_p0 = 0.5 * (alpha_next_[i] + beta_next_[i]);
+    const double a = source_explicit_[i];
+    const double b = source_implicit_[i];
+    const double u_p = (d * u_p0 - 2.0 * h * a) / (d + 2.0 * h * b);
+    const double change = 0.5 * h * lambda * (u_p - u_p0) + h * (a + b * u_p);
+    alpha_next_[i] -= change;
+    beta_next_[i] -= change;
+  }
+}
+
+// Inlet, x = 0 (6.7.1): the beta characteristic arrives from node 1; u(0) is imposed by the
+// piston, or by an extension's closure. With a closure the friction at the new point needs
+// u(0), which needs beta(0): two passes settle it, as at the outlet.
+void CharacteristicsSolver::StepInletNode(const PipeStepInputs& inputs, bool has_sources) {
+  const double h = dt_s_;
+  const Foot fb = BetaFoot(0);
+  const double f_b = config_.Friction(fb.velocity);
+  double u0 = inputs.end.inlet_velocity_mps;
+  if (inlet_closure_ != nullptr) u0 = 0.5 * (alpha_[0] + beta_[0]);
+  const InletInputs inlet{inputs.end.inlet_velocity_mps * config_.area_m2, config_.area_m2, h};
+  for (int pass = 0; pass < (inlet_closure_ != nullptr ? 2 : 1); ++pass) {
+    beta_next_[0] = fb.invariant - 0.5 * h * (f_b + config_.Friction(u0)) -
+                    h * config_.gravity_slope_mps2 - h * SourceAt(has_sources, 0, u0);
+    if (inlet_closure_ != nullptr) {
+      u0 = inlet_closure_->SolveInletVelocity(InletRelation(law_, beta_next_[0]), inlet);
+    }
+  }
+  alpha_next_[0] = 2.0 * u0 - beta_next_[0];
+}
+
+// Outlet, x = L (6.6.1): the alpha characteristic arrives from node N-1; the choke sets u(L).
+// The friction at the new point needs u(L), which needs alpha(L): two passes settle it.
+void CharacteristicsSolver::StepOutletNode(const PipeStepInputs& inputs, bool has_sources) {
+  const int n = config_.cells;
+  const double h = dt_s_;
+  const Foot fa = AlphaFoot(n);
+  const double f_a = config_.Friction(fa.velocity);
+  double u_l = 0.5 * (alpha_[n] + beta_[n]);
+  double alpha_l = 0.0;
+  for (int pass = 0; pass < 2; ++pass) {
+    alpha_l = fa.invariant - 0.5 * h * (f_a + config_.Friction(u_l)) -
+              h * config_.gravity_slope_mps2 - h * SourceAt(has_sources, n, u_l);
+    u_l = outlet_closure_ != nullptr
+              ? outlet_closure_->SolveOutletVelocity(OutletRelation(law_, alpha_l),
+                                                     inputs.end.choke, h, u_l)
+              : choke_.SolveOutletVelocity(law_, alpha_l, inputs.end.choke, u_l);
+  }
+  alpha_next_[n] = alpha_l;
+  beta_next_[n] = 2.0 * u_l - alpha_l;
 }
 
 // Both paths end alike: the new level becomes the state, checked for NaN and for the model's

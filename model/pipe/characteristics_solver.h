@@ -74,6 +74,11 @@ class CharacteristicsSolver final : public PipeSolver {
   Foot BetaFoot(int i) const;   // beta characteristic arriving at node i (from the right)
   void StepInteriorLinear();
   void StepInteriorQuasiLinear();
+  // The fast path's other parts (Step), in their order.
+  double SourceAt(bool has_sources, int i, double u) const;
+  void AddSourcesToInterior();
+  void StepInletNode(const PipeStepInputs& inputs, bool has_sources);
+  void StepOutletNode(const PipeStepInputs& inputs, bool has_sources);
   // The step's last part, on either path: alpha_next_, beta_next_ become the state.
   Status AdvanceToNewLevel(RangeViolation* violation);
   // The general path (see the header comment), in its steps; GeneralStep holds what they share.
