@@ -6,6 +6,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "model/analysis/measured_log.h"
 #include "model/common/units.h"
@@ -68,6 +69,88 @@ Status CheckProfileRunLimits(double duration_s, double rate_hz) {
   return Status::Ok();
 }
 
+// What drives a run: its inputs, the times of its samples and the atmosphere of its log.
+struct Drive {
+  InputSignals signals;
+  std::vector<double> output_times;
+  double atmosphere_pa = 0.0;
+  std::string description;  // the log's `drive` metadata
+};
+
+// The inputs of a measured log (--inputs). A log that starts mid-heave starts after a warm-up,
+// where its pressures say so, and its choke and FT2 levels are corrected from its pressures, as
+// compare's.
+Result<Drive> DriveFromLog(const SimulateArgs& args, const RigParams& params,
+                           SimulationOptions* options) {
+  auto log = riglog::ReadRigLog(args.inputs_path, args.read);
+  if (!log.ok()) return log.status();
+  InputReplayOptions replay = args.replay;
+  std::optional<InputReconstruction> plan;
+  if (auto measured = MeasuredLogFromRigLog(*log, args.inputs_path); measured.ok()) {
+    MPDRIG_RETURN_IF_ERROR(PrepareReplay(&*measured, params, *options, &replay, false));
+    plan = measured->reconstruction;
+  }
+  auto columns = InputColumnsFromLog(*log, args.inputs_path);
+  if (!columns.ok()) return columns.status();
+  auto from_log = SignalsFromColumns(std::move(columns).value(), args.inputs_path, replay,
+                                     plan ? &*plan : nullptr);
+  if (!from_log.ok()) return from_log.status();
+  options->choke_input = ChokeInput::kMeasured;
+  return Drive{*std::move(from_log), log->time_s, log->atmospheric_pressure_pa,
+               "inputs of " + args.inputs_path};
+}
+
+// Profiles of the piston and the choke, a constant pump and outlet pressure (--piston, ...).
+Result<Drive> DriveFromProfiles(const SimulateArgs& args, const RigParams& params,
+                                SimulationOptions* options) {
+  MPDRIG_RETURN_IF_ERROR(CheckProfileRunLimits(args.duration_s, args.rate_hz));
+  auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
+  if (!piston.ok()) return piston.status().Within("--piston");
+  auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);
+  if (!choke.ok()) return choke.status().Within("--choke-deg");
+  std::shared_ptr<Profile> piston_profile = std::move(piston).value();
+  std::shared_ptr<Profile> choke_profile = std::move(choke).value();
+  const double pump = units::LpmToM3ps(args.pump_lpm);
+  const double outlet = units::BargToPaAbs(args.outlet_barg, params.atmospheric_pressure_pa);
+  Drive drive;
+  drive.signals.piston_position_m = [piston_profile](double t) {
+    return piston_profile->ValueAt(t);
+  };
+  drive.signals.rig = [choke_profile, pump, outlet](double t) {
+    RigInputs in;
+    in.choke_opening_frac = units::ChokeDegToFrac(choke_profile->ValueAt(t));
+    in.pump_flow_m3ps = pump;
+    in.outlet_pressure_pa = outlet;
+    return in;
+  };
+  const long count = std::lround(args.duration_s * args.rate_hz);
+  for (long i = 0; i <= count; ++i) drive.output_times.push_back(i / args.rate_hz);
+  drive.atmosphere_pa = params.atmospheric_pressure_pa;
+  drive.description = "piston " + piston_profile->Describe() + " m, choke " +
+                      choke_profile->Describe() + " deg (through the actuator)";
+  options->choke_input = ChokeInput::kReference;
+  return drive;
+}
+
+// The log's header: what ran, on what, and the sensors' noise when there is any.
+riglog::Metadata RunMetadata(const SimulateArgs& args, const RigParams& params, const Drive& drive,
+                             const SensorNoise& noise) {
+  riglog::Metadata metadata = {
+      {"source", "mpdrig simulate"},
+      {"model", args.model.Describe(params)},
+      {"drive", drive.description},
+  };
+  if (!args.model.config_path.empty()) metadata.emplace_back("config", args.model.config_path);
+  for (const std::string& assignment : args.model.overrides) {
+    metadata.emplace_back("set", assignment);
+  }
+  if (!noise.IsNone()) {
+    metadata.emplace_back("sensor_noise",
+                          noise.ToSpec() + ", seed " + std::to_string(args.noise_seed));
+  }
+  return metadata;
+}
+
 int RunSimulate(const SimulateArgs& args) {
   const std::string name = "simulate";
   auto params = args.model.LoadParams();
@@ -80,85 +163,24 @@ int RunSimulate(const SimulateArgs& args) {
   auto noise = ParseSensorNoise(args.sensor_noise);
   if (!noise.ok()) return Fail(name, noise.status().Within("--sensor-noise"));
 
-  InputSignals signals;
-  std::vector<double> output_times;
-  double atmosphere = params->atmospheric_pressure_pa;
-  std::string drive;
-  if (!args.inputs_path.empty()) {
-    auto log = riglog::ReadRigLog(args.inputs_path, args.read);
-    if (!log.ok()) return Fail(name, log.status());
-    // A log that starts mid-heave starts after a warm-up, where its pressures say so (as compare).
-    // Its choke and FT2 levels are corrected from its pressures, as compare's.
-    InputReplayOptions replay = args.replay;
-    std::optional<InputReconstruction> plan;
-    if (auto measured = MeasuredLogFromRigLog(*log, args.inputs_path); measured.ok()) {
-      const Status prepared = PrepareReplay(&*measured, *params, *options, &replay, false);
-      if (!prepared.ok()) return Fail(name, prepared);
-      plan = measured->reconstruction;
-    }
-    auto columns = InputColumnsFromLog(*log, args.inputs_path);
-    if (!columns.ok()) return Fail(name, columns.status());
-    auto from_log = SignalsFromColumns(std::move(columns).value(), args.inputs_path, replay,
-                                       plan ? &*plan : nullptr);
-    if (!from_log.ok()) return Fail(name, from_log.status());
-    signals = *from_log;
-    output_times = log->time_s;
-    atmosphere = log->atmospheric_pressure_pa;
-    options->choke_input = ChokeInput::kMeasured;
-    drive = "inputs of " + args.inputs_path;
-  } else {
-    Status limits = CheckProfileRunLimits(args.duration_s, args.rate_hz);
-    if (!limits.ok()) return Fail(name, limits);
-    auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
-    if (!piston.ok()) return Fail(name, piston.status().Within("--piston"));
-    auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);
-    if (!choke.ok()) return Fail(name, choke.status().Within("--choke-deg"));
-    std::shared_ptr<Profile> piston_profile = std::move(piston).value();
-    std::shared_ptr<Profile> choke_profile = std::move(choke).value();
-    const double pump = units::LpmToM3ps(args.pump_lpm);
-    const double outlet = units::BargToPaAbs(args.outlet_barg, params->atmospheric_pressure_pa);
-    signals.piston_position_m = [piston_profile](double t) { return piston_profile->ValueAt(t); };
-    signals.rig = [choke_profile, pump, outlet](double t) {
-      RigInputs in;
-      in.choke_opening_frac = units::ChokeDegToFrac(choke_profile->ValueAt(t));
-      in.pump_flow_m3ps = pump;
-      in.outlet_pressure_pa = outlet;
-      return in;
-    };
-    const long count = std::lround(args.duration_s * args.rate_hz);
-    for (long i = 0; i <= count; ++i) output_times.push_back(i / args.rate_hz);
-    options->choke_input = ChokeInput::kReference;
-    drive = "piston " + piston_profile->Describe() + " m, choke " + choke_profile->Describe() +
-            " deg (through the actuator)";
-  }
-
-  const double span_s = output_times.back() - output_times.front();
+  auto drive = args.inputs_path.empty() ? DriveFromProfiles(args, *params, &*options)
+                                        : DriveFromLog(args, *params, &*options);
+  if (!drive.ok()) return Fail(name, drive.status());
+  const double span_s = drive->output_times.back() - drive->output_times.front();
   const bool show_progress = span_s > 600.0;
-  riglog::Metadata metadata = {
-      {"source", "mpdrig simulate"},
-      {"model", args.model.Describe(*params)},
-      {"drive", drive},
-  };
-  if (!args.model.config_path.empty()) metadata.emplace_back("config", args.model.config_path);
-  for (const std::string& assignment : args.model.overrides)
-    metadata.emplace_back("set", assignment);
   // What the lab's sensors would read (sensor_noise.h); the extra --pressure-at outputs are the
   // model's, not sensors, and stay noise-free. `none` writes the model's output untouched.
   std::optional<SensorNoiseApplier> sensors;
-  if (!noise->IsNone()) {
-    sensors.emplace(*noise, args.noise_seed);
-    metadata.emplace_back("sensor_noise",
-                          noise->ToSpec() + ", seed " + std::to_string(args.noise_seed));
-  }
+  if (!noise->IsNone()) sensors.emplace(*noise, args.noise_seed);
   // The samples go to the log as they come (a long run is not held in memory); a failed run
   // leaves no log behind (rig_log_output.h).
-  auto out =
-      SampleLogStream::Open(args.out_path, std::move(metadata), atmosphere, args.pressure_at_m);
+  auto out = SampleLogStream::Open(args.out_path, RunMetadata(args, *params, *drive, *noise),
+                                   drive->atmosphere_pa, args.pressure_at_m);
   if (!out.ok()) return Fail(name, out.status());
   Status written = Status::Ok();
   const auto started = std::chrono::steady_clock::now();
   auto run = SimulateEach(
-      *params, *options, signals, output_times,
+      *params, *options, drive->signals, drive->output_times,
       [&](const RigSample& sample) {
         if (!written.ok()) return;
         RigSample measured = sample;
