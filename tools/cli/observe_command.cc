@@ -113,6 +113,73 @@ std::string Describe(const observer::ObserverOptions& o, const observer::NoiseDe
   return out.str();
 }
 
+// The topside channels: C2 = p(l), and the outlet flow FT1, or FT3 - FT2 (5.3.1). Samples where
+// either is not measured are left out (the observer interpolates over them) and counted.
+Result<observer::TopsideSeries> TopsideFromLog(const riglog::RigLog& log, const std::string& path,
+                                               std::size_t* skipped) {
+  const std::vector<double>* c2 = log.Find(riglog::Channel::kC2);
+  const std::vector<double>* ft1 = log.Find(riglog::Channel::kFT1);
+  const std::vector<double>* ft2 = log.Find(riglog::Channel::kFT2);
+  const std::vector<double>* ft3 = log.Find(riglog::Channel::kFT3);
+  if (c2 == nullptr) return Status::Error(path + ": needs a C2 column");
+  if (ft1 == nullptr && (ft2 == nullptr || ft3 == nullptr)) {
+    return Status::Error(path + ": needs FT1, or FT3 and FT2");
+  }
+  observer::TopsideSeries series;
+  *skipped = 0;
+  for (std::size_t r = 0; r < log.num_rows(); ++r) {
+    const double q = ft1 != nullptr ? (*ft1)[r] : (*ft3)[r] - (*ft2)[r];
+    if (!std::isfinite((*c2)[r]) || !std::isfinite(q)) {
+      ++*skipped;
+      continue;
+    }
+    series.time_s.push_back(log.time_s[r]);
+    series.outlet_pressure_pa.push_back((*c2)[r]);
+    series.outlet_flow_m3ps.push_back(q);
+  }
+  return series;
+}
+
+// The noise the gains are designed for: estimated from the topside channels, unless given.
+Status SetNoiseFromLog(const ObserverArgs& args, const observer::TopsideSeries& series,
+                       observer::ObserverOptions* options) {
+  if (options->gain_design != observer::GainDesign::kNoise) return Status::Ok();
+  auto noise = observer::EstimateTopsideNoise(series.time_s, series.outlet_pressure_pa,
+                                              series.outlet_flow_m3ps);
+  if (!noise.ok()) return noise.status();
+  if (!std::isnan(args.pressure_noise_bar)) {
+    noise->outlet_pressure_pa = units::BarToPa(args.pressure_noise_bar);
+  }
+  if (!std::isnan(args.flow_noise_lpm)) {
+    noise->outlet_flow_m3ps = units::LpmToM3ps(args.flow_noise_lpm);
+  }
+  options->noise = *noise;
+  return Status::Ok();
+}
+
+// The estimates as extra columns beside the log's own.
+Status AddEstimateColumns(const std::vector<observer::ObserverEstimate>& estimates,
+                          riglog::RigLog* log) {
+  using riglog::Unit;
+  using E = observer::ObserverEstimate;
+  const auto add = [&](std::string_view channel, Unit unit, auto value) -> Status {
+    auto column = riglog::MakeColumn(channel, unit);
+    if (!column.ok()) return column.status();
+    std::vector<double> values(log->num_rows());
+    for (std::size_t r = 0; r < values.size(); ++r) values[r] = value(estimates[r]);
+    return log->AddColumn(*column, std::move(values));
+  };
+  MPDRIG_RETURN_IF_ERROR(add("BHP_est", Unit::kBarg, [](const E& e) { return e.bhp_pa; }));
+  for (int k = 0; k < 10; ++k) {
+    MPDRIG_RETURN_IF_ERROR(add("PT" + std::to_string(k + 1) + "_est", Unit::kBarg,
+                               [k](const E& e) { return e.pt_pa[k]; }));
+  }
+  MPDRIG_RETURN_IF_ERROR(add("FT4_est", Unit::kLpm, [](const E& e) { return e.inlet_flow_m3ps; }));
+  MPDRIG_RETURN_IF_ERROR(
+      add("piston_position_est", Unit::kM, [](const E& e) { return e.piston_position_m; }));
+  return add("FT1_innovation", Unit::kLpm, [](const E& e) { return e.output_error_m3ps; });
+}
+
 int RunObserve(const ObserverArgs& args) {
   const std::string name = "observe";
   auto params = args.model.LoadParams();
@@ -121,72 +188,18 @@ int RunObserve(const ObserverArgs& args) {
   if (!options.ok()) return Fail(name, options.status());
   auto log = riglog::ReadRigLog(args.log_path, args.read);
   if (!log.ok()) return Fail(name, log.status());
-
-  // Topside channels: C2 = p(l), and the outlet flow FT1, or FT3 - FT2 (5.3.1).
-  const std::vector<double>* c2 = log->Find(riglog::Channel::kC2);
-  const std::vector<double>* ft1 = log->Find(riglog::Channel::kFT1);
-  const std::vector<double>* ft2 = log->Find(riglog::Channel::kFT2);
-  const std::vector<double>* ft3 = log->Find(riglog::Channel::kFT3);
-  if (c2 == nullptr) return Fail(name, Status::Error(args.log_path + ": needs a C2 column"));
-  if (ft1 == nullptr && (ft2 == nullptr || ft3 == nullptr)) {
-    return Fail(name, Status::Error(args.log_path + ": needs FT1, or FT3 and FT2"));
-  }
-  observer::TopsideSeries series;
   std::size_t skipped = 0;
-  for (std::size_t r = 0; r < log->num_rows(); ++r) {
-    const double q = ft1 != nullptr ? (*ft1)[r] : (*ft3)[r] - (*ft2)[r];
-    if (!std::isfinite((*c2)[r]) || !std::isfinite(q)) {
-      ++skipped;  // not measured at this sample: interpolated from its neighbours
-      continue;
-    }
-    series.time_s.push_back(log->time_s[r]);
-    series.outlet_pressure_pa.push_back((*c2)[r]);
-    series.outlet_flow_m3ps.push_back(q);
-  }
-  // The noise level: estimated from the topside channels, unless given.
-  if (options->gain_design == observer::GainDesign::kNoise) {
-    auto noise = observer::EstimateTopsideNoise(series.time_s, series.outlet_pressure_pa,
-                                                series.outlet_flow_m3ps);
-    if (!noise.ok()) return Fail(name, noise.status().Within(args.log_path));
-    if (!std::isnan(args.pressure_noise_bar)) {
-      noise->outlet_pressure_pa = units::BarToPa(args.pressure_noise_bar);
-    }
-    if (!std::isnan(args.flow_noise_lpm)) {
-      noise->outlet_flow_m3ps = units::LpmToM3ps(args.flow_noise_lpm);
-    }
-    options->noise = *noise;
-  }
+  auto series = TopsideFromLog(*log, args.log_path, &skipped);
+  if (!series.ok()) return Fail(name, series.status());
+  const Status noise = SetNoiseFromLog(args, *series, &*options);
+  if (!noise.ok()) return Fail(name, noise.Within(args.log_path));
   auto design = observer::DesignForNoise(*params, *options);
   if (!design.ok()) return Fail(name, design.status().Within(args.log_path));
-  auto estimates = observer::RunObserver(*params, *options, series, log->time_s);
+  auto estimates = observer::RunObserver(*params, *options, *series, log->time_s);
   if (!estimates.ok()) return Fail(name, estimates.status().Within(args.log_path));
 
-  // Estimates as extra columns beside the log's own.
-  const std::size_t rows = log->num_rows();
-  auto add = [&](std::string_view channel, riglog::Unit unit, auto value) -> Status {
-    auto column = riglog::MakeColumn(channel, unit);
-    if (!column.ok()) return column.status();
-    std::vector<double> values(rows);
-    for (std::size_t r = 0; r < rows; ++r) values[r] = value((*estimates)[r]);
-    return log->AddColumn(*column, std::move(values));
-  };
-  using riglog::Unit;
-  using E = observer::ObserverEstimate;
-  Status status = add("BHP_est", Unit::kBarg, [](const E& e) { return e.bhp_pa; });
-  for (int k = 0; k < 10 && status.ok(); ++k) {
-    status = add("PT" + std::to_string(k + 1) + "_est", Unit::kBarg,
-                 [k](const E& e) { return e.pt_pa[k]; });
-  }
-  if (status.ok()) {
-    status = add("FT4_est", Unit::kLpm, [](const E& e) { return e.inlet_flow_m3ps; });
-  }
-  if (status.ok()) {
-    status = add("piston_position_est", Unit::kM, [](const E& e) { return e.piston_position_m; });
-  }
-  if (status.ok()) {
-    status = add("FT1_innovation", Unit::kLpm, [](const E& e) { return e.output_error_m3ps; });
-  }
-  if (!status.ok()) return Fail(name, status.Within(args.log_path));
+  const Status added = AddEstimateColumns(*estimates, &*log);
+  if (!added.ok()) return Fail(name, added.Within(args.log_path));
   log->metadata.push_back({"observer", Describe(*options, *design)});
   const double final_hz = estimates->empty() ? std::nan("") : estimates->back().disturbance_hz;
   if (options->track_frequency) {
@@ -200,10 +213,11 @@ int RunObserve(const ObserverArgs& args) {
   if (!written.ok()) return Fail(name, written);
   if (args.out_path != "-") {
     std::printf("%s: %zu samples of %s (%zu without C2/outlet flow) -> %s\n",
-                Describe(*options, *design).c_str(), rows, args.log_path.c_str(), skipped,
-                args.out_path.c_str());
-    if (options->track_frequency)
+                Describe(*options, *design).c_str(), log->num_rows(), args.log_path.c_str(),
+                skipped, args.out_path.c_str());
+    if (options->track_frequency) {
       std::printf("tracked heave frequency at the end: %.4g Hz\n", final_hz);
+    }
   }
   return 0;
 }
