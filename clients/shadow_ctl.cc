@@ -11,8 +11,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include <CLI/CLI.hpp>
 
@@ -52,10 +55,7 @@ void Print(const mpdrig_ShadowStatus& s) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  CLI::App app("shadow_ctl - switch a running shadow model's effects and parameters");
+struct Args {
   std::string rig_id = "rig-1";
   int domain = 0;
   std::string dds_config;
@@ -63,119 +63,94 @@ int main(int argc, char** argv) {
   bool reset = false, fit_now = false;
   double timeout_s = 10.0, fit_timeout_s = 600.0;
   std::string security;
-  app.add_option("--rig", rig_id, "the rig the shadow follows")->capture_default_str();
-  app.add_option("--domain", domain, "DDS domain id")
+};
+
+void AddOptions(CLI::App& app, Args& args) {
+  app.add_option("--rig", args.rig_id, "the rig the shadow follows")->capture_default_str();
+  app.add_option("--domain", args.domain, "DDS domain id")
       ->check(CLI::Range(0, 232))
       ->capture_default_str();
-  app.add_option("--dds-config", dds_config, "Cyclone DDS XML (default: loopback only)");
-  auto* on = app.add_option("--effect-on", effect_on, "switch an effect on: NAME[:k=v,...]");
-  auto* off = app.add_option("--effect-off", effect_off, "switch an effect off: NAME");
-  auto* param = app.add_option("--set", set, "set a parameter: KEY=VALUE (EFFECT.KEY too)");
-  auto* again = app.add_flag("--reset", reset, "back to the model the shadow started with");
-  auto* fit = app.add_flag("--fit-now", fit_now,
+  app.add_option("--dds-config", args.dds_config, "Cyclone DDS XML (default: loopback only)");
+  auto* on = app.add_option("--effect-on", args.effect_on, "switch an effect on: NAME[:k=v,...]");
+  auto* off = app.add_option("--effect-off", args.effect_off, "switch an effect off: NAME");
+  auto* param = app.add_option("--set", args.set, "set a parameter: KEY=VALUE (EFFECT.KEY too)");
+  auto* again = app.add_flag("--reset", args.reset, "back to the model the shadow started with");
+  auto* fit = app.add_flag("--fit-now", args.fit_now,
                            "fit c, f1 and the active effects' strengths on the shadow's last "
                            "minutes of rows, in the background; waits for the result");
   on->excludes(off, param, again, fit);
   off->excludes(param, again, fit);
   param->excludes(again, fit);
   again->excludes(fit);
-  app.add_option("--fit-timeout", fit_timeout_s, "with --fit-now: wait this long for the fit [s]")
+  app.add_option("--fit-timeout", args.fit_timeout_s,
+                 "with --fit-now: wait this long for the fit [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--security", security,
+  app.add_option("--security", args.security,
                  "DDS Security: an identity directory of a class (deploy/security/make-class OUT "
                  "NAME: OUT/NAME) allowed to use the rig's shadow; its topics are then in "
                  "partition rig.<rig id>. Refuses an invalid directory, saying why");
-  app.add_option("--timeout", timeout_s, "give up after this long [s]")
+  app.add_option("--timeout", args.timeout_s, "give up after this long [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+}
 
-  using namespace mpdrig;
-  auto created =
-      dds::Domain::Create(domain, dds_config.empty() ? dds::LoopbackConfig() : dds_config);
-  if (!created.ok()) return Fail(created.status().message());
-  // With --security the shadow's topics are in its rig's partition.
-  auto scope = dds::CreateClientScope(domain, security, rig_id);
-  if (!scope.ok()) return Fail(scope.status().message());
-  const dds_entity_t p = scope->participant.handle();
-  auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
-  auto status_topic = dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, "mpdrig_shadow_status");
-  if (!command_topic.ok()) return Fail(command_topic.status().message());
-  if (!status_topic.ok()) return Fail(status_topic.status().message());
-  auto status = dds::Reader<mpdrig_ShadowStatus>::Create(scope->sub(), status_topic->handle(),
-                                                         dds::StatusQos());
-  if (!status.ok()) return Fail(status.status().message());
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
-  // The shadow's current status first (transient-local: it arrives once matched).
-  bool have = false;
-  std::uint64_t before_rejected = 0;
-  while (!have && std::chrono::steady_clock::now() < deadline) {
-    auto ready = status->Wait(DDS_MSECS(100));
-    if (!ready.ok()) return Fail(ready.status().message());
-    (void)status->TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
+// The change the flags ask for, with its argument; none: only print the status.
+std::optional<std::pair<mpdrig_ShadowAction, std::string>> RequestedAction(const Args& args) {
+  if (!args.effect_on.empty()) return std::pair{mpdrig_SHADOW_EFFECT_ON, args.effect_on};
+  if (!args.effect_off.empty()) return std::pair{mpdrig_SHADOW_EFFECT_OFF, args.effect_off};
+  if (!args.set.empty()) return std::pair{mpdrig_SHADOW_SET, args.set};
+  if (args.reset) return std::pair{mpdrig_SHADOW_RESET, std::string()};
+  if (args.fit_now) return std::pair{mpdrig_SHADOW_FIT_NOW, std::string()};
+  return std::nullopt;
+}
+
+using Reader = mpdrig::dds::Reader<mpdrig_ShadowStatus>;
+using Clock = std::chrono::steady_clock;
+using Deadline = std::chrono::time_point<Clock, std::chrono::duration<double>>;
+
+// The shadow's current status (transient-local: it arrives once matched), printed; its count of
+// refused commands, or nothing if no shadow of the rig answered before the deadline.
+mpdrig::Result<std::optional<std::uint64_t>> ReadCurrentStatus(Reader& status,
+                                                               const std::string& rig_id,
+                                                               Deadline deadline) {
+  std::optional<std::uint64_t> rejected;
+  while (!rejected && Clock::now() < deadline) {
+    auto ready = status.Wait(DDS_MSECS(100));
+    if (!ready.ok()) return ready.status();
+    (void)status.TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
       if (rig_id != s.rig_id) return;
-      have = true;
-      before_rejected = s.rejected_commands;
+      rejected = s.rejected_commands;
       Print(s);
     });
   }
-  if (!have)
-    return Fail("no shadow of rig '" + rig_id + "' answered (is `mpdrig shadow` running?)");
-  std::string argument;
-  mpdrig_ShadowAction action;
-  if (!effect_on.empty()) {
-    action = mpdrig_SHADOW_EFFECT_ON, argument = effect_on;
-  } else if (!effect_off.empty()) {
-    action = mpdrig_SHADOW_EFFECT_OFF, argument = effect_off;
-  } else if (!set.empty()) {
-    action = mpdrig_SHADOW_SET, argument = set;
-  } else if (reset) {
-    action = mpdrig_SHADOW_RESET;
-  } else if (fit_now) {
-    action = mpdrig_SHADOW_FIT_NOW;
-  } else {
-    return 0;
-  }
-  // Only now: reading the status needs no right to command (a watcher under security has none).
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(),
-                                                          dds::RequestQos());
-  if (!writer.ok()) return Fail(writer.status().message());
-  // A command written before the shadow's reader has matched would be lost (volatile).
-  const std::chrono::duration<double> left = deadline - std::chrono::steady_clock::now();
-  const auto matched = dds::AwaitReader(writer->handle(), dds::DeadlineAfter(left.count()));
-  if (!matched.ok()) return Fail(matched.status().message());
-  if (!*matched) return Fail("the shadow's command reader did not match within --timeout");
+  return rejected;
+}
 
-  mpdrig_ShadowCommand command{};
-  command.rig_id = rig_id.data();
-  command.command_id =
-      static_cast<unsigned long long>(std::chrono::system_clock::now().time_since_epoch().count());
-  command.action = action;
-  command.argument = argument.data();
-  auto written = writer->Write(command);
-  if (!written.ok()) return Fail(written.message());
-  // The answer: the status that names this command; for a fit, then the one that ends it.
+// The answer: the status that names the command; for a fit, then the one that ends it (waited
+// for up to fit_timeout_s past the deadline). The exit code.
+int AwaitAnswer(Reader& status, const Args& args, const mpdrig_ShadowCommand& command,
+                std::uint64_t before_rejected, Deadline deadline) {
   bool fitting = false;
   auto until = deadline;
-  while (std::chrono::steady_clock::now() < until) {
-    auto ready = status->Wait(DDS_MSECS(100));
+  while (Clock::now() < until) {
+    auto ready = status.Wait(DDS_MSECS(100));
     if (!ready.ok()) return Fail(ready.status().message());
     int code = -1;
-    (void)status->TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-      if (code >= 0 || rig_id != s.rig_id || s.last_command_id != command.command_id) return;
+    (void)status.TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
+      if (code >= 0 || args.rig_id != s.rig_id || s.last_command_id != command.command_id) return;
       const std::string fit_state = s.fit_state;
       if (s.rejected_commands > before_rejected) {
         std::printf("refused: %s\n", s.last_rejection);
         code = 1;
-      } else if (action == mpdrig_SHADOW_FIT_NOW && fit_state.rfind("running:", 0) == 0) {
+      } else if (command.action == mpdrig_SHADOW_FIT_NOW && fit_state.rfind("running:", 0) == 0) {
         if (!fitting) std::printf("fit %s\n", s.fit_state);
         fitting = true;
-      } else if (action == mpdrig_SHADOW_FIT_NOW && fitting) {
+      } else if (command.action == mpdrig_SHADOW_FIT_NOW && fitting) {
         std::printf("after the fit:\n");
         Print(s);
         code = fit_state.rfind("done:", 0) == 0 ? 0 : 1;
-      } else if (action != mpdrig_SHADOW_FIT_NOW) {
+      } else if (command.action != mpdrig_SHADOW_FIT_NOW) {
         std::printf("after the change:\n");
         Print(s);
         code = 0;
@@ -183,11 +158,61 @@ int main(int argc, char** argv) {
     });
     if (code >= 0) return code;
     if (fitting) {
-      until = std::max(until,
-                       deadline + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                      std::chrono::duration<double>(fit_timeout_s)));
+      until = std::max(until, deadline + std::chrono::duration<double>(args.fit_timeout_s));
     }
   }
   if (fitting) return Fail("the fit did not end within --fit-timeout (it goes on in the shadow)");
   return Fail("the shadow did not answer the command within --timeout");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app("shadow_ctl - switch a running shadow model's effects and parameters");
+  Args args;
+  AddOptions(app, args);
+  CLI11_PARSE(app, argc, argv);
+
+  using namespace mpdrig;
+  auto created = dds::Domain::Create(
+      args.domain, args.dds_config.empty() ? dds::LoopbackConfig() : args.dds_config);
+  if (!created.ok()) return Fail(created.status().message());
+  // With --security the shadow's topics are in its rig's partition.
+  auto scope = dds::CreateClientScope(args.domain, args.security, args.rig_id);
+  if (!scope.ok()) return Fail(scope.status().message());
+  const dds_entity_t p = scope->participant.handle();
+  auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
+  auto status_topic = dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, "mpdrig_shadow_status");
+  if (!command_topic.ok()) return Fail(command_topic.status().message());
+  if (!status_topic.ok()) return Fail(status_topic.status().message());
+  auto status = Reader::Create(scope->sub(), status_topic->handle(), dds::StatusQos());
+  if (!status.ok()) return Fail(status.status().message());
+  const Deadline deadline = Clock::now() + std::chrono::duration<double>(args.timeout_s);
+  auto before_rejected = ReadCurrentStatus(*status, args.rig_id, deadline);
+  if (!before_rejected.ok()) return Fail(before_rejected.status().message());
+  if (!*before_rejected) {
+    return Fail("no shadow of rig '" + args.rig_id + "' answered (is `mpdrig shadow` running?)");
+  }
+  auto action = RequestedAction(args);
+  if (!action) return 0;
+
+  // Only now: reading the status needs no right to command (a watcher under security has none).
+  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(),
+                                                          dds::RequestQos());
+  if (!writer.ok()) return Fail(writer.status().message());
+  // A command written before the shadow's reader has matched would be lost (volatile).
+  const std::chrono::duration<double> left = deadline - Clock::now();
+  const auto matched = dds::AwaitReader(writer->handle(), dds::DeadlineAfter(left.count()));
+  if (!matched.ok()) return Fail(matched.status().message());
+  if (!*matched) return Fail("the shadow's command reader did not match within --timeout");
+
+  mpdrig_ShadowCommand command{};
+  command.rig_id = args.rig_id.data();
+  command.command_id =
+      static_cast<unsigned long long>(std::chrono::system_clock::now().time_since_epoch().count());
+  command.action = action->first;
+  command.argument = action->second.data();
+  auto written = writer->Write(command);
+  if (!written.ok()) return Fail(written.message());
+  return AwaitAnswer(*status, args, command, **before_rejected, deadline);
 }
