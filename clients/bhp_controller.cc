@@ -484,6 +484,100 @@ int Run(const Args& args) {
   return session.Loop();
 }
 
+// The options, in groups for --help: where the rig is, how to control it, what to run and report.
+void AddConnectionOptions(CLI::App& app, Args& args) {
+  CLI::Option_group* g = app.add_option_group("Rig and connection");
+  g->add_option("--rig", args.rig_id, "rig id to control")->capture_default_str();
+  g->add_option("--domain", args.domain, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  g->add_option("--dds-config", args.dds_config, "Cyclone DDS XML (default: loopback only)");
+  g->add_option("--security", args.security,
+                "DDS Security: this student's (or the instructor's) identity directory of a "
+                "class (deploy/security/make-class OUT NAME: OUT/NAME); the rig's topics are "
+                "then in partition rig.<rig id>. Refuses an invalid directory, saying why");
+  g->add_option("--strength", args.strength,
+                "ownership strength of the choke commands: of several controllers the "
+                "strongest live one wins (an instructor taking over a class's rig: 100)")
+      ->capture_default_str();
+  g->add_flag("--lockstep", args.lockstep,
+              "the rig runs `mpdrig serve --clock lockstep`: this controller steps it one "
+              "sample at a time (deterministic)");
+  g->add_option("--timeout", args.timeout_s,
+                "give up after this long without samples [s]: before the first, exit 1 (no "
+                "rig); after it, the rig is lost (exit 3, see below)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+}
+
+void AddControlOptions(CLI::App& app, Args& args, bool* no_feedforward) {
+  ControllerOptions& c = args.control;
+  CLI::Option_group* g = app.add_option_group("Control (set point, gains, plant model)");
+  g->add_option("--setpoint-barg", c.setpoint_barg,
+                "bottom-hole pressure to hold [barg] (default: with the choke left as it is, "
+                "watch --settle seconds, then hold the mean over the next --learn seconds)");
+  g->add_option("--learn", c.learn_s,
+                "without --setpoint-barg: watch this long [s], rounded to whole heave "
+                "periods when the heave's frequency is known")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  g->add_option("--settle", c.settle_s,
+                "without --setpoint-barg: watch at least this long, and two heave periods, "
+                "before learning [s] (the heave's start-up transient; the observer's, which "
+                "estimates the sensors' noise and converges in about two periods)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  g->add_flag("--use-estimate", args.use_estimate,
+              "control the observer's BHP_est (mpdrig_estimate) instead of the PT1 transmitter: "
+              "what a controller on a real well, without a downhole sensor, would do");
+  g->add_option("--kp", c.kp_deg_per_bar, "proportional gain [deg of choke per bar]")
+      ->capture_default_str();
+  g->add_option("--ki", c.ki_deg_per_bar_s, "integral gain [deg per bar per s]")
+      ->capture_default_str();
+  g->add_flag("--no-feedforward", *no_feedforward,
+              "PI only: no adaptive cancellation of the heave (it needs mpdrig_estimate)");
+  g->add_option("--adapt", c.adapt_per_s,
+                "adaptation rate gamma of the heave cancellation [1/s]; above about 0.4 the "
+                "adaptation outruns the pipe's delay and oscillates")
+      ->check(CLI::Range(0.0, 5.0))
+      ->capture_default_str();
+  g->add_option("--choke-gain", c.choke_gain_bar_per_deg,
+                "plant model: BHP drop per degree of choke opening [bar/deg] (about 2 dp/G "
+                "dG/dtheta at the operating point)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  g->add_option("--delay", c.delay_s,
+                "plant model: delay from the choke to the bottom [s] (l/c = 1.06 s, plus the "
+                "actuator's 0.1 s and the pipe's phase)")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
+  g->add_option("--choke-min-deg", c.choke_min_deg, "lowest choke reference [deg]")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+  g->add_option("--choke-max-deg", c.choke_max_deg, "highest choke reference [deg]")
+      ->check(CLI::Range(0.0, 90.0))
+      ->capture_default_str();
+}
+
+void AddRunOptions(CLI::App& app, Args& args) {
+  CLI::Option_group* g = app.add_option_group("Run and report");
+  g->add_flag("--open-loop", args.open_loop,
+              "write no commands: only measure (the fixed-choke baseline)");
+  g->add_option("--duration", args.duration_s, "stop at this rig time [s] (0: run until Ctrl-C)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  g->add_option("--measure-last", args.measure_last_s,
+                "report PT1 over the last this many seconds of --duration (stdout, one "
+                "key=value line): its half peak-to-peak swing and mean, and, robust to the "
+                "sensors' noise, its component at the heave frequency and the RMS of its "
+                "periodic part (harmonics 1-3)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  g->add_option("--log", args.log_path,
+                "write a CSV of time, PT1, BHP_est, choke position and reference, set point "
+                "(rig-log column names)");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -491,88 +585,10 @@ int main(int argc, char** argv) {
       "bhp_controller - hold a rig's bottom-hole pressure at a set point against heave with the "
       "choke (an example client: it speaks only the DDS topics)");
   Args args;
-  ControllerOptions& c = args.control;
-  app.add_option("--rig", args.rig_id, "rig id to control")->capture_default_str();
-  app.add_option("--domain", args.domain, "DDS domain id")
-      ->check(CLI::Range(0, 232))
-      ->capture_default_str();
-  app.add_option("--dds-config", args.dds_config, "Cyclone DDS XML (default: loopback only)");
-  app.add_option("--setpoint-barg", c.setpoint_barg,
-                 "bottom-hole pressure to hold [barg] (default: with the choke left as it is, "
-                 "watch --settle seconds, then hold the mean over the next --learn seconds)");
-  app.add_option("--learn", c.learn_s,
-                 "without --setpoint-barg: watch this long [s], rounded to whole heave "
-                 "periods when the heave's frequency is known")
-      ->check(CLI::Range(0.0, 3600.0))
-      ->capture_default_str();
-  app.add_option("--settle", c.settle_s,
-                 "without --setpoint-barg: watch at least this long, and two heave periods, "
-                 "before learning [s] (the heave's start-up transient; the observer's, which "
-                 "estimates the sensors' noise and converges in about two periods)")
-      ->check(CLI::Range(0.0, 3600.0))
-      ->capture_default_str();
-  app.add_flag("--use-estimate", args.use_estimate,
-               "control the observer's BHP_est (mpdrig_estimate) instead of the PT1 transmitter: "
-               "what a controller on a real well, without a downhole sensor, would do");
-  app.add_option("--kp", c.kp_deg_per_bar, "proportional gain [deg of choke per bar]")
-      ->capture_default_str();
-  app.add_option("--ki", c.ki_deg_per_bar_s, "integral gain [deg per bar per s]")
-      ->capture_default_str();
   bool no_feedforward = false;
-  app.add_flag("--no-feedforward", no_feedforward,
-               "PI only: no adaptive cancellation of the heave (it needs mpdrig_estimate)");
-  app.add_option("--adapt", c.adapt_per_s,
-                 "adaptation rate gamma of the heave cancellation [1/s]; above about 0.4 the "
-                 "adaptation outruns the pipe's delay and oscillates")
-      ->check(CLI::Range(0.0, 5.0))
-      ->capture_default_str();
-  app.add_option("--choke-gain", c.choke_gain_bar_per_deg,
-                 "plant model: BHP drop per degree of choke opening [bar/deg] (about 2 dp/G "
-                 "dG/dtheta at the operating point)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  app.add_option("--delay", c.delay_s,
-                 "plant model: delay from the choke to the bottom [s] (l/c = 1.06 s, plus the "
-                 "actuator's 0.1 s and the pipe's phase)")
-      ->check(CLI::Range(0.0, 10.0))
-      ->capture_default_str();
-  app.add_option("--choke-min-deg", c.choke_min_deg, "lowest choke reference [deg]")
-      ->check(CLI::Range(0.0, 90.0))
-      ->capture_default_str();
-  app.add_option("--choke-max-deg", c.choke_max_deg, "highest choke reference [deg]")
-      ->check(CLI::Range(0.0, 90.0))
-      ->capture_default_str();
-  app.add_option("--strength", args.strength,
-                 "ownership strength of the choke commands: of several controllers the "
-                 "strongest live one wins (an instructor taking over a class's rig: 100)")
-      ->capture_default_str();
-  app.add_option("--security", args.security,
-                 "DDS Security: this student's (or the instructor's) identity directory of a "
-                 "class (deploy/security/make-class OUT NAME: OUT/NAME); the rig's topics are "
-                 "then in partition rig.<rig id>. Refuses an invalid directory, saying why");
-  app.add_flag("--open-loop", args.open_loop,
-               "write no commands: only measure (the fixed-choke baseline)");
-  app.add_flag("--lockstep", args.lockstep,
-               "the rig runs `mpdrig serve --clock lockstep`: this controller steps it one "
-               "sample at a time (deterministic)");
-  app.add_option("--duration", args.duration_s, "stop at this rig time [s] (0: run until Ctrl-C)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--measure-last", args.measure_last_s,
-                 "report PT1 over the last this many seconds of --duration (stdout, one "
-                 "key=value line): its half peak-to-peak swing and mean, and, robust to the "
-                 "sensors' noise, its component at the heave frequency and the RMS of its "
-                 "periodic part (harmonics 1-3)")
-      ->check(CLI::NonNegativeNumber)
-      ->capture_default_str();
-  app.add_option("--log", args.log_path,
-                 "write a CSV of time, PT1, BHP_est, choke position and reference, set point "
-                 "(rig-log column names)");
-  app.add_option("--timeout", args.timeout_s,
-                 "give up after this long without samples [s]: before the first, exit 1 (no "
-                 "rig); after it, the rig is lost (exit 3, see below)")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
+  AddConnectionOptions(app, args);
+  AddControlOptions(app, args, &no_feedforward);
+  AddRunOptions(app, args);
   app.footer(
       "Control law (details at the top of clients/bhp_controller.cc):\n"
       "  e = BHP - set point;  choke = u_I + Kp e + Re{theta z};  u_I' = Ki e (anti-windup)\n"
@@ -590,6 +606,7 @@ int main(int argc, char** argv) {
       "comes for --timeout s, the controller says why on stderr and exits with status 3, without\n"
       "its summary line: its integrator, set point and adaptation belong to the lost run.");
   CLI11_PARSE(app, argc, argv);
+  ControllerOptions& c = args.control;
   c.feedforward = !no_feedforward;
   if (!(c.choke_min_deg < c.choke_max_deg)) {
     std::fprintf(stderr, "bhp_controller: --choke-min-deg must be below --choke-max-deg\n");
