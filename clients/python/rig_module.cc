@@ -94,10 +94,8 @@ py::dict AsRow(const mpdrig::client::Sensors& s) {
   return row;
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_mpdrig, m) {
-  m.doc() = "Binding of the mpdrig client library (clients/client/rig_client.h); use `mpdrig`.";
+// The module's exceptions: RigError and its RigLost.
+void BindErrors(py::module_& m) {
   g_rig_error =
       PyErr_NewExceptionWithDoc("mpdrig.RigError",
                                 "A call to the rig failed: no such rig, a DDS error, a bad "
@@ -112,7 +110,10 @@ PYBIND11_MODULE(_mpdrig, m) {
   if (g_rig_error == nullptr || g_rig_lost == nullptr) throw py::error_already_set();
   m.attr("RigError") = py::handle(g_rig_error);
   m.attr("RigLost") = py::handle(g_rig_lost);
+}
 
+// mpdrig.Sensors: one sample of every lab channel.
+void BindSensors(py::module_& m) {
   using mpdrig::client::Sensors;
   py::class_<Sensors> sensors(
       m, "Sensors",
@@ -166,7 +167,10 @@ PYBIND11_MODULE(_mpdrig, m) {
           name.c_str(), [i](const Sensors& s) { return s.PT_barg[i]; }, doc.c_str());
     }
   }
+}
 
+// mpdrig.Estimate: the observer's estimate for a sample.
+void BindEstimate(py::module_& m) {
   using mpdrig::client::Estimate;
   py::class_<Estimate>(m, "Estimate",
                        "The backstepping observer's estimate for one sensor sample (thesis ch. "
@@ -195,7 +199,10 @@ PYBIND11_MODULE(_mpdrig, m) {
                       e.piston_velocity_est_mps, e.disturbance_frequency_hz);
         return std::string(text);
       });
+}
 
+// mpdrig.Profile: the pressure along the pipe.
+void BindProfile(py::module_& m) {
   using mpdrig::client::Profile;
   py::class_<Profile>(m, "Profile",
                       "Pressure along the pipe at one sample, for plots of the waves.")
@@ -215,7 +222,10 @@ PYBIND11_MODULE(_mpdrig, m) {
             return Array(p.pressure_est_barg.data(), p.pressure_est_barg.size());
           },
           "numpy array: the observer's estimate [barg] there (empty without an observer)");
+}
 
+// mpdrig.Status: what the rig reports about itself.
+void BindStatus(py::module_& m) {
   using mpdrig::client::RigStatus;
   py::class_<RigStatus>(m, "Status", "What the rig reports about itself (topic mpdrig_status).")
       .def_readonly("clock", &RigStatus::clock, "'realtime', 'fast' or 'lockstep'")
@@ -236,51 +246,16 @@ PYBIND11_MODULE(_mpdrig, m) {
         return "<mpdrig.Status clock=" + s.clock + " t=" + std::to_string(s.sim_time_s) +
                " s rejected=" + std::to_string(s.rejected_commands) + ">";
       });
+}
 
-  py::class_<Rig>(m, "_Rig")
-      .def(py::init([](const std::string& rig_id, int domain, int strength, double timeout,
-                       const std::string& dds_config, const std::string& security) {
-             mpdrig::client::RigOptions options;
-             options.rig_id = rig_id;
-             options.domain = domain;
-             options.strength = strength;
-             options.timeout_s = timeout;
-             options.dds_config = dds_config;
-             options.security_dir = security;
-             auto connected = [&] {
-               py::gil_scoped_release release;
-               return Rig::Connect(options, Interrupted);
-             }();
-             if (!connected.ok()) {
-               const std::string message = connected.status().message();
-               Raise(nullptr,
-                     message == "interrupted"            ? Failure::kInterrupted
-                     : message.rfind("no rig '", 0) == 0 ? Failure::kTimeout
-                                                         : Failure::kError,
-                     message);
-             }
-             return std::move(connected).value();
-           }),
-           py::arg("rig_id") = "rig-1", py::arg("domain") = 0, py::kw_only(),
-           py::arg("strength") = 0, py::arg("timeout") = 10.0, py::arg("dds_config") = "",
-           py::arg("security") = "")
-      .def_property_readonly("rig_id", [](const Rig& r) { return r.options().rig_id; })
-      .def_property_readonly("domain", [](const Rig& r) { return r.options().domain; })
-      .def_property_readonly("strength", [](const Rig& r) { return r.options().strength; })
-      .def_property_readonly("timeout", [](const Rig& r) { return r.options().timeout_s; })
-      .def_property_readonly("security", [](const Rig& r) { return r.options().security_dir; })
-      .def_property_readonly("lockstep", &Rig::lockstep)
-      .def_property_readonly("lost", [](const Rig& r) { return r.lost(); })
-      .def_property_readonly("closed", &Rig::closed)
-      .def("close", &Rig::Close, py::call_guard<py::gil_scoped_release>(),
-           "Leave the rig: commands written are acknowledged first (up to the timeout, 10 s at "
-           "most), then the writers are deleted, so another controller takes over at once.")
-      .def(
-          "sensors",
-          [](Rig& r, bool fresh) {
-            return Blocking(r, [&](const Rig::Interrupt& i) { return r.Latest(fresh, i); });
-          },
-          py::arg("fresh") = false)
+// mpdrig._Rig's reads: the latest and the next samples, estimates, profile, status, refusals.
+void BindRigReads(py::class_<Rig>& rig) {
+  rig.def(
+         "sensors",
+         [](Rig& r, bool fresh) {
+           return Blocking(r, [&](const Rig::Interrupt& i) { return r.Latest(fresh, i); });
+         },
+         py::arg("fresh") = false)
       .def("next_sensors",
            [](Rig& r) { return Blocking(r, [&](const Rig::Interrupt& i) { return r.Next(i); }); })
       .def("pending",
@@ -301,16 +276,19 @@ PYBIND11_MODULE(_mpdrig, m) {
            [](Rig& r) {
              return Blocking(r, [&](const Rig::Interrupt& i) { return r.LatestStatus(i); });
            })
-      .def("rejections",
-           [](Rig& r) {
-             return Blocking(r, [&](const Rig::Interrupt& i) { return r.NewRejections(i); });
-           })
-      .def(
-          "choke",
-          [](Rig& r, double deg) {
-            Blocking(r, [&](const Rig::Interrupt& i) { return r.Choke(deg, i); });
-          },
-          py::arg("opening_deg"))
+      .def("rejections", [](Rig& r) {
+        return Blocking(r, [&](const Rig::Interrupt& i) { return r.NewRejections(i); });
+      });
+}
+
+// mpdrig._Rig's commands: choke, pump, outlet, piston, and a lockstep rig's steps.
+void BindRigCommands(py::class_<Rig>& rig) {
+  rig.def(
+         "choke",
+         [](Rig& r, double deg) {
+           Blocking(r, [&](const Rig::Interrupt& i) { return r.Choke(deg, i); });
+         },
+         py::arg("opening_deg"))
       .def(
           "pump",
           [](Rig& r, double lpm) {
@@ -348,4 +326,61 @@ PYBIND11_MODULE(_mpdrig, m) {
             });
           },
           py::arg("steps") = 1);
+}
+
+// mpdrig._Rig: the connection and its properties, then its reads and commands (mpdrig.Rig wraps
+// it).
+void BindRig(py::module_& m) {
+  py::class_<Rig> rig(m, "_Rig");
+  rig.def(py::init([](const std::string& rig_id, int domain, int strength, double timeout,
+                      const std::string& dds_config, const std::string& security) {
+            mpdrig::client::RigOptions options;
+            options.rig_id = rig_id;
+            options.domain = domain;
+            options.strength = strength;
+            options.timeout_s = timeout;
+            options.dds_config = dds_config;
+            options.security_dir = security;
+            auto connected = [&] {
+              py::gil_scoped_release release;
+              return Rig::Connect(options, Interrupted);
+            }();
+            if (!connected.ok()) {
+              const std::string message = connected.status().message();
+              Raise(nullptr,
+                    message == "interrupted"            ? Failure::kInterrupted
+                    : message.rfind("no rig '", 0) == 0 ? Failure::kTimeout
+                                                        : Failure::kError,
+                    message);
+            }
+            return std::move(connected).value();
+          }),
+          py::arg("rig_id") = "rig-1", py::arg("domain") = 0, py::kw_only(),
+          py::arg("strength") = 0, py::arg("timeout") = 10.0, py::arg("dds_config") = "",
+          py::arg("security") = "")
+      .def_property_readonly("rig_id", [](const Rig& r) { return r.options().rig_id; })
+      .def_property_readonly("domain", [](const Rig& r) { return r.options().domain; })
+      .def_property_readonly("strength", [](const Rig& r) { return r.options().strength; })
+      .def_property_readonly("timeout", [](const Rig& r) { return r.options().timeout_s; })
+      .def_property_readonly("security", [](const Rig& r) { return r.options().security_dir; })
+      .def_property_readonly("lockstep", &Rig::lockstep)
+      .def_property_readonly("lost", [](const Rig& r) { return r.lost(); })
+      .def_property_readonly("closed", &Rig::closed)
+      .def("close", &Rig::Close, py::call_guard<py::gil_scoped_release>(),
+           "Leave the rig: commands written are acknowledged first (up to the timeout, 10 s at "
+           "most), then the writers are deleted, so another controller takes over at once.");
+  BindRigReads(rig);
+  BindRigCommands(rig);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_mpdrig, m) {
+  m.doc() = "Binding of the mpdrig client library (clients/client/rig_client.h); use `mpdrig`.";
+  BindErrors(m);
+  BindSensors(m);
+  BindEstimate(m);
+  BindProfile(m);
+  BindStatus(m);
+  BindRig(m);
 }
