@@ -209,6 +209,53 @@ std::optional<std::string> ActionOf(const std::string& action, mpdrig_ShadowActi
   return std::nullopt;
 }
 
+EstimateView EstimateFromWire(const mpdrig_RigEstimate& w) {
+  return EstimateView{w.sim_time_s,
+                      w.BHP_est_barg,
+                      w.piston_position_est_m,
+                      w.piston_velocity_est_mps,
+                      w.FT4_est_lpm,
+                      w.disturbance_frequency_hz,
+                      SourceName(w.frequency_source)};
+}
+
+StatusView StatusFromWire(const mpdrig_RigStatus& w) {
+  StatusView st;
+  st.clock = ClockName(w.clock);
+  st.t = w.sim_time_s;
+  st.rtf = w.real_time_factor;
+  st.deadline_misses = w.deadline_misses;
+  st.lost_periods = w.lost_periods;
+  st.longest_stall_s = w.longest_stall_s;
+  st.rejected = w.rejected_commands;
+  st.last_rejection = w.last_rejection;
+  st.noise = w.sensor_noise;
+  st.warnings = Strings(w.warnings);
+  st.effects = Strings(w.active_effects);
+  st.owners = Strings(w.actuator_owners);
+  return st;
+}
+
+ShadowStatusView ShadowStatusFromWire(const mpdrig_ShadowStatus& w) {
+  ShadowStatusView st;
+  st.t = w.sim_time_s;
+  st.window_s = w.window_s;
+  st.error = w.error;
+  st.channels = Strings(w.channels);
+  st.nrmse = Doubles(w.nrmse);
+  st.effects = Strings(w.active_effects);
+  st.parameters = Strings(w.parameters);
+  st.available = Strings(w.available_effects);
+  st.last_change = w.last_change;
+  st.last_change_t = w.last_change_sim_time_s;
+  st.error_at_change = w.error_at_last_change;
+  st.rejected = w.rejected_commands;
+  st.last_rejection = w.last_rejection;
+  st.last_command_id = w.last_command_id;
+  st.fit_state = w.fit_state;
+  return st;
+}
+
 }  // namespace
 
 struct RigFeed::DomainHolder {
@@ -386,13 +433,7 @@ void RigFeed::Drain() {
   count(s.estimate->TakeEach([&](const mpdrig_RigEstimate& w, const dds_sample_info_t&) {
     if (!Wanted(w.rig_id)) return;
     RigView& v = View(w.rig_id);
-    v.estimate = EstimateView{w.sim_time_s,
-                              w.BHP_est_barg,
-                              w.piston_position_est_m,
-                              w.piston_velocity_est_mps,
-                              w.FT4_est_lpm,
-                              w.disturbance_frequency_hz,
-                              SourceName(w.frequency_source)};
+    v.estimate = EstimateFromWire(w);
     v.fresh_estimate = true;
   }));
   count(s.profile->TakeEach([&](const mpdrig_PressureProfile& w, const dds_sample_info_t&) {
@@ -404,20 +445,7 @@ void RigFeed::Drain() {
   }));
   count(s.status->TakeEach([&](const mpdrig_RigStatus& w, const dds_sample_info_t&) {
     if (!Wanted(w.rig_id)) return;
-    StatusView st;
-    st.clock = ClockName(w.clock);
-    st.t = w.sim_time_s;
-    st.rtf = w.real_time_factor;
-    st.deadline_misses = w.deadline_misses;
-    st.lost_periods = w.lost_periods;
-    st.longest_stall_s = w.longest_stall_s;
-    st.rejected = w.rejected_commands;
-    st.last_rejection = w.last_rejection;
-    st.noise = w.sensor_noise;
-    st.warnings = Strings(w.warnings);
-    st.effects = Strings(w.active_effects);
-    st.owners = Strings(w.actuator_owners);
-    View(w.rig_id).status = std::move(st);
+    View(w.rig_id).status = StatusFromWire(w);
   }));
   count(s.shadow_sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
     if (!Wanted(w.rig_id)) return;
@@ -428,30 +456,18 @@ void RigFeed::Drain() {
   }));
   count(s.shadow_status->TakeEach([&](const mpdrig_ShadowStatus& w, const dds_sample_info_t&) {
     if (!Wanted(w.rig_id)) return;
-    ShadowStatusView st;
-    st.t = w.sim_time_s;
-    st.window_s = w.window_s;
-    st.error = w.error;
-    st.channels = Strings(w.channels);
-    st.nrmse = Doubles(w.nrmse);
-    st.effects = Strings(w.active_effects);
-    st.parameters = Strings(w.parameters);
-    st.available = Strings(w.available_effects);
-    st.last_change = w.last_change;
-    st.last_change_t = w.last_change_sim_time_s;
-    st.error_at_change = w.error_at_last_change;
-    st.rejected = w.rejected_commands;
-    st.last_rejection = w.last_rejection;
-    st.last_command_id = w.last_command_id;
-    st.fit_state = w.fit_state;
     RigView& v = View(w.rig_id);
-    v.shadow_status = std::move(st);
+    v.shadow_status = ShadowStatusFromWire(w);
     v.fresh_error = true;
   }));
   health_.samples_taken += taken;
   ++health_.frames;
 
-  // One history point per series per frame: the newest sample (the thinning).
+  AddHistoryPoints();
+}
+
+// One history point per series per frame: the newest sample (the thinning).
+void RigFeed::AddHistoryPoints() {
   for (auto& [id, v] : views_) {
     if (v->fresh_sensors) {
       const SensorsView& x = *v->sensors;

@@ -80,7 +80,8 @@ class RigFeed {
  private:
   explicit RigFeed(const FeedOptions& options);
   void Run();
-  void Drain();  // takes every topic into the views (mu_ held)
+  void Drain();             // takes every topic into the views (mu_ held)
+  void AddHistoryPoints();  // after Drain: each fresh series its newest point (mu_ held)
   bool Wanted(const char* rig_id) const;
   static void AppendAlignedProfile(std::string* out, const RigView& view);
   RigView& View(const std::string& rig_id);
