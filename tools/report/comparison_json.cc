@@ -74,27 +74,9 @@ class JsonWriter {
 
 double PhaseDeg(std::complex<double> value) { return std::arg(value) * 180.0 / std::numbers::pi; }
 
-}  // namespace
-
-std::string ComparisonJson(const Comparison& comparison, const ReportContext& context) {
-  JsonWriter json;
-  json.BeginObject();
-  json.Key("format").Text("mpdrig-compare");
-  json.Key("version").Integer(1);
-  json.Key("log").Text(context.log_path);
-  json.Key("model").Text(context.model_description);
-  json.Key("config").Text(context.config);
-  json.Key("samples").Integer(comparison.samples);
-  json.Key("duration_s").Number(comparison.duration_s);
-  json.Key("sample_interval_s").Number(comparison.sample_interval_s);
-  json.Key("uniform_sampling").Bool(comparison.uniform_sampling);
-  json.Key("error").Number(comparison.error);
-  json.Key("dominant_freqs_hz").Numbers(comparison.dominant_freqs_hz);
-  json.Key("max_lag_s").Number(comparison.max_lag_s);
-  json.Key("spectrum_segments").Integer(comparison.spectrum_segments);
-  json.Key("spectrum_segment_s").Number(comparison.spectrum_segment_s);
-  // How the inputs reached the model (log_inputs.h): reconstructed under their noise, in lab
-  // units, or as measured; and whether the replay started after a warm-up.
+// How the inputs reached the model (log_inputs.h): reconstructed under their noise, in lab
+// units, or as measured; and whether the replay started after a warm-up.
+void WriteInputs(const Comparison& comparison, JsonWriter& json) {
   json.Key("inputs").BeginObject();
   json.Key("reconstructed").Bool(comparison.input_reconstruction.has_value());
   if (const auto& plan = comparison.input_reconstruction) {
@@ -140,65 +122,73 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
     json.Key("warmup_s").Number(comparison.warmup->duration_s);
   }
   json.EndObject();
-  if (comparison.first_range_event) {
-    json.Key("warning").Text(comparison.first_range_event->Describe());
-  }
+}
 
-  json.Key("channels").BeginObject();
-  for (const ChannelMetrics& channel : comparison.channels) {
-    const riglog::Unit unit = channel.unit;
-    json.Key(riglog::ChannelName(channel.channel)).BeginObject();
-    json.Key("unit").Text(riglog::UnitSuffix(unit));
-    json.Key("difference_unit").Text(DifferenceUnit(unit));
-    json.Key("samples").Integer(channel.samples);
-    json.Key("fit_percent").Number(channel.fit_percent);
-    json.Key("nrmse").Number(channel.nrmse);
-    json.Key("rms").Number(LabDifference(unit, channel.rms_si));
-    json.Key("bias").Number(LabDifference(unit, channel.bias_si));
-    json.Key("lag_s").Number(channel.lag_s);
-    json.Key("lag_correlation").Number(channel.lag_correlation);
-    json.Key("measured_mean")
-        .Number(LabValue(unit, channel.measured_mean_si, context.atmospheric_pressure_pa));
-    json.Key("measured_std").Number(LabDifference(unit, channel.measured_std_si));
-    json.Key("bands").BeginArray();
-    for (const BandMetrics& band : channel.bands) {
-      json.BeginObject();
-      json.Key("freq_hz").Number(band.freq_hz);
-      json.Key("low_hz").Number(band.low_hz);
-      json.Key("high_hz").Number(band.high_hz);
-      json.Key("harmonic").Integer(band.harmonic);
-      json.Key("measured_amplitude").Number(LabDifference(unit, band.measured_amplitude));
-      json.Key("model_amplitude").Number(LabDifference(unit, band.model_amplitude));
-      json.Key("magnitude_ratio").Number(band.magnitude_ratio);
-      json.Key("phase_diff_deg").Number(band.phase_diff_deg);
-      json.Key("band_nrmse").Number(band.band_nrmse);
-      json.Key("error_amplitude").Number(LabDifference(unit, band.error_amplitude));
-      json.EndObject();
-    }
-    json.EndArray();
-    const ResidualAnalysis& residual = channel.residual;
-    json.Key("residual").BeginObject();
-    json.Key("lags").Integer(residual.lags);
-    json.Key("confidence").Number(residual.confidence);
-    json.Key("autocorrelation").Numbers(residual.autocorrelation);
-    json.Key("max_abs_autocorrelation").Number(residual.max_abs_autocorrelation);
-    json.Key("white").Bool(residual.white);
-    json.Key("independent_of_inputs").Bool(residual.independent_of_inputs);
-    json.Key("cross").BeginObject();
-    for (const Correlation& cross : residual.cross) {
-      json.Key(cross.input).BeginObject();
-      json.Key("constant_input").Bool(cross.constant_input);
-      json.Key("max_abs").Number(cross.max_abs);
-      json.Key("independent").Bool(cross.independent);
-      json.Key("r").Numbers(cross.r);
-      json.EndObject();
-    }
+// The error at the bands of the dominant frequencies and their harmonics.
+void WriteBands(const ChannelMetrics& channel, JsonWriter& json) {
+  const riglog::Unit unit = channel.unit;
+  json.Key("bands").BeginArray();
+  for (const BandMetrics& band : channel.bands) {
+    json.BeginObject();
+    json.Key("freq_hz").Number(band.freq_hz);
+    json.Key("low_hz").Number(band.low_hz);
+    json.Key("high_hz").Number(band.high_hz);
+    json.Key("harmonic").Integer(band.harmonic);
+    json.Key("measured_amplitude").Number(LabDifference(unit, band.measured_amplitude));
+    json.Key("model_amplitude").Number(LabDifference(unit, band.model_amplitude));
+    json.Key("magnitude_ratio").Number(band.magnitude_ratio);
+    json.Key("phase_diff_deg").Number(band.phase_diff_deg);
+    json.Key("band_nrmse").Number(band.band_nrmse);
+    json.Key("error_amplitude").Number(LabDifference(unit, band.error_amplitude));
     json.EndObject();
-    json.EndObject();
+  }
+  json.EndArray();
+}
+
+// Is the residual white, and independent of the inputs?
+void WriteResidual(const ResidualAnalysis& residual, JsonWriter& json) {
+  json.Key("residual").BeginObject();
+  json.Key("lags").Integer(residual.lags);
+  json.Key("confidence").Number(residual.confidence);
+  json.Key("autocorrelation").Numbers(residual.autocorrelation);
+  json.Key("max_abs_autocorrelation").Number(residual.max_abs_autocorrelation);
+  json.Key("white").Bool(residual.white);
+  json.Key("independent_of_inputs").Bool(residual.independent_of_inputs);
+  json.Key("cross").BeginObject();
+  for (const Correlation& cross : residual.cross) {
+    json.Key(cross.input).BeginObject();
+    json.Key("constant_input").Bool(cross.constant_input);
+    json.Key("max_abs").Number(cross.max_abs);
+    json.Key("independent").Bool(cross.independent);
+    json.Key("r").Numbers(cross.r);
     json.EndObject();
   }
   json.EndObject();
+  json.EndObject();
+}
 
+void WriteChannel(const ChannelMetrics& channel, const ReportContext& context, JsonWriter& json) {
+  const riglog::Unit unit = channel.unit;
+  json.Key(riglog::ChannelName(channel.channel)).BeginObject();
+  json.Key("unit").Text(riglog::UnitSuffix(unit));
+  json.Key("difference_unit").Text(DifferenceUnit(unit));
+  json.Key("samples").Integer(channel.samples);
+  json.Key("fit_percent").Number(channel.fit_percent);
+  json.Key("nrmse").Number(channel.nrmse);
+  json.Key("rms").Number(LabDifference(unit, channel.rms_si));
+  json.Key("bias").Number(LabDifference(unit, channel.bias_si));
+  json.Key("lag_s").Number(channel.lag_s);
+  json.Key("lag_correlation").Number(channel.lag_correlation);
+  json.Key("measured_mean")
+      .Number(LabValue(unit, channel.measured_mean_si, context.atmospheric_pressure_pa));
+  json.Key("measured_std").Number(LabDifference(unit, channel.measured_std_si));
+  WriteBands(channel, json);
+  WriteResidual(channel.residual, json);
+  json.EndObject();
+}
+
+// The error along the pipe, one point per pressure transmitter.
+void WriteProfile(const Comparison& comparison, JsonWriter& json) {
   json.Key("profile").BeginArray();
   for (const ProfilePoint& point : comparison.profile) {
     const ChannelMetrics* channel = comparison.Find(point.channel);
@@ -214,7 +204,10 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
     json.EndObject();
   }
   json.EndArray();
+}
 
+// Piston position -> each output, measured and modelled, at the log's dominant frequencies.
+void WriteTransferFunctions(const Comparison& comparison, JsonWriter& json) {
   json.Key("transfer_functions").BeginObject();
   for (const TransferFunction& tf : comparison.transfer_functions) {
     const ChannelMetrics* channel = comparison.Find(tf.output);
@@ -236,6 +229,38 @@ std::string ComparisonJson(const Comparison& comparison, const ReportContext& co
     json.EndObject();
   }
   json.EndObject();
+}
+
+}  // namespace
+
+std::string ComparisonJson(const Comparison& comparison, const ReportContext& context) {
+  JsonWriter json;
+  json.BeginObject();
+  json.Key("format").Text("mpdrig-compare");
+  json.Key("version").Integer(1);
+  json.Key("log").Text(context.log_path);
+  json.Key("model").Text(context.model_description);
+  json.Key("config").Text(context.config);
+  json.Key("samples").Integer(comparison.samples);
+  json.Key("duration_s").Number(comparison.duration_s);
+  json.Key("sample_interval_s").Number(comparison.sample_interval_s);
+  json.Key("uniform_sampling").Bool(comparison.uniform_sampling);
+  json.Key("error").Number(comparison.error);
+  json.Key("dominant_freqs_hz").Numbers(comparison.dominant_freqs_hz);
+  json.Key("max_lag_s").Number(comparison.max_lag_s);
+  json.Key("spectrum_segments").Integer(comparison.spectrum_segments);
+  json.Key("spectrum_segment_s").Number(comparison.spectrum_segment_s);
+  WriteInputs(comparison, json);
+  if (comparison.first_range_event) {
+    json.Key("warning").Text(comparison.first_range_event->Describe());
+  }
+
+  json.Key("channels").BeginObject();
+  for (const ChannelMetrics& channel : comparison.channels) WriteChannel(channel, context, json);
+  json.EndObject();
+
+  WriteProfile(comparison, json);
+  WriteTransferFunctions(comparison, json);
   json.EndObject();
   return json.str() + "\n";
 }
