@@ -134,15 +134,12 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   return out.str();
 }
 
-std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
-  std::ostringstream html;
+namespace {
+
+// The page's head, the log and the verdict: the missing effect, or none.
+void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::string& log_path,
+                  std::ostringstream& html) {
   const CandidateResult& b = d.baseline;
-  const CandidateResult* winner = nullptr;
-  if (d.verdict) {
-    for (const CandidateResult& c : d.candidates) {
-      if (c.effect == *d.verdict) winner = &c;
-    }
-  }
   html << "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>mpdrig diagnose: "
        << EscapeHtml(log_path)
        << "</title><style>body{font-family:sans-serif;max-width:1100px;margin:1em auto;color:#222}"
@@ -170,44 +167,50 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
             "beyond noise and extra freedom. Baseline error "
          << FormatValue(100.0 * b.error) << " %.</p>\n";
   }
+}
 
-  // Per channel: error before and after, side by side.
+// Per channel: the error before and after adding the verdict, side by side.
+void WriteChannelErrors(const Diagnosis& d, const CandidateResult* winner,
+                        std::ostringstream& html) {
+  const CandidateResult& b = d.baseline;
   html << "<h2>Error per channel, before and after"
        << (winner ? " adding " + EscapeHtml(winner->effect) : std::string()) << "</h2>\n";
-  {
-    std::vector<double> x, before, after;
-    std::string names;
-    for (std::size_t i = 0; i < b.channel_errors.size(); ++i) {
-      x.push_back(static_cast<double>(i));
-      before.push_back(100.0 * b.channel_errors[i].second);
-      after.push_back(winner ? 100.0 * ErrorOf(*winner, b.channel_errors[i].first) : std::nan(""));
-    }
-    SvgPlot plot(1000, 260, "channel (table below)", "NRMSE on scoring data [%]");
-    plot.Stems(x, before, "#c33");
-    plot.Legend("fitted base model", "#c33");
-    if (winner) {
-      std::vector<double> shifted;
-      for (double v : x) shifted.push_back(v + 0.25);
-      plot.Stems(shifted, after, "#080");
-      plot.Legend("with " + winner->effect, "#080");
-    }
-    plot.HorizontalLine(100.0 * d.noise_floor, "#888");
-    html << plot.Render() << "\n<table><tr><th class=\"l\">channel</th><th>base model [%]</th>"
-         << (winner ? "<th>with " + EscapeHtml(winner->effect) + " [%]</th><th>change</th>" : "")
-         << "</tr>\n";
-    for (const auto& [channel, error] : b.channel_errors) {
-      html << "<tr><td class=\"l\">" << riglog::ChannelName(channel) << "</td><td>"
-           << FormatValue(100.0 * error) << "</td>";
-      if (winner) {
-        const double e = ErrorOf(*winner, channel);
-        html << "<td>" << FormatValue(100.0 * e) << "</td><td>"
-             << FormatValue(100.0 * (e - error) / error, 3) << " %</td>";
-      }
-      html << "</tr>\n";
-    }
-    html << "</table>\n";
+  std::vector<double> x, before, after;
+  std::string names;
+  for (std::size_t i = 0; i < b.channel_errors.size(); ++i) {
+    x.push_back(static_cast<double>(i));
+    before.push_back(100.0 * b.channel_errors[i].second);
+    after.push_back(winner ? 100.0 * ErrorOf(*winner, b.channel_errors[i].first) : std::nan(""));
   }
+  SvgPlot plot(1000, 260, "channel (table below)", "NRMSE on scoring data [%]");
+  plot.Stems(x, before, "#c33");
+  plot.Legend("fitted base model", "#c33");
+  if (winner) {
+    std::vector<double> shifted;
+    for (double v : x) shifted.push_back(v + 0.25);
+    plot.Stems(shifted, after, "#080");
+    plot.Legend("with " + winner->effect, "#080");
+  }
+  plot.HorizontalLine(100.0 * d.noise_floor, "#888");
+  html << plot.Render() << "\n<table><tr><th class=\"l\">channel</th><th>base model [%]</th>"
+       << (winner ? "<th>with " + EscapeHtml(winner->effect) + " [%]</th><th>change</th>" : "")
+       << "</tr>\n";
+  for (const auto& [channel, error] : b.channel_errors) {
+    html << "<tr><td class=\"l\">" << riglog::ChannelName(channel) << "</td><td>"
+         << FormatValue(100.0 * error) << "</td>";
+    if (winner) {
+      const double e = ErrorOf(*winner, channel);
+      html << "<td>" << FormatValue(100.0 * e) << "</td><td>"
+           << FormatValue(100.0 * (e - error) / error, 3) << " %</td>";
+    }
+    html << "</tr>\n";
+  }
+  html << "</table>\n";
+}
 
+// Every candidate, best first, with what it explains.
+void WriteCandidates(const Diagnosis& d, std::ostringstream& html) {
+  const CandidateResult& b = d.baseline;
   html << "<h2>Candidates, best first</h2>\n<table><tr><th>#</th><th class=\"l\">effect</th>"
           "<th>error [%]</th><th>penalised [%]</th><th>improvement</th><th>significant</th>"
           "<th class=\"l\">fitted effect parameters</th><th class=\"l\">what it "
@@ -234,8 +237,10 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
          << "</td></tr>\n";
   }
   html << "</table>\n";
+}
 
-  // Where the fitted base model fails.
+// Where the fitted base model fails: along the pipe and per channel.
+void WriteBaseModelFailures(const Diagnosis& d, std::ostringstream& html) {
   const Comparison& cmp = d.baseline_comparison;
   html << "<h2>Where the fitted base model fails</h2>\n";
   if (!cmp.profile.empty()) {
@@ -260,7 +265,24 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
          << "</td><td class=\"l\">" << bands << "</td><td>" << (m.residual.white ? "yes" : "no")
          << "</td><td>" << (m.residual.independent_of_inputs ? "yes" : "no") << "</td></tr>\n";
   }
-  html << "</table>\n<p>Made by <code>mpdrig diagnose</code>. Ranking: compare's error on the "
+  html << "</table>\n";
+}
+
+}  // namespace
+
+std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
+  std::ostringstream html;
+  const CandidateResult* winner = nullptr;
+  if (d.verdict) {
+    for (const CandidateResult& c : d.candidates) {
+      if (c.effect == *d.verdict) winner = &c;
+    }
+  }
+  WriteVerdict(d, winner, log_path, html);
+  WriteChannelErrors(d, winner, html);
+  WriteCandidates(d, html);
+  WriteBaseModelFailures(d, html);
+  html << "<p>Made by <code>mpdrig diagnose</code>. Ranking: compare's error on the "
           "scoring data times (1 + 1% per extra parameter); significant: better than the base "
           "model by more than 5% and more than three standard errors over 8 blocks of the "
           "scoring data.</p>\n</body></html>\n";
