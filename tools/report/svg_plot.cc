@@ -153,6 +153,36 @@ double SvgPlot::Ty(double y) const {
 }
 
 std::string SvgPlot::Render() const {
+  FixRanges();
+  std::string svg = RenderFrameAndAxes();
+  for (const Item& item : items_) {
+    if (item.kind == "line") {
+      svg += RenderLine(item);
+    } else if (item.kind == "band") {
+      svg += RenderBand(item);
+    } else if (item.kind == "markers") {
+      svg += RenderMarkers(item);
+    } else if (item.kind == "hline") {
+      const double py = Ty(item.y[0]);
+      svg += "<line x1=\"" + std::to_string(kLeftPx) + "\" y1=\"" + Num(py) + "\" x2=\"" +
+             Num(kLeftPx + PlotWidth()) + "\" y2=\"" + Num(py) + "\" stroke=\"" + item.color +
+             "\" stroke-dasharray=\"" + item.dash + "\"/>";
+    } else if (item.kind == "stems") {
+      svg += RenderStems(item);
+    }
+  }
+  svg += "</svg>";
+  svg += RenderLegend();
+  svg += "</svg>";
+  return svg;
+}
+
+double SvgPlot::PlotWidth() const { return width_ - kLeftPx - kRightPx; }
+double SvgPlot::PlotHeight() const { return height_ - kTopPx - kBottomPx; }
+
+// The drawn ranges from the data's: a default where there is none, a width where it is a point,
+// and 5 % padding in y unless SetYRange fixed it.
+void SvgPlot::FixRanges() const {
   rx_lo_ = std::isfinite(x_lo_) ? x_lo_ : 0.0;
   rx_hi_ = std::isfinite(x_hi_) ? x_hi_ : 1.0;
   ry_lo_ = std::isfinite(y_lo_) ? y_lo_ : 0.0;
@@ -165,7 +195,12 @@ std::string SvgPlot::Render() const {
     const double pad = 0.05 * (ry_hi_ - ry_lo_);
     ry_lo_ -= pad, ry_hi_ += pad;
   }
-  const double plot_w = width_ - kLeftPx - kRightPx, plot_h = height_ - kTopPx - kBottomPx;
+}
+
+// The outer SVG, the plot's frame, grid, ticks and axis labels, and the opening of the clipped
+// inner SVG the items are drawn in.
+std::string SvgPlot::RenderFrameAndAxes() const {
+  const double plot_w = PlotWidth(), plot_h = PlotHeight();
   // Inline SVG in HTML5 needs no namespace attribute (and the report carries no URL at all).
   std::string svg = "<svg width=\"" + std::to_string(width_) + "\" height=\"" +
                     std::to_string(height_) + "\" viewBox=\"0 0 " + std::to_string(width_) + " " +
@@ -173,7 +208,6 @@ std::string SvgPlot::Render() const {
   svg += "<rect x=\"" + std::to_string(kLeftPx) + "\" y=\"" + std::to_string(kTopPx) +
          "\" width=\"" + Num(plot_w) + "\" height=\"" + Num(plot_h) +
          "\" fill=\"#fff\" stroke=\"#999\"/>";
-  // Ticks and grid.
   const auto x_ticks = log_x_ ? LogTicks(rx_lo_, rx_hi_) : LinearTicks(rx_lo_, rx_hi_, 8);
   const auto y_ticks = log_y_ ? LogTicks(ry_lo_, ry_hi_) : LinearTicks(ry_lo_, ry_hi_, 5);
   for (double t : x_ticks) {
@@ -199,67 +233,82 @@ std::string SvgPlot::Render() const {
          "\" width=\"" + Num(plot_w) + "\" height=\"" + Num(plot_h) + "\" viewBox=\"" +
          std::to_string(kLeftPx) + " " + std::to_string(kTopPx) + " " + Num(plot_w) + " " +
          Num(plot_h) + "\" overflow=\"hidden\">";
-  auto finite = [&](double x, double y) {
-    return std::isfinite(x) && std::isfinite(y) && (!log_x_ || x > 0) && (!log_y_ || y > 0);
-  };
-  for (const Item& item : items_) {
-    if (item.kind == "line") {
-      std::string path;
-      bool pen_down = false;
-      for (std::size_t i = 0; i < item.x.size(); ++i) {
-        if (!finite(item.x[i], item.y[i])) {
-          pen_down = false;
-          continue;
-        }
-        path += (pen_down ? "L" : "M") + Num(Tx(item.x[i])) + " " + Num(Ty(item.y[i]));
-        pen_down = true;
-      }
-      svg += "<path d=\"" + path + "\" fill=\"none\" stroke=\"" + item.color +
-             "\" stroke-width=\"" + Num(item.width) + "\"" +
-             (item.dash.empty() ? "" : " stroke-dasharray=\"" + item.dash + "\"") + "/>";
-    } else if (item.kind == "band") {
-      // One polygon per run of finite columns: along the maxima, back along the minima.
-      std::size_t i = 0;
-      while (i < item.x.size()) {
-        while (i < item.x.size() &&
-               !(finite(item.x[i], item.y[i]) && finite(item.x[i], item.y2[i])))
-          ++i;
-        std::size_t j = i;
-        while (j < item.x.size() && finite(item.x[j], item.y[j]) && finite(item.x[j], item.y2[j]))
-          ++j;
-        if (j > i) {
-          std::string points;
-          for (std::size_t k = i; k < j; ++k)
-            points += Num(Tx(item.x[k])) + "," + Num(Ty(item.y2[k])) + " ";
-          for (std::size_t k = j; k-- > i;)
-            points += Num(Tx(item.x[k])) + "," + Num(Ty(item.y[k])) + " ";
-          svg += "<polygon points=\"" + points + "\" fill=\"" + item.color + "\" stroke=\"" +
-                 item.color + "\" stroke-width=\"0.8\" fill-opacity=\"" + Num(item.width) +
-                 "\" stroke-opacity=\"" + Num(std::min(1.0, item.width + 0.3)) + "\"/>";
-        }
-        i = j;
-      }
-    } else if (item.kind == "markers") {
-      for (std::size_t i = 0; i < item.x.size(); ++i) {
-        if (!finite(item.x[i], item.y[i])) continue;
-        svg += "<circle cx=\"" + Num(Tx(item.x[i])) + "\" cy=\"" + Num(Ty(item.y[i])) + "\" r=\"" +
-               Num(item.width) + "\" fill=\"" + item.color + "\"/>";
-      }
-    } else if (item.kind == "hline") {
-      const double py = Ty(item.y[0]);
-      svg += "<line x1=\"" + std::to_string(kLeftPx) + "\" y1=\"" + Num(py) + "\" x2=\"" +
-             Num(kLeftPx + plot_w) + "\" y2=\"" + Num(py) + "\" stroke=\"" + item.color +
-             "\" stroke-dasharray=\"" + item.dash + "\"/>";
-    } else if (item.kind == "stems") {
-      for (std::size_t i = 0; i < item.x.size(); ++i) {
-        if (!finite(item.x[i], item.y[i])) continue;
-        svg += "<line x1=\"" + Num(Tx(item.x[i])) + "\" y1=\"" + Num(Ty(0.0)) + "\" x2=\"" +
-               Num(Tx(item.x[i])) + "\" y2=\"" + Num(Ty(item.y[i])) + "\" stroke=\"" + item.color +
-               "\" stroke-width=\"" + Num(item.width) + "\"/>";
-      }
+  return svg;
+}
+
+// A point that can be drawn: finite, and positive on a log axis.
+bool SvgPlot::Drawable(double x, double y) const {
+  return std::isfinite(x) && std::isfinite(y) && (!log_x_ || x > 0) && (!log_y_ || y > 0);
+}
+
+// A polyline that lifts the pen over points it cannot draw.
+std::string SvgPlot::RenderLine(const Item& item) const {
+  std::string path;
+  bool pen_down = false;
+  for (std::size_t i = 0; i < item.x.size(); ++i) {
+    if (!Drawable(item.x[i], item.y[i])) {
+      pen_down = false;
+      continue;
     }
+    path += (pen_down ? "L" : "M") + Num(Tx(item.x[i])) + " " + Num(Ty(item.y[i]));
+    pen_down = true;
   }
-  svg += "</svg>";
+  return "<path d=\"" + path + "\" fill=\"none\" stroke=\"" + item.color + "\" stroke-width=\"" +
+         Num(item.width) + "\"" +
+         (item.dash.empty() ? "" : " stroke-dasharray=\"" + item.dash + "\"") + "/>";
+}
+
+// One polygon per run of drawable columns: along the maxima, back along the minima.
+std::string SvgPlot::RenderBand(const Item& item) const {
+  const auto drawable = [&](std::size_t k) {
+    return Drawable(item.x[k], item.y[k]) && Drawable(item.x[k], item.y2[k]);
+  };
+  std::string svg;
+  std::size_t i = 0;
+  while (i < item.x.size()) {
+    while (i < item.x.size() && !drawable(i)) ++i;
+    std::size_t j = i;
+    while (j < item.x.size() && drawable(j)) ++j;
+    if (j > i) {
+      std::string points;
+      for (std::size_t k = i; k < j; ++k) {
+        points += Num(Tx(item.x[k])) + "," + Num(Ty(item.y2[k])) + " ";
+      }
+      for (std::size_t k = j; k-- > i;) {
+        points += Num(Tx(item.x[k])) + "," + Num(Ty(item.y[k])) + " ";
+      }
+      svg += "<polygon points=\"" + points + "\" fill=\"" + item.color + "\" stroke=\"" +
+             item.color + "\" stroke-width=\"0.8\" fill-opacity=\"" + Num(item.width) +
+             "\" stroke-opacity=\"" + Num(std::min(1.0, item.width + 0.3)) + "\"/>";
+    }
+    i = j;
+  }
+  return svg;
+}
+
+std::string SvgPlot::RenderMarkers(const Item& item) const {
+  std::string svg;
+  for (std::size_t i = 0; i < item.x.size(); ++i) {
+    if (!Drawable(item.x[i], item.y[i])) continue;
+    svg += "<circle cx=\"" + Num(Tx(item.x[i])) + "\" cy=\"" + Num(Ty(item.y[i])) + "\" r=\"" +
+           Num(item.width) + "\" fill=\"" + item.color + "\"/>";
+  }
+  return svg;
+}
+
+std::string SvgPlot::RenderStems(const Item& item) const {
+  std::string svg;
+  for (std::size_t i = 0; i < item.x.size(); ++i) {
+    if (!Drawable(item.x[i], item.y[i])) continue;
+    svg += "<line x1=\"" + Num(Tx(item.x[i])) + "\" y1=\"" + Num(Ty(0.0)) + "\" x2=\"" +
+           Num(Tx(item.x[i])) + "\" y2=\"" + Num(Ty(item.y[i])) + "\" stroke=\"" + item.color +
+           "\" stroke-width=\"" + Num(item.width) + "\"/>";
+  }
+  return svg;
+}
+
+std::string SvgPlot::RenderLegend() const {
+  std::string svg;
   double ly = kTopPx + 14;
   for (const auto& [label, color] : legend_) {
     const double lx = width_ - kRightPx - 210;
@@ -268,7 +317,6 @@ std::string SvgPlot::Render() const {
            "\" y=\"" + Num(ly) + "\">" + EscapeHtml(label) + "</text>";
     ly += 14;
   }
-  svg += "</svg>";
   return svg;
 }
 

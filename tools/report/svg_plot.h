@@ -43,6 +43,17 @@ class SvgPlot {
   double Tx(double x) const;
   double Ty(double y) const;
   void Extend(const std::vector<double>& x, const std::vector<double>& y);
+  // Render's parts.
+  double PlotWidth() const;
+  double PlotHeight() const;
+  void FixRanges() const;
+  std::string RenderFrameAndAxes() const;
+  bool Drawable(double x, double y) const;
+  std::string RenderLine(const Item& item) const;
+  std::string RenderBand(const Item& item) const;
+  std::string RenderMarkers(const Item& item) const;
+  std::string RenderStems(const Item& item) const;
+  std::string RenderLegend() const;
 
   int width_, height_;
   std::string x_label_, y_label_;
