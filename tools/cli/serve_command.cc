@@ -296,81 +296,107 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       "  mpdrig serve --clock lockstep --domain 7   # advances only on mpdrig_step_request\n"
       "Watch it from another terminal: rig_echo --rig rig-1 --samples 1000 --out -");
   args->model.AddAll(command);
-  command->add_option("--rig", args->rigs, "rig id to serve (repeatable)")->capture_default_str();
-  command->add_option("--rate-hz", args->rate_hz, "sensor rate [Hz]")
+  CLI::Option_group* g_rigs =
+      command->add_option_group("Rigs: what runs, how fast, from what start");
+  g_rigs->add_option("--rig", args->rigs, "rig id to serve (repeatable)")->capture_default_str();
+  g_rigs->add_option("--rate-hz", args->rate_hz, "sensor rate [Hz]")
       ->check(CLI::Range(0.1, 10000.0))
       ->capture_default_str();
-  command->add_option("--clock", args->clock, "realtime, fast or lockstep")
+  g_rigs->add_option("--clock", args->clock, "realtime, fast or lockstep")
       ->check(CLI::IsMember({"realtime", "fast", "lockstep"}))
       ->capture_default_str();
-  command->add_option("--domain", args->domain, "DDS domain id")
-      ->check(CLI::Range(0, 232))
-      ->capture_default_str();
-  command->add_option("--dds-config", args->dds_config,
-                      "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
-  command->add_option(
-      "--security", args->security,
-      "DDS Security: the service's identity directory of a class (deploy/security/make-class "
-      "OUT ...: OUT/service). Authenticated, access-controlled and encrypted; each rig's topics "
-      "in partition rig.<rig id>, so a student's permissions name the rigs they may command and "
-      "read. Refuses to start if the directory is not a valid identity, saying why");
-  command->add_option(
-      "--private-rigs", args->private_rigs,
-      "with --security: a student may ask (mpdrig_rig_request, in their rig's partition) for up "
-      "to this many private rigs NAME.1 .. NAME.N, made while the service runs (0: none)");
-  command->add_option("--max-rigs", args->max_rigs,
-                      "with --private-rigs: the most rigs the service runs in all (default: "
-                      "12000 / --rate-hz, about 20 % of one core as measured; at least the "
-                      "--rig count)");
-  command
+  g_rigs
       ->add_option("--duration", args->duration_s,
                    "stop after this much rig time [s] (realtime/fast; 0: run until Ctrl-C)")
       ->capture_default_str();
-  command->add_option("--choke-deg", args->choke_deg, "initial choke opening [deg]")
+  g_rigs->add_option("--choke-deg", args->choke_deg, "initial choke opening [deg]")
       ->capture_default_str();
-  command->add_option("--pump-lpm", args->pump_lpm, "initial pump flow [L/min]")
+  g_rigs->add_option("--pump-lpm", args->pump_lpm, "initial pump flow [L/min]")
       ->capture_default_str();
-  command->add_option("--outlet-barg", args->outlet_barg, "initial outlet pressure [barg]")
+  g_rigs->add_option("--outlet-barg", args->outlet_barg, "initial outlet pressure [barg]")
       ->capture_default_str();
-  command
-      ->add_option("--safe-choke-deg", args->safe_choke_deg,
-                   "choke opening when a rig's last choke controller goes [deg] (default: keep "
-                   "the last command); the piston always holds")
-      ->check(CLI::Range(0.0, 90.0));
-  command
+  g_rigs
       ->add_option("--heave-amp-m", args->heave_amp_m,
                    "start each rig's heave generator on a sine of this amplitude [m] (0: hold; "
                    "a piston command replaces it)")
       ->check(CLI::Range(-0.6, 0.6))
       ->capture_default_str();
-  command->add_option("--heave-hz", args->heave_hz, "frequency of that sine [Hz]")
+  g_rigs->add_option("--heave-hz", args->heave_hz, "frequency of that sine [Hz]")
       ->check(CLI::Range(0.0, 2.0))
       ->capture_default_str();
-  command->add_flag("--no-observer", args->no_observer,
-                    "do not run the observer (no mpdrig_estimate, profile without estimate)");
-  command
+  g_rigs
+      ->add_option("--safe-choke-deg", args->safe_choke_deg,
+                   "choke opening when a rig's last choke controller goes [deg] (default: keep "
+                   "the last command); the piston always holds")
+      ->check(CLI::Range(0.0, 90.0));
+  g_rigs
+      ->add_option("--sensor-noise", args->sensor_noise,
+                   "noise of the published sensor channels: none, lab (thesis Table 4.1.1) or "
+                   "a SPEC (docs/sensor-noise.md)")
+      ->capture_default_str();
+  g_rigs
+      ->add_option("--noise-seed", args->noise_seed,
+                   "seed of the sensor noise (each rig mixes in its id)")
+      ->capture_default_str();
+  g_rigs->add_option("--hidden-effect", args->hidden_effect,
+                     "a mystery rig: run with this effect (NAME[:k=v], or random: one from the "
+                     "catalogue at its defaults, chosen by --seed) and let the status say only "
+                     "\"a hidden effect is active\" (mpdrig reveal --seed S tells which)");
+  g_rigs->add_option("--seed", args->seed, "seed of --hidden-effect random")->capture_default_str();
+  g_rigs->add_option("--playback", args->playback,
+                     "publish this rig log (rig-log-format.md) as the rig's sensors, one row per "
+                     "period of the log's own sampling (median interval), paced by --clock; "
+                     "channels the log lacks go out as NaN (not measured); the observer runs on "
+                     "its topside channels; every command is refused (a recording). One --rig; "
+                     "--rate-hz, the initial commands and --sensor-noise do not apply");
+  g_rigs->add_flag("--loop", args->loop,
+                   "with --playback: start again after the last row, the clock running on");
+  CLI::Option_group* g_dds = command->add_option_group("DDS and a class");
+  g_dds->add_option("--domain", args->domain, "DDS domain id")
+      ->check(CLI::Range(0, 232))
+      ->capture_default_str();
+  g_dds->add_option("--dds-config", args->dds_config,
+                    "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
+  g_dds->add_option(
+      "--security", args->security,
+      "DDS Security: the service's identity directory of a class (deploy/security/make-class "
+      "OUT ...: OUT/service). Authenticated, access-controlled and encrypted; each rig's topics "
+      "in partition rig.<rig id>, so a student's permissions name the rigs they may command and "
+      "read. Refuses to start if the directory is not a valid identity, saying why");
+  g_dds->add_option(
+      "--private-rigs", args->private_rigs,
+      "with --security: a student may ask (mpdrig_rig_request, in their rig's partition) for up "
+      "to this many private rigs NAME.1 .. NAME.N, made while the service runs (0: none)");
+  g_dds->add_option("--max-rigs", args->max_rigs,
+                    "with --private-rigs: the most rigs the service runs in all (default: "
+                    "12000 / --rate-hz, about 20 % of one core as measured; at least the "
+                    "--rig count)");
+  CLI::Option_group* g_observer = command->add_option_group("Observer and pressure profile");
+  g_observer->add_flag("--no-observer", args->no_observer,
+                       "do not run the observer (no mpdrig_estimate, profile without estimate)");
+  g_observer
       ->add_option("--estimate-hz", args->estimate_hz,
                    "publish mpdrig_estimate at this rate [Hz] (0: with every sensor sample); "
                    "the observer steps on every sample regardless")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command
+  g_observer
       ->add_option("--profile-hz", args->profile_hz,
                    "publish mpdrig_pressure_profile at this rate [Hz] (0: off)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command
+  g_observer
       ->add_option("--profile-points", args->profile_points,
                    "points of the pressure profile, evenly from the inlet (0 m) to the choke")
       ->check(CLI::Range(2, 1000))
       ->capture_default_str();
-  command
+  g_observer
       ->add_option("--observer-start-hz", args->observer_start_hz,
                    "disturbance frequency the observer assumes until its tracker locks, when the "
                    "heave is not a commanded sine [Hz]")
       ->check(CLI::Range(0.02, 2.0))
       ->capture_default_str();
-  command
+  g_observer
       ->add_option("--observer-pole", args->observer_pole,
                    "place the poles of A - LC at RE +- IM i [rad/s] instead of choosing them from "
                    "the noise (thesis 10.3: -40 20). Default: the steady-state Kalman gain for "
@@ -378,7 +404,7 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
                    "the thesis's poles when it is negligible (docs/observer.md)")
       ->expected(2)
       ->each([args](const std::string&) { args->observer_pole_given = true; });
-  command
+  g_observer
       ->add_option("--observer-noise", args->observer_noise,
                    "the sensors' noise the observer designs for: C2_BAR FT1_LPM (standard "
                    "deviations per sample; lab: 0.024 0.07); the estimate from the start-up "
@@ -386,39 +412,16 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
       ->expected(2)
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command
+  g_observer
       ->add_option("--observer-noise-window-s", args->observer_noise_window_s,
                    "rig time over which the observer estimates the noise of C2 and FT1 at start "
                    "(0: only --observer-noise)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  command->add_flag(
+  g_observer->add_flag(
       "--observer-linear-friction", args->observer_linear_friction,
       "the thesis's observer: linear friction only in its pipe copy (default: also "
       "the quadratic friction f2 u|u|, about 50x smaller BHP error at 0.1 m strokes)");
-  command
-      ->add_option("--sensor-noise", args->sensor_noise,
-                   "noise of the published sensor channels: none, lab (thesis Table 4.1.1) or "
-                   "a SPEC (docs/sensor-noise.md)")
-      ->capture_default_str();
-  command
-      ->add_option("--noise-seed", args->noise_seed,
-                   "seed of the sensor noise (each rig mixes in its id)")
-      ->capture_default_str();
-  command->add_option("--playback", args->playback,
-                      "publish this rig log (rig-log-format.md) as the rig's sensors, one row per "
-                      "period of the log's own sampling (median interval), paced by --clock; "
-                      "channels the log lacks go out as NaN (not measured); the observer runs on "
-                      "its topside channels; every command is refused (a recording). One --rig; "
-                      "--rate-hz, the initial commands and --sensor-noise do not apply");
-  command->add_flag("--loop", args->loop,
-                    "with --playback: start again after the last row, the clock running on");
-  command->add_option("--hidden-effect", args->hidden_effect,
-                      "a mystery rig: run with this effect (NAME[:k=v], or random: one from the "
-                      "catalogue at its defaults, chosen by --seed) and let the status say only "
-                      "\"a hidden effect is active\" (mpdrig reveal --seed S tells which)");
-  command->add_option("--seed", args->seed, "seed of --hidden-effect random")
-      ->capture_default_str();
   command->callback([args, exit_code]() { *exit_code = RunServe(*args); });
 }
 
