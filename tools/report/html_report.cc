@@ -221,7 +221,9 @@ std::string InputsSection(const Comparison& comparison) {
   return html + "</div>";
 }
 
-std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& context) {
+// The channel's traces: measured and model as min/max bands per column, their difference, and a
+// close-up of every sample around the largest error.
+std::string ChannelTraces(const ChannelMetrics& channel, const ReportContext& context) {
   const std::string name = Name(channel.channel);
   const riglog::Unit unit = channel.unit;
   const std::string level_unit(riglog::UnitSuffix(unit));
@@ -234,8 +236,9 @@ std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& c
   }
   auto level = [&](const std::vector<double>& v) {
     std::vector<double> out(v.size());
-    for (std::size_t i = 0; i < v.size(); ++i)
+    for (std::size_t i = 0; i < v.size(); ++i) {
       out[i] = LabValue(unit, v[i], context.atmospheric_pressure_pa);
+    }
     return out;
   };
   auto difference = [&](const std::vector<double>& v) {
@@ -243,13 +246,6 @@ std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& c
     for (std::size_t i = 0; i < v.size(); ++i) out[i] = LabDifference(unit, v[i]);
     return out;
   };
-  std::string html = "<section id=\"ch-" + name + "\"><h3>" + name + "</h3><p>fit " +
-                     FormatValue(channel.fit_percent) + " %, NRMSE " + FormatValue(channel.nrmse) +
-                     ", RMS error " + FormatValue(LabDifference(unit, channel.rms_si)) + " " +
-                     diff_unit + ", bias " + FormatValue(LabDifference(unit, channel.bias_si)) +
-                     " " + diff_unit + ", lag " + FormatValue(channel.lag_s) + " s (correlation " +
-                     FormatValue(channel.lag_correlation, 3) + "), " +
-                     std::to_string(channel.samples) + " measured samples.</p>";
   SvgPlot traces(1160, 260, "time [s]", name + " [" + level_unit + "]");
   traces.Band(t, level(env.measured_min), level(env.measured_max), kMeasuredColor, 0.35);
   traces.Band(t, level(env.model_min), level(env.model_max), kModelColor, 0.35);
@@ -258,7 +254,7 @@ std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& c
   SvgPlot residual(1160, 170, "time [s]", "meas. - model [" + diff_unit + "]");
   residual.Band(t, difference(env.residual_min), difference(env.residual_max), kResidualColor, 0.5);
   residual.HorizontalLine(0.0, "#555");
-  html += traces.Render() + "<br>" + residual.Render();
+  std::string html = traces.Render() + "<br>" + residual.Render();
   if (channel.zoom.time_s.size() > 1) {
     SvgPlot zoom(1160, 220, "time [s]", name + " [" + level_unit + "]");
     zoom.Line(channel.zoom.time_s, level(channel.zoom.measured), kMeasuredColor, 1.5);
@@ -268,59 +264,81 @@ std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& c
     html +=
         "<p><small>Close-up: every sample around the largest error.</small></p>" + zoom.Render();
   }
+  return html;
+}
 
-  if (!channel.bands.empty()) {
-    html +=
-        "<table><tr><th>band [Hz]</th><th>harmonic</th><th>measured amplitude</th><th>model "
-        "amplitude</th><th>|model/meas.|</th><th>phase diff [deg]<br><small>&minus; model "
-        "lags</small></th><th>band NRMSE</th><th>error amplitude</th></tr>";
-    for (const BandMetrics& band : channel.bands) {
-      html += "<tr><td>" + FormatValue(band.freq_hz) + " (" + FormatValue(band.low_hz, 3) +
-              "&ndash;" + FormatValue(band.high_hz, 3) + ")</td><td>" +
-              (band.harmonic > 0 ? std::to_string(band.harmonic) + " f0" : "other peak") +
-              "</td><td>" + FormatValue(LabDifference(unit, band.measured_amplitude)) + " " +
-              diff_unit + "</td><td>" + FormatValue(LabDifference(unit, band.model_amplitude)) +
-              " " + diff_unit + "</td><td>" + FormatValue(band.magnitude_ratio) + "</td><td>" +
-              FormatValue(band.phase_diff_deg, 3) + "</td><td>" + FormatValue(band.band_nrmse) +
-              "</td><td>" + FormatValue(LabDifference(unit, band.error_amplitude)) + " " +
-              diff_unit + "</td></tr>";
-    }
-    html += "</table>";
+// The error at the dominant frequencies and their harmonics, one row per band.
+std::string BandTable(const ChannelMetrics& channel) {
+  if (channel.bands.empty()) return "";
+  const riglog::Unit unit = channel.unit;
+  const std::string diff_unit = DifferenceUnit(unit);
+  std::string html =
+      "<table><tr><th>band [Hz]</th><th>harmonic</th><th>measured amplitude</th><th>model "
+      "amplitude</th><th>|model/meas.|</th><th>phase diff [deg]<br><small>&minus; model "
+      "lags</small></th><th>band NRMSE</th><th>error amplitude</th></tr>";
+  for (const BandMetrics& band : channel.bands) {
+    html += "<tr><td>" + FormatValue(band.freq_hz) + " (" + FormatValue(band.low_hz, 3) +
+            "&ndash;" + FormatValue(band.high_hz, 3) + ")</td><td>" +
+            (band.harmonic > 0 ? std::to_string(band.harmonic) + " f0" : "other peak") +
+            "</td><td>" + FormatValue(LabDifference(unit, band.measured_amplitude)) + " " +
+            diff_unit + "</td><td>" + FormatValue(LabDifference(unit, band.model_amplitude)) + " " +
+            diff_unit + "</td><td>" + FormatValue(band.magnitude_ratio) + "</td><td>" +
+            FormatValue(band.phase_diff_deg, 3) + "</td><td>" + FormatValue(band.band_nrmse) +
+            "</td><td>" + FormatValue(LabDifference(unit, band.error_amplitude)) + " " + diff_unit +
+            "</td></tr>";
   }
+  return html + "</table>";
+}
 
-  // Residual analysis, as MATLAB's resid: correlations against the 99% band.
-  const ResidualAnalysis& analysis = channel.residual;
+// One correlation plot against the 99 % band.
+std::string CorrelationPlot(const std::vector<double>& lags, const std::vector<double>& r,
+                            const std::string& x_label, const std::string& y_label, double band) {
+  SvgPlot plot(380, 200, x_label, y_label);
+  plot.Stems(lags, r, kResidualColor);
+  plot.HorizontalLine(band, kBandColor);
+  plot.HorizontalLine(-band, kBandColor);
+  return plot.Render();
+}
+
+// Residual analysis, as MATLAB's resid: correlations against the 99% band.
+std::string ResidualDetails(const ResidualAnalysis& analysis) {
   const double band = analysis.confidence;
-  std::string plots;
-  {
-    std::vector<double> k, r;
-    for (std::size_t i = 1; i < analysis.autocorrelation.size(); ++i) {
-      k.push_back(static_cast<double>(i));
-      r.push_back(analysis.autocorrelation[i]);
-    }
-    SvgPlot auto_plot(380, 200, "lag [samples]", "residual autocorrelation");
-    auto_plot.Stems(k, r, kResidualColor);
-    auto_plot.HorizontalLine(band, kBandColor);
-    auto_plot.HorizontalLine(-band, kBandColor);
-    plots += auto_plot.Render();
+  std::vector<double> k, r;
+  for (std::size_t i = 1; i < analysis.autocorrelation.size(); ++i) {
+    k.push_back(static_cast<double>(i));
+    r.push_back(analysis.autocorrelation[i]);
   }
+  std::string plots = CorrelationPlot(k, r, "lag [samples]", "residual autocorrelation", band);
   for (const Correlation& cross : analysis.cross) {
     if (cross.constant_input) continue;
-    std::vector<double> k, r;
+    k.clear(), r.clear();
     for (std::size_t i = 0; i < cross.r.size(); ++i) {
       k.push_back(static_cast<double>(i) - analysis.lags);
       r.push_back(cross.r[i]);
     }
-    SvgPlot cross_plot(380, 200, "lag [samples] (+: input leads)", "corr. with " + cross.input);
-    cross_plot.Stems(k, r, kResidualColor);
-    cross_plot.HorizontalLine(band, kBandColor);
-    cross_plot.HorizontalLine(-band, kBandColor);
-    plots += cross_plot.Render();
+    plots +=
+        CorrelationPlot(k, r, "lag [samples] (+: input leads)", "corr. with " + cross.input, band);
   }
-  html += "<details><summary>Residual analysis: white " + YesNo(analysis.white) +
-          ", independent of the inputs " + YesNo(analysis.independent_of_inputs) +
-          " (99% band &plusmn;" + FormatValue(band, 3) + ")</summary><div class=row>" + plots +
-          "</div></details>";
+  return "<details><summary>Residual analysis: white " + YesNo(analysis.white) +
+         ", independent of the inputs " + YesNo(analysis.independent_of_inputs) +
+         " (99% band &plusmn;" + FormatValue(band, 3) + ")</summary><div class=row>" + plots +
+         "</div></details>";
+}
+
+std::string ChannelSection(const ChannelMetrics& channel, const ReportContext& context) {
+  const std::string name = Name(channel.channel);
+  const riglog::Unit unit = channel.unit;
+  const std::string diff_unit = DifferenceUnit(unit);
+  std::string html = "<section id=\"ch-" + name + "\"><h3>" + name + "</h3><p>fit " +
+                     FormatValue(channel.fit_percent) + " %, NRMSE " + FormatValue(channel.nrmse) +
+                     ", RMS error " + FormatValue(LabDifference(unit, channel.rms_si)) + " " +
+                     diff_unit + ", bias " + FormatValue(LabDifference(unit, channel.bias_si)) +
+                     " " + diff_unit + ", lag " + FormatValue(channel.lag_s) + " s (correlation " +
+                     FormatValue(channel.lag_correlation, 3) + "), " +
+                     std::to_string(channel.samples) + " measured samples.</p>";
+  html += ChannelTraces(channel, context);
+  html += BandTable(channel);
+  html += ResidualDetails(channel.residual);
   return html + "</section>";
 }
 

@@ -21,7 +21,11 @@ std::vector<double> LinearTicks(double lo, double hi, int target) {
     step = m * magnitude;
     if (step >= raw) break;
   }
-  for (double t = std::ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step) {
+  // At most a few times the target: a step below the values' resolution (t + step == t) would
+  // otherwise never end. SvgPlot::FixRanges keeps ranges above it; this is the backstop.
+  const std::size_t most = 4 * static_cast<std::size_t>(std::max(target, 1)) + 1;
+  for (double t = std::ceil(lo / step) * step; t <= hi + 1e-9 * step && ticks.size() < most;
+       t += step) {
     ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
   }
   return ticks;
@@ -45,6 +49,12 @@ std::string Num(double v) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.1f", v);
   return buffer;
+}
+
+// A range no wider than the rounding of its values (a constant that reads 5 and 5 + 1 ulp): a
+// point, as far as axis labels of a few digits can tell.
+bool WithinRounding(double lo, double hi) {
+  return !(hi - lo > 1e-9 * std::max(std::abs(lo), std::abs(hi)));
 }
 
 }  // namespace
@@ -180,13 +190,15 @@ std::string SvgPlot::Render() const {
 double SvgPlot::PlotWidth() const { return width_ - kLeftPx - kRightPx; }
 double SvgPlot::PlotHeight() const { return height_ - kTopPx - kBottomPx; }
 
-// The drawn ranges from the data's: a default where there is none, a width where it is a point,
-// and 5 % padding in y unless SetYRange fixed it.
+// The drawn ranges from the data's: a default where there is none, a width where it is a point
+// (or within rounding of one), and 5 % padding in y unless SetYRange fixed it.
 void SvgPlot::FixRanges() const {
   rx_lo_ = std::isfinite(x_lo_) ? x_lo_ : 0.0;
   rx_hi_ = std::isfinite(x_hi_) ? x_hi_ : 1.0;
   ry_lo_ = std::isfinite(y_lo_) ? y_lo_ : 0.0;
   ry_hi_ = std::isfinite(y_hi_) ? y_hi_ : 1.0;
+  if (WithinRounding(rx_lo_, rx_hi_)) rx_lo_ = rx_hi_ = 0.5 * (rx_lo_ + rx_hi_);
+  if (WithinRounding(ry_lo_, ry_hi_)) ry_lo_ = ry_hi_ = 0.5 * (ry_lo_ + ry_hi_);
   if (!(rx_hi_ > rx_lo_)) rx_lo_ -= 0.5, rx_hi_ += 0.5;
   if (!(ry_hi_ > ry_lo_)) {
     const double pad = std::max(1e-12, std::abs(ry_lo_) * 0.05);
