@@ -481,15 +481,21 @@ Result<std::pair<std::uint64_t, std::string>> Rig::NewRejections(const Interrupt
 
 // Waits until `writer` has matched a reader: a sample written before may reach no one.
 Status Rig::AwaitMatch(std::int32_t writer, const char* topic_name, const Interrupt& interrupt) {
-  return WaitFor(
+  // A failing status read is a DDS error to report now, not a reader that never comes.
+  dds_return_t read = DDS_RETCODE_OK;
+  MPDRIG_RETURN_IF_ERROR(WaitFor(
       [&] {
         dds_publication_matched_status_t m{};
-        dds_get_publication_matched_status(writer, &m);
-        return m.current_count > 0;
+        read = dds_get_publication_matched_status(writer, &m);
+        return read < 0 || m.current_count > 0;
       },
       std::string("no reader of ") + topic_name + " for rig " + options_.rig_id +
           " (is the service running?)",
-      interrupt);
+      interrupt));
+  if (read < 0) {
+    return Fail(Failure::kError, dds::Check(read, "dds_get_publication_matched_status").message());
+  }
+  return Status::Ok();
 }
 
 template <typename T>
