@@ -6,10 +6,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "model/analysis/log_replay.h"
 #include "model/analysis/measured_log.h"
@@ -37,6 +39,46 @@ struct DiagnoseArgs {
   bool quiet = false;
   riglog::ReadOptions read;
 };
+
+// Runs the tasks on one thread per core (at most one per task), saying when each is done.
+void RunOnEveryCore(const std::vector<std::function<void()>>& tasks, bool quiet) {
+  std::atomic<std::size_t> next{0}, done{0};
+  const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(),
+                                                           static_cast<unsigned>(tasks.size())));
+  std::vector<std::thread> threads;
+  for (unsigned w = 0; w < workers; ++w) {
+    threads.emplace_back([&] {
+      for (std::size_t i = next++; i < tasks.size(); i = next++) {
+        tasks[i]();
+        const std::size_t finished = ++done;
+        if (!quiet) {
+          std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished, tasks.size());
+        }
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+}
+
+// The base model's error, the candidates best first and the verdict.
+void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
+  std::fprintf(summary,
+               "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
+               "(noise floor %.3g%%)\n",
+               d.fit_end_s, 100.0 * d.baseline.error, 100.0 * d.noise_floor);
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    std::fprintf(summary, "%2zu. %s\n", i + 1,
+                 DescribeCandidate(d.candidates[i], d.baseline).c_str());
+  }
+  std::string equivalent;
+  for (const std::string& name : d.equivalent) {
+    equivalent += (equivalent.empty() ? "" : ", ") + name;
+  }
+  if (!equivalent.empty()) equivalent = "; as good: " + equivalent;
+  std::fprintf(summary, "verdict: %s%s (%d model runs, %.1f s)\n",
+               d.verdict ? d.verdict->c_str() : "no effect is significant", equivalent.c_str(),
+               d.replays, elapsed_s);
+}
 
 int RunDiagnose(DiagnoseArgs args) {
   const std::string name = "diagnose";
@@ -68,22 +110,7 @@ int RunDiagnose(DiagnoseArgs args) {
   }
   // The candidates are independent: one thread per core works through them.
   options.run_tasks = [quiet = args.quiet](const std::vector<std::function<void()>>& tasks) {
-    std::atomic<std::size_t> next{0}, done{0};
-    const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(),
-                                                             static_cast<unsigned>(tasks.size())));
-    std::vector<std::thread> threads;
-    for (unsigned w = 0; w < workers; ++w) {
-      threads.emplace_back([&] {
-        for (std::size_t i = next++; i < tasks.size(); i = next++) {
-          tasks[i]();
-          const std::size_t finished = ++done;
-          if (!quiet) {
-            std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished, tasks.size());
-          }
-        }
-      });
-    }
-    for (std::thread& thread : threads) thread.join();
+    RunOnEveryCore(tasks, quiet);
   };
   auto diagnosis = Diagnose(*log, *params, options);
   if (!diagnosis.ok()) return Fail(name, diagnosis.status());
@@ -101,22 +128,8 @@ int RunDiagnose(DiagnoseArgs args) {
     if (!written.ok()) return Fail(name, written);
   }
   FILE* summary = args.json_path == "-" || args.report_path == "-" ? stderr : stdout;
-  std::fprintf(summary,
-               "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
-               "(noise floor %.3g%%)\n",
-               d.fit_end_s, 100.0 * d.baseline.error, 100.0 * d.noise_floor);
-  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
-    std::fprintf(summary, "%2zu. %s\n", i + 1,
-                 DescribeCandidate(d.candidates[i], d.baseline).c_str());
-  }
-  std::string equivalent;
-  for (const std::string& name : d.equivalent)
-    equivalent += (equivalent.empty() ? "" : ", ") + name;
-  if (!equivalent.empty()) equivalent = "; as good: " + equivalent;
-  std::fprintf(summary, "verdict: %s%s (%d model runs, %.1f s)\n",
-               d.verdict ? d.verdict->c_str() : "no effect is significant", equivalent.c_str(),
-               d.replays,
-               std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+  PrintSummary(d, std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
+               summary);
   return 0;
 }
 
