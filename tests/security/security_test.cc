@@ -534,6 +534,27 @@ TEST_F(SecureClass, StudentGetsAPrivateRigWithinTheServicesLimits) {
       2.0, [&](double) { return instructor_on_private.samples() > before + 50; }));
 }
 
+// The rig_request client as a student runs it: it says what the service made (exit 0), and
+// what it refused (exit 1).
+TEST_F(SecureClass, RigRequestSaysWhatTheServiceMadeAndRefused) {
+  StartService({"--private-rigs", "1"});
+  auto request = [&](int count, const std::string& out) {
+    testing::ChildProcess process(
+        {RIG_REQUEST_EXE, "--security", Dir("alice"), "--rig", "alice", "--private-rigs",
+         std::to_string(count), "--domain", std::to_string(domain_), "--timeout", "20"},
+        Logged(out));
+    return process.Wait(40.0);
+  };
+  const std::string made = Dir("request-1.txt");
+  EXPECT_EQ(request(1, made), 0) << ReadFile(made) << "\nserve said:\n" << ReadFile(service_log_);
+  EXPECT_NE(ReadFile(made).find("private rig alice.1 runs"), std::string::npos) << ReadFile(made);
+  RigWatch instructor_on_private(*instructor_, "alice.1");
+  EXPECT_TRUE(instructor_on_private.WaitFor(10.0, [](double) { return true; }));
+  const std::string beyond = Dir("request-2.txt");
+  EXPECT_EQ(request(2, beyond), 1) << ReadFile(beyond);
+  EXPECT_NE(ReadFile(beyond).find("refused beyond 1"), std::string::npos) << ReadFile(beyond);
+}
+
 // A shadow model under security: alice runs `mpdrig shadow` of her rig with her identity (its
 // topics in her rig's partition) and switches it with shadow_ctl; bob, who may watch alice's rig,
 // reads her shadow's status but may not switch it (his permissions publish only in his own
