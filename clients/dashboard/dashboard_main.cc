@@ -36,6 +36,7 @@ struct Args {
   std::string host = "127.0.0.1";
   std::vector<std::string> rigs;
   std::string dds_config;
+  std::string security;  // make-class's OUT/NAME; empty: no DDS Security
   double idle_s = 5.0;
   double frame_hz = 20.0;
   double duration_s = 0.0;
@@ -141,6 +142,11 @@ int main(int argc, char** argv) {
   app.add_option("--rig", args.rigs, "a rig to show (repeatable; default: every rig seen)");
   app.add_option("--dds-config", args.dds_config,
                  "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
+  app.add_option("--security", args.security,
+                 "DDS Security: an identity directory of a class (deploy/security/make-class OUT "
+                 "NAME: OUT/NAME) allowed to read the rig given with --rig (one); its topics, and "
+                 "its shadow's, are then in partition rig.<rig id>. Refuses an invalid directory, "
+                 "saying why");
   app.add_option("--idle-s", args.idle_s, "close DDS this long after the last request [s]")
       ->check(CLI::Range(0.5, 3600.0))
       ->capture_default_str();
@@ -177,6 +183,7 @@ int main(int argc, char** argv) {
   options.domain = args.domain;
   options.dds_config = args.dds_config;
   options.rigs = args.rigs;
+  options.security_dir = args.security;
   options.idle_s = args.idle_s;
   options.frame_hz = args.frame_hz;
   auto feed = mpdrig::dashboard::RigFeed::Create(options);

@@ -9,6 +9,7 @@
 #include "clients/dashboard/json_out.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/security.h"
 
 namespace mpdrig::dashboard {
 
@@ -263,7 +264,7 @@ struct RigFeed::DomainHolder {
 };
 
 struct RigFeed::Session {
-  dds::Entity participant;  // first: destroyed last (deleting it deletes its children)
+  dds::ClientScope scope;  // first: destroyed last (deleting it deletes its children)
   std::vector<dds::Entity> topics;
   std::optional<dds::Reader<mpdrig_RigSensors>> sensors, shadow_sensors;
   std::optional<dds::Reader<mpdrig_RigEstimate>> estimate;
@@ -291,25 +292,28 @@ namespace {
 
 // Creates topic `name` and a reader of it into `*reader`; the topic is kept in `topics`.
 template <typename T>
-Status OpenReader(std::optional<dds::Reader<T>>* reader, dds_entity_t participant,
+Status OpenReader(std::optional<dds::Reader<T>>* reader, const dds::ClientScope& scope,
                   std::vector<dds::Entity>* topics, const dds_topic_descriptor_t* descriptor,
                   const char* name, const dds::Qos& qos) {
-  auto topic = dds::CreateTopic(participant, descriptor, name);
+  auto topic = dds::CreateTopic(scope.participant.handle(), descriptor, name);
   if (!topic.ok()) return topic.status().Within(name);
-  auto created = dds::Reader<T>::Create(participant, topic->handle(), qos);
+  auto created = dds::Reader<T>::Create(scope.sub(), topic->handle(), qos);
   topics->push_back(std::move(topic).value());
   if (!created.ok()) return created.status().Within(name);
   reader->emplace(std::move(created).value());
   return Status::Ok();
 }
 
-// The DDS entities of a watched period: one participant, a reader per topic, the command writer.
-Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
+// The DDS entities of a watched period: one participant (with FeedOptions::security_dir, its
+// subscriber and publisher in the rig's partition), a reader per topic, the command writer.
+Result<std::unique_ptr<RigFeed::Session>> OpenSession(const FeedOptions& options) {
   auto session = std::make_unique<RigFeed::Session>();
-  auto participant = dds::CreateParticipant(domain);
-  if (!participant.ok()) return participant.status();
-  session->participant = std::move(participant).value();
-  const dds_entity_t p = session->participant.handle();
+  auto scope =
+      dds::CreateClientScope(options.domain, options.security_dir,
+                             options.security_dir.empty() ? std::string() : options.rigs.front());
+  if (!scope.ok()) return scope.status();
+  session->scope = std::move(scope).value();
+  const dds::ClientScope& p = session->scope;
   auto* topics = &session->topics;
   const dds::Qos sensor_qos = dds::SensorQos(false);
   const dds::Qos status_qos = dds::StatusQos();
@@ -325,10 +329,11 @@ Result<std::unique_ptr<RigFeed::Session>> OpenSession(int domain) {
                                     "mpdrig_shadow_sensors", sensor_qos));
   MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_status, p, topics, &mpdrig_ShadowStatus_desc,
                                     "mpdrig_shadow_status", status_qos));
-  auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
+  auto command_topic =
+      dds::CreateTopic(p.participant.handle(), &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
   if (!command_topic.ok()) return command_topic.status();
-  auto writer =
-      dds::Writer<mpdrig_ShadowCommand>::Create(p, command_topic->handle(), dds::RequestQos());
+  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p.pub(), command_topic->handle(),
+                                                          dds::RequestQos());
   if (!writer.ok()) return writer.status();
   session->topics.push_back(std::move(command_topic).value());
   session->shadow_command.emplace(std::move(writer).value());
@@ -341,6 +346,16 @@ Result<std::unique_ptr<RigFeed>> RigFeed::Create(const FeedOptions& options) {
   if (!(options.frame_hz > 0.0 && options.frame_hz <= 100.0))
     return Status::Error("the frame rate must be in (0, 100] Hz");
   if (!(options.idle_s > 0.0)) return Status::Error("the idle time must be positive");
+  if (!options.security_dir.empty()) {
+    // Refused now, saying why, rather than when a browser first asks.
+    if (options.rigs.size() != 1) {
+      return Status::Error(
+          "--security shows one rig, in its partition: give its id once with --rig");
+    }
+    MPDRIG_RETURN_IF_ERROR(dds::CheckSecureRigId(options.rigs.front()));
+    auto files = dds::LoadSecurityDirectory(options.security_dir);
+    if (!files.ok()) return files.status().Within("--security");
+  }
   auto domain = dds::Domain::Create(
       options.domain, options.dds_config.empty() ? dds::LoopbackConfig() : options.dds_config);
   if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
@@ -387,7 +402,7 @@ void RigFeed::Run() {
     }
     if (watched && !session_ && now - last_attempt > std::chrono::seconds(1)) {
       last_attempt = now;
-      auto session = OpenSession(options_.domain);
+      auto session = OpenSession(options_);
       if (session.ok()) {
         session_ = std::move(session).value();
         health_.open = true;

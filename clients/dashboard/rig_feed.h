@@ -36,9 +36,13 @@ struct FeedOptions {
   int domain = 0;
   std::string dds_config;         // Cyclone XML (inline); empty: loopback only
   std::vector<std::string> rigs;  // the rigs to show; empty: every rig that reports a status
-  double idle_s = 5.0;            // close DDS this long after the last request
-  double frame_hz = 20.0;         // drains (and history points) per second
-  double history_s = 120.0;       // rig time of history kept per rig
+  // DDS Security: a class's identity directory (deploy/security/make-class OUT NAME: OUT/NAME).
+  // The feed then reads, and switches the shadow of, the one rig in `rigs`, in its partition
+  // rig.<rig id>, as the other clients do; empty: no security.
+  std::string security_dir;
+  double idle_s = 5.0;       // close DDS this long after the last request
+  double frame_hz = 20.0;    // drains (and history points) per second
+  double history_s = 120.0;  // rig time of history kept per rig
 };
 
 // Counters for the measurements (GET /api/health): is DDS open, how often it opened, samples.

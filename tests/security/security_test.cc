@@ -23,6 +23,7 @@
 
 #include <gtest/gtest.h>
 
+#include "clients/dashboard/rig_feed.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
@@ -49,6 +50,18 @@ testing::ChildOptions Logged(const std::string& log_path) {
   return options;
 }
 
+// The loopback configuration of a local domain whose participants meet on `wire_domain`: each
+// identity of a class needs a domain of its own in one process (its security settings are the
+// participant's), and ExternalDomainId puts them all on the service's wire domain.
+std::string OnWireDomain(int wire_domain) {
+  std::string config = dds::LoopbackConfig();
+  const std::string discovery = "<Discovery>";
+  config.replace(
+      config.find(discovery), discovery.size(),
+      discovery + "<ExternalDomainId>" + std::to_string(wire_domain) + "</ExternalDomainId>");
+  return config;
+}
+
 // A participant with a domain instance of its own that is `wire_domain` on the wire.
 class Peer {
  public:
@@ -56,12 +69,7 @@ class Peer {
   static std::unique_ptr<Peer> Create(int wire_domain, const std::string& security_dir) {
     auto peer = std::unique_ptr<Peer>(new Peer());
     peer->local_domain_ = static_cast<dds_domainid_t>(testing::ClaimTestDomain());
-    std::string config = dds::LoopbackConfig();
-    const std::string discovery = "<Discovery>";
-    config.replace(
-        config.find(discovery), discovery.size(),
-        discovery + "<ExternalDomainId>" + std::to_string(wire_domain) + "</ExternalDomainId>");
-    auto domain = dds::Domain::Create(peer->local_domain_, config);
+    auto domain = dds::Domain::Create(peer->local_domain_, OnWireDomain(wire_domain));
     EXPECT_TRUE(domain.ok()) << domain.status().message();
     if (!domain.ok()) return nullptr;
     peer->domain_.emplace(std::move(domain).value());
@@ -553,6 +561,51 @@ TEST_F(SecureClass, RigRequestSaysWhatTheServiceMadeAndRefused) {
   const std::string beyond = Dir("request-2.txt");
   EXPECT_EQ(request(2, beyond), 1) << ReadFile(beyond);
   EXPECT_NE(ReadFile(beyond).find("refused beyond 1"), std::string::npos) << ReadFile(beyond);
+}
+
+// The dashboard's feed under security: with alice's identity it shows her rig, read in its
+// partition; without an identity it sees nothing of the secure service; it refuses, saying why,
+// two rigs or a directory that is no identity.
+TEST_F(SecureClass, DashboardWithAStudentsIdentityShowsHerRigAndNothingWithout) {
+  StartService();
+  const auto watch = [&](const std::string& security, double seconds) {
+    dashboard::FeedOptions options;
+    options.domain = testing::ClaimTestDomain();
+    options.dds_config = OnWireDomain(domain_);
+    options.rigs = {"alice"};
+    options.security_dir = security;
+    auto feed = dashboard::RigFeed::Create(options);
+    EXPECT_TRUE(feed.ok()) << feed.status().message();
+    std::string state;
+    if (!feed.ok()) return state;
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (std::chrono::steady_clock::now() < end &&
+           state.find("\"sensors\"") == std::string::npos) {
+      (*feed)->Touch();  // a browser polling
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      state = (*feed)->StateJson("alice", 0) + (*feed)->Health().error;
+    }
+    return state;
+  };
+  const std::string with_identity = watch(Dir("alice"), 30.0);
+  EXPECT_NE(with_identity.find("\"sensors\""), std::string::npos) << with_identity;
+  const std::string without = watch("", 3.0);
+  EXPECT_EQ(without.find("\"sensors\""), std::string::npos) << without;
+
+  dashboard::FeedOptions two;
+  two.domain = testing::ClaimTestDomain();
+  two.rigs = {"alice", "bob"};
+  two.security_dir = Dir("alice");
+  auto refused = dashboard::RigFeed::Create(two);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("one rig"), std::string::npos)
+      << refused.status().message();
+  two.rigs = {"alice"};
+  two.security_dir = Dir("nobody");
+  refused = dashboard::RigFeed::Create(two);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("--security"), std::string::npos)
+      << refused.status().message();
 }
 
 // A shadow model under security: alice runs `mpdrig shadow` of her rig with her identity (its
