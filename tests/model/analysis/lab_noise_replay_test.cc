@@ -19,40 +19,25 @@
 #include "model/analysis/log_replay.h"
 #include "model/analysis/measured_log.h"
 #include "model/common/units.h"
-#include "model/identification/fit.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
 #include "model/sim/sensor_noise.h"
+#include "tests/support/lab_scenario.h"
 
 namespace mpdrig {
 namespace {
 
 using riglog::Channel;
+using testing::LabNoise;
+using testing::Ramp;
+using testing::Scenario;
+using testing::Sine;
+using testing::TruthLog;
+constexpr double kRateHz = testing::kScenarioRateHz;
+const auto ReplayOptionsFor = testing::ScenarioReplayOptions;
 
-constexpr double kRateHz = 100.0;
-constexpr int kCells = 50;
 // "Within 3 points of a perfect model" (the acceptance).
 constexpr double kAllowedFitLossPoints = 3.0;
-
-struct Scenario {
-  std::string name;
-  double duration_s = 60.0;
-  double cut_s = 0.0;  // the log starts here (a recording joining a running rig)
-  std::function<double(double)> piston_m;
-  std::function<double(double)> choke_deg;
-  std::function<double(double)> pump_lpm;
-};
-
-double Sine(double t, double amp, double freq_hz) {
-  return amp * std::sin(2.0 * std::numbers::pi * freq_hz * t);
-}
-
-// A ramp from a to b over [t0, t0 + rise].
-double Ramp(double t, double t0, double rise, double a, double b) {
-  if (t <= t0) return a;
-  if (t >= t0 + rise) return b;
-  return a + (b - a) * (t - t0) / rise;
-}
 
 std::vector<Scenario> Scenarios() {
   return {
@@ -99,65 +84,9 @@ Scenario MidHeaveThirdHertz() {
           [](double) { return 5.0; }};
 }
 
-SimulationOptions ReplayOptionsFor() {
-  SimulationOptions options;
-  options.cells = kCells;
-  options.choke_input = ChokeInput::kMeasured;
-  return options;
-}
-
-// The truth (noise-free, every compared channel and the inputs) from t = 0, cut at cut_s.
-riglog::RigLog TruthLog(const Scenario& s, const RigParams& params = RigParams{}) {
-  InputSignals signals;
-  signals.piston_position_m = s.piston_m;
-  signals.rig = [&](double t) {
-    RigInputs in;
-    in.choke_opening_frac = units::ChokeDegToFrac(s.choke_deg(t));
-    in.pump_flow_m3ps = units::LpmToM3ps(s.pump_lpm(t));
-    in.outlet_pressure_pa = units::kStandardAtmospherePa;
-    return in;
-  };
-  std::vector<double> times;
-  for (long i = 0; i <= std::lround(s.duration_s * kRateHz); ++i) times.push_back(i / kRateHz);
-  auto run = Simulate(params, ReplayOptionsFor(), signals, times);
-  EXPECT_TRUE(run.ok()) << run.status().message();
-  riglog::RigLog log;
-  std::vector<std::vector<double>> columns(4 + ComparedChannels().size());
-  for (const RigSample& sample : run->samples) {
-    if (sample.time_s < s.cut_s - 1e-9) continue;
-    log.time_s.push_back(sample.time_s);
-    columns[0].push_back(sample[Channel::kPistonPosition]);
-    columns[1].push_back(sample[Channel::kChokePosition]);
-    columns[2].push_back(sample[Channel::kFT2]);
-    columns[3].push_back(sample[Channel::kC1]);
-    for (std::size_t c = 0; c < ComparedChannels().size(); ++c) {
-      columns[4 + c].push_back(sample[ComparedChannels()[c]]);
-    }
-  }
-  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kPistonPosition), columns[0]).ok());
-  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kChokePosition), columns[1]).ok());
-  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kFT2), columns[2]).ok());
-  EXPECT_TRUE(log.AddColumn(riglog::LabColumn(Channel::kC1), columns[3]).ok());
-  for (std::size_t c = 0; c < ComparedChannels().size(); ++c) {
-    EXPECT_TRUE(log.AddColumn(riglog::LabColumn(ComparedChannels()[c]), columns[4 + c]).ok());
-  }
-  return log;
-}
-
 bool IsFlow(Channel channel) {
   return channel == Channel::kFT1 || channel == Channel::kFT2 || channel == Channel::kFT3 ||
          channel == Channel::kFT4;
-}
-
-// The truth as the lab's sensors would log it (SensorNoise::Lab(), thesis Table 4.1.1: the
-// project's one noise model, as `mpdrig synth` and `simulate` apply it).
-riglog::RigLog LabNoise(riglog::RigLog log, std::uint64_t seed) {
-  SensorNoiseApplier noise(SensorNoise::Lab(), seed);
-  for (std::size_t c = 0; c < log.columns.size(); ++c) {
-    const auto channel = riglog::FindChannel(log.columns[c].channel);
-    if (channel) noise.MeasureColumn(*channel, log.values_si[c]);
-  }
-  return log;
 }
 
 double Fit(const std::vector<double>& y, const std::vector<double>& yhat) {
@@ -340,50 +269,6 @@ TEST(InputLevels, CorrectedLevelsMeetTheTruth) {
   }
   // Over the seeds, at least a third of the error was the levels' (measured: 0.058 -> 0.021 bar).
   EXPECT_LT(total[1], 0.67 * total[0]);
-}
-
-// The choke's leak (the floor of G, 9.4) shows only where the choke is closed and flow must pass
-// through it: a closed choke, 2 L/min from the pump, a heave, lab noise, a rig whose leak,
-// wave speed and friction differ from the defaults. `mpdrig fit`'s path (the levels estimated at
-// the first fit's parameters) finds the leak within 2 % (measured 0.2 %), c within 1 % and f1
-// within 20 %. (f2, the quadratic friction, needs faster flow than this heave gives: not asserted.)
-TEST(FitAtLabNoise, LeakThroughAClosedChoke) {
-  RigParams rig;
-  rig.choke_leak_m2 = 8.0e-7;
-  rig.wave_speed_mps = 950.0;
-  rig.friction_f1_per_s = 0.2;
-  // Two tones, as the thesis identified c from more than one frequency (a lone 0.2 Hz sine far
-  // below the first resonance leaves c's valley flat: seed 1 stopped at 959 m/s with f1 = 0).
-  const Scenario closed{"closed_pumping",
-                        60.0,
-                        0.0,
-                        [](double t) { return Sine(t, 0.04, 0.2) + Sine(t, 0.01, 0.45); },
-                        [](double) { return 0.0; },
-                        [](double) { return 2.0; }};
-  const riglog::RigLog truth = TruthLog(closed, rig);
-  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    SCOPED_TRACE("seed " + std::to_string(seed));
-    auto log = MeasuredLogFromRigLog(LabNoise(truth, seed), "closed choke");
-    ASSERT_TRUE(log.ok());
-    FitOptions options;
-    options.simulation = ReplayOptionsFor();
-    ASSERT_TRUE(PrepareLogReplay(&*log, RigParams{}, options.simulation, &options.replay,
-                                 InputLevels::kAfterTheFit)
-                    .ok());
-    std::vector<FitParameter> parameters;
-    for (const char* key : {"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"}) {
-      auto parameter = DefaultFitParameter(key);
-      ASSERT_TRUE(parameter.ok());
-      parameters.push_back(*parameter);
-    }
-    auto fit = FitParametersAndInputLevels(&*log, RigParams{}, parameters, options);
-    ASSERT_TRUE(fit.ok()) << fit.status().message();
-    std::printf("seed %d: c %.1f (950), f1 %.4f (0.2), leak %.4g (8e-7)\n", static_cast<int>(seed),
-                fit->estimates[0], fit->estimates[1], fit->estimates[2]);
-    EXPECT_NEAR(fit->estimates[0], rig.wave_speed_mps, 0.01 * rig.wave_speed_mps);
-    EXPECT_NEAR(fit->estimates[1], rig.friction_f1_per_s, 0.2 * rig.friction_f1_per_s);
-    EXPECT_NEAR(fit->estimates[2], rig.choke_leak_m2, 0.02 * rig.choke_leak_m2);
-  }
 }
 
 }  // namespace
