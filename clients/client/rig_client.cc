@@ -268,8 +268,11 @@ Status Rig::TakeSensors() {
   const std::string& id = options_.rig_id;
   auto took = d.sensors->TakeEach([&](const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
     if (id != s.rig_id || lost_) return;
-    lost_ = watch_.Sample(s.sample_counter, s.sim_time_s);
-    if (lost_) return;
+    std::string why;
+    const auto verdict =
+        watch_.Sample(s.sample_counter, s.sim_time_s, info.publication_handle, &why);
+    if (verdict == clients::RigWatch::Verdict::kLost) lost_ = why;
+    if (verdict != clients::RigWatch::Verdict::kAccept) return;
     last_sample_wall_s_ = WallSeconds();
     Sensors sample = FromWire(s);
     sample.published_s = 1e-9 * static_cast<double>(info.source_timestamp);
@@ -353,10 +356,15 @@ Status Rig::Drain() {
   MPDRIG_RETURN_IF_ERROR(TakeStatus());
   if (lost_) return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
   if (!dds_->sensors) return Status::Ok();
-  dds_subscription_matched_status_t matched{};
-  dds_get_subscription_matched_status(dds_->sensors->handle(), &matched);
-  std::optional<std::string> why =
-      watch_.Check(WallSeconds() - last_sample_wall_s_, matched.current_count > 0);
+  // The rig's own sensor writer, not any: a stranger's writer on the topic keeps no rig alive.
+  bool matched = false;
+  if (watch_.writer() != 0) {
+    dds_builtintopic_endpoint_t* writer =
+        dds_get_matched_publication_data(dds_->sensors->handle(), watch_.writer());
+    matched = writer != nullptr;
+    if (writer != nullptr) dds_builtintopic_free_endpoint(writer);
+  }
+  std::optional<std::string> why = watch_.Check(WallSeconds() - last_sample_wall_s_, matched);
   if (!why) return Status::Ok();
   // What the departed writer sent before it went is in the reader by now: keep it.
   MPDRIG_RETURN_IF_ERROR(TakeSensors());

@@ -32,6 +32,12 @@ Qos SensorQos(bool keep_all) {
   return qos;
 }
 
+Qos SensorWriterQos(bool lockstep) {
+  Qos qos = SensorQos(false);
+  if (lockstep) dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, kLockstepSensorDepth);
+  return qos;
+}
+
 Qos CommandQos(int ownership_strength) {
   Qos qos;
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));

@@ -90,6 +90,19 @@ class Qos {
 //              volatile. A request is an event, not state: every one counts, a late joiner must
 //              not act on an old one.
 Qos SensorQos(bool keep_all = false);
+// The service's side of a sensor-like stream (sensors, estimates, profiles). In lockstep the
+// writer keeps the last kLockstepSensorDepth samples of each rig, not all of them: Cyclone
+// throttles only reliable keep-all writers (its writer-history watermarks: a write waits, up to
+// the reliability's max blocking time, while a reader leaves too much unacknowledged), so one
+// reader that stops acknowledging (a client killed and not yet expired, held in a debugger, or
+// SIGSTOPped) would hold up every rig of the service and then fail its writes. A keep-last
+// writer never waits for a reader; a reader that falls more than the depth behind loses the
+// oldest samples (it sees a gap in the sample counter) and nobody else does. The depth covers a
+// live reader's retransmissions at full lockstep speed (about 5e4 samples/s for a heartbeat
+// period of 100 ms: 5e3 samples) with room to spare, and bounds what a stopped reader costs
+// the service (kLockstepSensorDepth samples of each rig and stream, until its lease ends).
+inline constexpr int kLockstepSensorDepth = 8192;
+Qos SensorWriterQos(bool lockstep);
 inline constexpr dds_duration_t kCommandLivelinessLease = DDS_SECS(1);
 Qos CommandQos(int ownership_strength = 0);
 Qos StatusQos();

@@ -7,10 +7,13 @@
 
 namespace mpdrig::service {
 
-Result<std::shared_ptr<LogPlayback>> LogPlayback::Open(const std::string& path, bool loop) {
+Result<std::shared_ptr<LogPlayback>> LogPlayback::Open(const std::string& path, bool loop,
+                                                       const riglog::ReadOptions& read) {
+  MPDRIG_RETURN_IF_ERROR(read.Validate());
   std::shared_ptr<LogPlayback> playback(new LogPlayback());
   playback->path_ = path;
   playback->loop_ = loop;
+  playback->read_options_ = read;
   MPDRIG_RETURN_IF_ERROR(playback->Reopen());
   playback->atmospheric_pa_ = playback->reader_->atmospheric_pressure_pa();
   playback->column_of_.assign(kChannelCount, -1);
@@ -47,7 +50,7 @@ Result<std::shared_ptr<LogPlayback>> LogPlayback::Open(const std::string& path, 
 }
 
 Status LogPlayback::Reopen() {
-  auto reader = riglog::RigLogReader::Open(path_);
+  auto reader = riglog::RigLogReader::Open(path_, read_options_);
   if (!reader.ok()) return reader.status();
   reader_.emplace(std::move(reader).value());
   file_done_ = false;
@@ -76,6 +79,13 @@ Result<bool> LogPlayback::ReadRow() {
 }
 
 Result<RigSample> LogPlayback::Next(std::size_t pressure_points) {
+  if (!failed_.ok()) return failed_;
+  auto row = NextRow(pressure_points);
+  if (!row.ok() && !finished_) failed_ = row.status();
+  return row;
+}
+
+Result<RigSample> LogPlayback::NextRow(std::size_t pressure_points) {
   if (finished_) {
     return Status::Error("the playback of " + path_ + " has ended (" +
                          std::to_string(rows_played_) + " rows played)");
@@ -92,19 +102,26 @@ Result<RigSample> LogPlayback::Next(std::size_t pressure_points) {
   ahead_.pop_front();
   sample.pressure_at_positions_pa.assign(pressure_points, std::numeric_limits<double>::quiet_NaN());
   ++rows_played_;
-  // Look one row ahead so the end is known when the last row goes out.
+  // Look one row ahead so the end is known when the last row goes out. A bad row there ends
+  // the playback at the next call: this row, which is good, still goes out.
   if (ahead_.empty()) {
     auto more = ReadRow();
-    if (!more.ok()) return more.status();
+    if (!more.ok()) {
+      failed_ = more.status();
+      return sample;
+    }
     if (!*more) {
       ++passes_;
       if (loop_) {
         // The next pass continues the clock: one period after this pass's last row.
         time_offset_s_ += last_time_s_ - first_time_s_ + period_s_;
-        MPDRIG_RETURN_IF_ERROR(Reopen());
-        auto first = ReadRow();
-        if (!first.ok()) return first.status();
-        if (!*first) return Status::Error(path_ + ": the log became empty while looping");
+        Status reopened = Reopen();
+        auto first = reopened.ok() ? ReadRow() : Result<bool>(reopened);
+        if (!first.ok()) {
+          failed_ = first.status();
+        } else if (!*first) {
+          failed_ = Status::Error(path_ + ": the log became empty while looping");
+        }
       } else {
         finished_ = true;
       }

@@ -28,8 +28,10 @@ class LogPlayback {
  public:
   static constexpr std::size_t kPeriodRows = 1000;
 
-  // Reads the header and the first rows. Errors name the file, line and column.
-  static Result<std::shared_ptr<LogPlayback>> Open(const std::string& path, bool loop);
+  // Reads the header and the first rows. Errors name the file, line and column. `read` limits
+  // the log's time axis (the gap between two rows, `serve --max-gap-s`), as for every reader.
+  static Result<std::shared_ptr<LogPlayback>> Open(const std::string& path, bool loop,
+                                                   const riglog::ReadOptions& read = {});
 
   const std::string& path() const { return path_; }
   double period_s() const { return period_s_; }
@@ -43,11 +45,14 @@ class LogPlayback {
   std::uint64_t passes() const { return passes_; }
   // True once the last row of a log that does not loop has gone out.
   bool finished() const { return finished_; }
+  // The error that ended the playback (a bad row further on in the file), or OK.
+  const Status& failed() const { return failed_; }
 
   // The next row as a sample (SI, absolute pressure; NaN where not measured), with
   // `pressure_points` NaN pressures along the pipe (a log has only PT1..PT10: the profile is not
   // measured between them). An error at the end of a log that does not loop, or when the file
-  // turns out bad further on (its path, line and column).
+  // turns out bad further on (its path, line and column): then the playback has failed for
+  // good (failed(); the reader stays failed, so no row after a bad one is ever played).
   Result<RigSample> Next(std::size_t pressure_points);
 
   // "run.csv (12000 rows so far; not measured: P1, FT4)".
@@ -56,10 +61,12 @@ class LogPlayback {
  private:
   LogPlayback() = default;
   Status Reopen();
+  Result<RigSample> NextRow(std::size_t pressure_points);  // Next, before it records a failure
   Result<bool> ReadRow();  // appends to ahead_; false at the end of the file
 
   std::string path_;
   bool loop_ = false;
+  riglog::ReadOptions read_options_;
   std::optional<riglog::RigLogReader> reader_;
   double atmospheric_pa_ = 0.0;
   double period_s_ = 0.0;
@@ -74,6 +81,7 @@ class LogPlayback {
   std::uint64_t rows_played_ = 0, passes_ = 0;
   bool file_done_ = false;
   bool finished_ = false;
+  Status failed_ = Status::Ok();
 };
 
 }  // namespace mpdrig::service

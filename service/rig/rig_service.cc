@@ -102,6 +102,15 @@ constexpr int kMaxCommandsPerTick = 256;
 
 // Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
 constexpr std::uint64_t kLockstepSliceSteps = 100;
+// Lockstep: the most rig time one step request may ask for. A request cannot be cancelled, and
+// a rig's later requests (its own controller's) wait behind it: 2^32 - 1 steps ran about 15 h
+// while the rig's controller failed. An hour of rig time (360 000 steps at the lab's 100 Hz,
+// about 10-20 s of wall time here) is far beyond any one control step and any experiment a
+// client would not split; a longer one is refused on the status with the reason.
+constexpr double kMaxStepRequestRigTimeS = 3600.0;
+// While a long request runs, its rig's status goes out this often [s of wall time], so that
+// clients and dashboards see the rig time move (and any refusal) before the request completes.
+constexpr double kLockstepStatusEveryS = 0.5;
 
 struct RigService::Impl {
   ServeOptions options;
@@ -157,11 +166,47 @@ struct RigService::Impl {
     std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
     std::optional<dds::Reader<mpdrig_StepRequest>> steps;
     std::optional<dds::Reader<mpdrig_RigRequest>> requests;  // private rigs (security)
+    // Since when a reader of these sensors has left something unacknowledged (ProbeReaders);
+    // unset while every reader has acknowledged everything.
+    std::optional<Clock::time_point> unacknowledged_since;
+    bool stopped_reader_published = false;  // the last status of these rigs named one
   };
   std::vector<std::unique_ptr<Endpoints>> endpoints;
   dds::Entity step_waitset;  // every set's step requests (lockstep)
 
-  Status CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool keep_all, Endpoints* set);
+  Status CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool lockstep, Endpoints* set);
+
+  // A reader that stops acknowledging (its client SIGSTOPped, held in a debugger, or killed and
+  // its participant's lease not yet over) is not waited for (dds::SensorWriterQos) but reported:
+  // each probe asks whether every reader has acknowledged every sample written so far; a live
+  // reader does so within a heartbeat period (100 ms), so one that has not for
+  // kStoppedReaderAfterS is stopped. The status says so until it acknowledges again or is gone.
+  static constexpr double kStoppedReaderAfterS = 2.0;
+  static void ProbeReaders(Endpoints& set) {
+    const dds_return_t acked = dds_wait_for_acks(set.sensors->handle(), 0);
+    if (acked == DDS_RETCODE_OK) {
+      set.unacknowledged_since.reset();
+    } else if (!set.unacknowledged_since) {
+      set.unacknowledged_since = Clock::now();
+    }
+  }
+  static double StoppedReaderSeconds(const Endpoints& set) {
+    if (!set.unacknowledged_since) return 0.0;
+    const double s =
+        std::chrono::duration<double>(Clock::now() - *set.unacknowledged_since).count();
+    return s >= kStoppedReaderAfterS ? s : 0.0;
+  }
+  static std::string StoppedReaderWarning(const Endpoints& set) {
+    const double s = StoppedReaderSeconds(set);
+    if (s <= 0.0) return "";
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "a reader of the sensors has acknowledged nothing for %.1f s (a client stopped, "
+                  "held in a debugger, or killed within its lease): the rig runs on without "
+                  "waiting; that reader loses samples beyond the last %d",
+                  s, dds::kLockstepSensorDepth);
+    return text;
+  }
 
   Endpoints& EndpointsOf(std::size_t rig_index) {
     return endpoints.front()->rig < 0 ? *endpoints.front() : *endpoints[rig_index];
@@ -444,6 +489,14 @@ struct RigService::Impl {
 
   Status TickAndPublish(RigHost& rig) {
     auto sample = rig.Tick();
+    if (!sample.ok() && rig.playback() != nullptr) {
+      // A recording with a bad row further on (its file, line and column): the playback has
+      // nothing more it can truthfully publish, so the service ends with the error (mpdrig serve
+      // prints it and exits non-zero) instead of ticking on without a word.
+      (void)rig.Refuse("playback ended: " + sample.status().message());
+      (void)PublishAllStatus();
+      return sample.status().Within("playback of rig " + rig.rig_id());
+    }
     if (!sample.ok()) {
       // The model failed (e.g. the solver): the rig keeps its last state and says why.
       (void)rig.Refuse("simulation step failed: " + sample.status().message());
@@ -525,10 +578,15 @@ struct RigService::Impl {
     std::string range_warning = rig.range_event() ? rig.range_event()->Describe() : "";
     std::string stall_warning = StallWarning();
     std::string event = rig.counters().last_event;
-    char* warnings[3];
+    Endpoints& out = EndpointsOf(index);
+    ProbeReaders(out);
+    std::string reader_warning = StoppedReaderWarning(out);
+    out.stopped_reader_published = !reader_warning.empty();
+    char* warnings[4];
     std::uint32_t count = 0;
     if (!range_warning.empty()) warnings[count++] = range_warning.data();
     if (!stall_warning.empty()) warnings[count++] = stall_warning.data();
+    if (!reader_warning.empty()) warnings[count++] = reader_warning.data();
     if (!event.empty()) warnings[count++] = event.data();
     wire.warnings._length = wire.warnings._maximum = count;
     wire.warnings._buffer = count > 0 ? warnings : nullptr;
@@ -566,7 +624,7 @@ struct RigService::Impl {
     wire.actuator_owners._release = false;
     const std::string sensor_noise = rig.DescribeSensorNoise();
     wire.sensor_noise = const_cast<char*>(sensor_noise.c_str());
-    return EndpointsOf(index).status->Write(wire);
+    return out.status->Write(wire);
   }
 
   Status PublishAllStatus() {
@@ -633,6 +691,7 @@ struct RigService::Impl {
       bool started = false;
     };
     std::vector<std::deque<Pending>> queues(rigs.size());
+    std::vector<Clock::time_point> last_status_wall(rigs.size(), Clock::now());
     auto busy = [&queues] {
       return std::any_of(queues.begin(), queues.end(), [](const auto& q) { return !q.empty(); });
     };
@@ -641,12 +700,20 @@ struct RigService::Impl {
         const dds_return_t ready =
             dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
         if (ready < 0) return dds::Check(ready, "dds_waitset_wait");
-        // Refusals of the topic filters (unknown rig ids) are reported within this wait.
-        if (RefuseFiltered()) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
+        // Refusals of the topic filters (unknown rig ids) are reported within this wait, and
+        // so is a reader that stopped acknowledging (or started again).
+        bool readers_changed = false;
+        for (auto& set : endpoints) {
+          ProbeReaders(*set);
+          const bool stopped = StoppedReaderSeconds(*set) > 0.0;
+          readers_changed = readers_changed || stopped != set->stopped_reader_published;
+        }
+        if (RefuseFiltered() || readers_changed) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
         if (ready == 0) continue;
       }
       MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
       queues.resize(rigs.size());
+      last_status_wall.resize(rigs.size(), Clock::now());
       std::vector<std::pair<std::string, Pending>> requests;
       bool refused = false;  // from another rig's partition (security), or an unknown rig's dispose
       for (auto& set : endpoints) {
@@ -679,7 +746,21 @@ struct RigService::Impl {
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
-        queues[static_cast<std::size_t>(rig - rigs.data())].push_back(request);
+        const std::size_t index = static_cast<std::size_t>(rig - rigs.data());
+        const double max_steps = std::floor(kMaxStepRequestRigTimeS / rig->sensor_period_s());
+        if (static_cast<double>(request.remaining) > max_steps) {
+          char reason[300];
+          std::snprintf(reason, sizeof reason,
+                        "%s %llu of %llu steps refused: more than %.0f s of rig time (%.0f steps "
+                        "at this rate) in one request; send several",
+                        kStepRequestTopic, static_cast<unsigned long long>(request.id),
+                        static_cast<unsigned long long>(request.remaining), kMaxStepRequestRigTimeS,
+                        max_steps);
+          (void)rig->Refuse(reason);
+          MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+          continue;
+        }
+        queues[index].push_back(request);
       }
       for (std::size_t index = 0; index < rigs.size() && !stop.load(); ++index) {
         if (queues[index].empty()) continue;
@@ -697,6 +778,11 @@ struct RigService::Impl {
           last_step_request[index] = request.id;
           queues[index].pop_front();
           MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+          last_status_wall[index] = Clock::now();
+        } else if (std::chrono::duration<double>(Clock::now() - last_status_wall[index]).count() >=
+                   kLockstepStatusEveryS) {
+          MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
+          last_status_wall[index] = Clock::now();
         }
       }
     }
@@ -704,19 +790,19 @@ struct RigService::Impl {
   }
 };
 
-Status RigService::Impl::CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool keep_all,
+Status RigService::Impl::CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool lockstep,
                                          Endpoints* set) {
-  auto sensors =
-      dds::Writer<mpdrig_RigSensors>::Create(pub, sensors_topic.handle(), dds::SensorQos(keep_all));
+  auto sensors = dds::Writer<mpdrig_RigSensors>::Create(pub, sensors_topic.handle(),
+                                                        dds::SensorWriterQos(lockstep));
   if (!sensors.ok()) return sensors.status();
   set->sensors.emplace(std::move(sensors).value());
   // Estimates and profiles are sensor-like streams: the same QoS, for the same reasons.
   auto estimate = dds::Writer<mpdrig_RigEstimate>::Create(pub, estimate_topic.handle(),
-                                                          dds::SensorQos(keep_all));
+                                                          dds::SensorWriterQos(lockstep));
   if (!estimate.ok()) return estimate.status();
   set->estimate.emplace(std::move(estimate).value());
   auto profile = dds::Writer<mpdrig_PressureProfile>::Create(pub, profile_topic.handle(),
-                                                             dds::SensorQos(keep_all));
+                                                             dds::SensorWriterQos(lockstep));
   if (!profile.ok()) return profile.status();
   set->profile.emplace(std::move(profile).value());
   auto status = dds::Writer<mpdrig_RigStatus>::Create(pub, status_topic.handle(), dds::StatusQos());

@@ -11,8 +11,10 @@
 //              then the status carries last_completed_step_request. A client that needs its
 //              command applied in a given step waits for the command's acknowledgement
 //              (dds_wait_for_acks) before it sends the step request. Requests queue per rig;
-//              rigs with pending steps take turns of at most 100 steps, so a huge request
-//              (up to 2^32 - 1 steps) starves no other rig, and a stop ends it within one step.
+//              rigs with pending steps take turns of at most 100 steps, so a long request
+//              starves no other rig, and a stop ends it within one step. A request for more
+//              than an hour of rig time is refused (on the status, with the reason); while a
+//              long one runs, its rig's status goes out every 0.5 s of wall time.
 //              A command sent while its rig's request runs may apply in the middle of it.
 // A command that is NaN, infinite, out of range or for an unknown rig is refused, counted and
 // reported on status; the rig runs on. Nothing a client sends stops the service.
@@ -96,7 +98,8 @@ class RigService {
   ~RigService();
 
   // Serves until `stop` is set (SIGINT/SIGTERM in mpdrig serve) or the duration is reached.
-  // Fails only when the transport fails.
+  // Fails only when the transport fails, or when a playback meets a bad row (the error names its
+  // file, line and column; a playback cannot go on past it).
   Status Run(const std::atomic<bool>& stop);
 
   const std::vector<RigHost>& rigs() const;

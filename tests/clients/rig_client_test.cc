@@ -4,10 +4,13 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -148,6 +151,86 @@ TEST(RigClient, ConfigurationFileAndRecorderOptions) {
   client::RigOptions negative = options;
   negative.timeout_s = -1.0;
   EXPECT_FALSE(client::Rig::Connect(negative).ok());
+}
+
+// One client must never stop a class's shared lockstep rig. A recorder (rig_echo) of rig r1 is
+// stopped (SIGSTOP, as a debugger holds a process) and later another one is killed (SIGKILL: its
+// participant lingers until its 10 s lease ends, as after a controller killed and restarted):
+// neither acknowledges again, and a keep-all sensor writer would fill and then fail the
+// service's writes (the service died after 100-300 steps). A controller steps r1 2000 periods
+// past each, another steps r2 beside it, the status names the stopped reader, and the service
+// runs on.
+TEST(RigClient, AStoppedOrKilledReaderDoesNotHoldUpALockstepRig) {
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  const std::string d = std::to_string(domain);
+  testing::ChildProcess serve(
+      {MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100", "--rig", "r1", "--rig", "r2",
+       "--domain", d, "--pump-lpm", "5", "--choke-deg", "31"},
+      testing::ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
+  client::RigOptions options;
+  options.domain = domain;
+  options.timeout_s = 20.0;
+  options.rig_id = "r1";
+  auto r1 = client::Rig::Connect(options);
+  ASSERT_TRUE(r1.ok()) << r1.status().message();
+  options.rig_id = "r2";
+  auto r2 = client::Rig::Connect(options);
+  ASSERT_TRUE(r2.ok()) << r2.status().message();
+
+  const std::string out = ::testing::TempDir() + "stopped_reader_" + std::to_string(::getpid());
+  auto start_echo = [&](const std::string& name) {
+    auto echo = std::make_unique<testing::ChildProcess>(
+        std::vector<std::string>{RIG_ECHO_EXE, "--rig", "r1", "--domain", d, "--samples", "100000",
+                                 "--timeout", "60", "--out", out + name + ".csv"},
+        testing::ChildOptions::Quiet());
+    EXPECT_TRUE(echo->started()) << echo->error();
+    return echo;
+  };
+  // Steps r1 `steps` periods in requests of 100, and r2 100 periods beside them.
+  auto step_both = [&](int steps) {
+    for (int done = 0; done < steps; done += 100) {
+      auto s = (*r1)->Step(100);
+      if (!s.ok())
+        return ::testing::AssertionFailure()
+               << "r1 after " << done << " steps: " << s.status().message();
+    }
+    auto s = (*r2)->Step(100);
+    if (!s.ok()) return ::testing::AssertionFailure() << "r2: " << s.status().message();
+    return ::testing::AssertionSuccess();
+  };
+  auto stopped_reader_reported = [&] {
+    for (int i = 0; i < 60; ++i) {  // up to 6 s: well inside the stopped reader's 10 s lease
+      auto status = (*r1)->LatestStatus();
+      if (status.ok()) {
+        for (const std::string& w : status->warnings) {
+          if (w.find("acknowledged nothing") != std::string::npos) return true;
+        }
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+  };
+
+  // A recorder that reads, then stops acknowledging.
+  auto stopped = start_echo("a");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));  // it matches the rig
+  ASSERT_TRUE(step_both(100));
+  ASSERT_TRUE(stopped->Signal(SIGSTOP));
+  EXPECT_TRUE(step_both(2000));
+  EXPECT_TRUE(stopped_reader_reported()) << "the status never named the stopped reader";
+  EXPECT_EQ(serve.Wait(0.0), testing::ChildProcess::kNoExit) << "the service ended";
+
+  // A recorder killed without a goodbye: its reader lives on in the other participants until its
+  // lease ends.
+  auto killed = start_echo("b");
+  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+  ASSERT_TRUE(step_both(100));
+  killed->Kill();
+  EXPECT_TRUE(step_both(2000));
+  EXPECT_EQ(serve.Wait(0.0), testing::ChildProcess::kNoExit) << "the service ended";
+  stopped->Kill();
 }
 
 }  // namespace

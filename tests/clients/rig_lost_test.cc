@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include "model/riglog/rig_log.h"
+#include "mpdrig.h"
+#include "service/dds/dds.h"
 #include "tests/support/process.h"
 #include "tests/support/shell.h"
 #include "tests/support/test_domain.h"
@@ -128,6 +130,54 @@ TEST_F(RigLost, StoppedServiceIsNoticedByItsWriterLeaving) {
   EXPECT_NE(Output("echo.txt").find("the rig's service left"), std::string::npos)
       << Output("echo.txt");
   ExpectReadableRecording();
+}
+
+// Without --security anyone on the domain can write a sensor sample. One forged sample (counter
+// 1e9, rig time 1e6 s) is no evidence that the service restarted: both clients go on, and the
+// recording holds no row of it. Before: both exited 3 ("rig time went back") at the rig's next
+// genuine sample.
+TEST_F(RigLost, AStraySampleOfAnotherWriterIsNoEvidenceOfARestart) {
+  testing::ChildProcess serve(Serve(), Log("serve.txt"));
+  ASSERT_TRUE(serve.started());
+  testing::ChildProcess controller(Controller("8"), Log("controller.txt"));
+  testing::ChildProcess echo(Echo("8"), Log("echo.txt"));
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+
+  const int domain = std::stoi(domain_);
+  auto dds_domain = dds::Domain::Create(domain, dds::LoopbackConfig());
+  ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
+  auto participant = dds::CreateParticipant(domain);
+  ASSERT_TRUE(participant.ok());
+  auto topic = dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc, "mpdrig_sensors");
+  ASSERT_TRUE(topic.ok());
+  auto forger = dds::Writer<mpdrig_RigSensors>::Create(participant->handle(), topic->handle(),
+                                                       dds::SensorQos());
+  ASSERT_TRUE(forger.ok());
+  // The forged sample must reach both clients: wait until their readers have matched.
+  for (int i = 0; i < 100; ++i) {
+    dds_publication_matched_status_t matched{};
+    dds_get_publication_matched_status(forger->handle(), &matched);
+    if (matched.current_count >= 2) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  mpdrig_RigSensors forged{};
+  forged.rig_id = const_cast<char*>("rig-1");
+  forged.sample_counter = 1000000000ull;
+  forged.sim_time_s = 1e6;
+  ASSERT_TRUE(forger->Write(forged).ok());
+  std::this_thread::sleep_for(std::chrono::seconds(2));
+  EXPECT_EQ(controller.Wait(0.0), testing::ChildProcess::kNoExit) << Output("controller.txt");
+  EXPECT_EQ(echo.Wait(0.0), testing::ChildProcess::kNoExit) << Output("echo.txt");
+
+  serve.Signal(SIGTERM);  // the genuine end: both notice and say so
+  EXPECT_EQ(controller.Wait(10.0), 3) << Output("controller.txt");
+  EXPECT_NE(Output("controller.txt").find("the rig's service left"), std::string::npos)
+      << Output("controller.txt");
+  EXPECT_EQ(echo.Wait(10.0), 3) << Output("echo.txt");
+  ExpectReadableRecording();
+  auto read = riglog::ReadRigLog((dir_ / "echo.csv").string());
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_LT(read->time_s.back(), 100.0) << "the forged sample was recorded";
 }
 
 }  // namespace

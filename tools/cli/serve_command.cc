@@ -59,6 +59,7 @@ struct ServeArgs {
   std::uint64_t noise_seed = 1;
   std::string playback;       // a rig log to publish instead of simulating
   bool loop = false;          // with playback: start again after the last row
+  riglog::ReadOptions read;   // with playback: the log's time limits (--max-gap-s)
   std::string hidden_effect;  // NAME[:k=v] or random: an effect the status does not name
   std::uint64_t seed = 1;     // of --hidden-effect random
 };
@@ -116,7 +117,7 @@ Result<std::vector<service::RigHost>> MakeRigs(const ServeArgs& args, const RigT
     if (args.rigs.size() != 1) {
       return Status::Error("--playback plays one log as one rig: give one --rig");
     }
-    auto playback = service::LogPlayback::Open(args.playback, args.loop);
+    auto playback = service::LogPlayback::Open(args.playback, args.loop, args.read);
     if (!playback.ok()) return playback.status().Within("--playback");
     auto rig = service::RigHost::CreatePlayback(args.rigs.front(), from.params, from.options,
                                                 std::move(playback).value());
@@ -351,6 +352,9 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
                      "--rate-hz, the initial commands and --sensor-noise do not apply");
   g_rigs->add_flag("--loop", args->loop,
                    "with --playback: start again after the last row, the clock running on");
+  // A bad row anywhere in the log (a gap, a repeated time, a truncated line) ends the playback
+  // with its file:line:column and a non-zero exit; --max-gap-s admits longer gaps.
+  AddLogReadOptions(g_rigs, &args->read);
   CLI::Option_group* g_dds = command->add_option_group("DDS and a class");
   g_dds->add_option("--domain", args->domain, "DDS domain id")
       ->check(CLI::Range(0, 232))

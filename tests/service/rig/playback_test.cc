@@ -3,6 +3,8 @@
 // (not measured); commands are refused with the reason; a hidden effect is not named.
 #include "service/rig/log_playback.h"
 
+#include <unistd.h>
+
 #include <atomic>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +25,7 @@
 #include "service/rig/rig_host.h"
 #include "service/rig/rig_service.h"
 #include "service/rig/wire.h"
+#include "tests/support/process.h"
 #include "tests/support/test_domain.h"
 
 namespace mpdrig::service {
@@ -117,6 +120,88 @@ TEST(LogPlayback, LoopKeepsTheClockRising) {
   }
   EXPECT_EQ((*playback)->passes(), 2u);
   EXPECT_FALSE((*playback)->finished());
+}
+
+// A log whose row `bad` (0-based, after the header line) is broken as `kind` says, the rows
+// before it good at 100 Hz. Past LogPlayback::kPeriodRows, so Open reads it only later.
+std::string WriteLogWithABadRow(const std::string& name, int rows, int bad,
+                                const std::string& kind) {
+  const std::string path = (std::filesystem::temp_directory_path() / name).string();
+  std::ofstream out(path);
+  out << "time_s,piston_position_m,choke_position_deg,PT1_barg\n";
+  for (int i = 0; i < rows; ++i) {
+    double t = 0.01 * i;
+    if (i >= bad && kind == "gap") t += 15.0;  // 15 s without a sample
+    if (i == bad && kind == "repeated time") t = 0.01 * (i - 1);
+    if (i == bad && kind == "truncated") {
+      out << t << ",0.0\n";  // a line cut short: two fields of four
+      continue;
+    }
+    out << t << "," << 0.01 * std::sin(t) << ",31," << 4.0 + 0.1 * std::sin(t) << "\n";
+  }
+  return path;
+}
+
+// A bad row anywhere (past the rows Open reads to find the pace: a hang before) ends the
+// playback with the row's file:line:column: every row before it goes out, none after it, and
+// every later call gives the same error.
+TEST(LogPlayback, ABadRowFurtherOnEndsThePlaybackWithItsLine) {
+  constexpr int kBad = 1500;
+  for (const std::string kind : {"gap", "repeated time", "truncated"}) {
+    SCOPED_TRACE(kind);
+    const std::string path = WriteLogWithABadRow("mpdrig-playback-late-bad.csv", 2000, kBad, kind);
+    auto playback = LogPlayback::Open(path, false);
+    ASSERT_TRUE(playback.ok()) << playback.status().message();
+    for (int i = 0; i < kBad; ++i) {
+      auto row = (*playback)->Next(0);
+      ASSERT_TRUE(row.ok()) << "row " << i << ": " << row.status().message();
+    }
+    const std::string where = path + ":" + std::to_string(kBad + 2) + ":";  // 1-based, header
+    for (int again = 0; again < 3; ++again) {
+      auto row = (*playback)->Next(0);
+      ASSERT_FALSE(row.ok()) << "a row after the bad one went out";
+      EXPECT_NE(row.status().message().find(where), std::string::npos) << row.status().message();
+    }
+    EXPECT_FALSE((*playback)->failed().ok());
+    EXPECT_FALSE((*playback)->finished());
+  }
+  // A longer gap limit admits the gap (serve --max-gap-s): every row plays.
+  const std::string path = WriteLogWithABadRow("mpdrig-playback-gap.csv", 2000, kBad, "gap");
+  riglog::ReadOptions read;
+  read.max_gap_s = 20.0;
+  auto playback = LogPlayback::Open(path, false, read);
+  ASSERT_TRUE(playback.ok()) << playback.status().message();
+  for (int i = 0; i < 2000; ++i) ASSERT_TRUE((*playback)->Next(0).ok()) << "row " << i;
+  EXPECT_TRUE((*playback)->finished());
+}
+
+// The same as a process, as the issue met it: `mpdrig serve --playback` ticked on for ever
+// without a word. Now it ends within a second of reaching the row, non-zero, naming it.
+TEST(ServePlayback, ABadRowEndsTheServiceWithItsLine) {
+  constexpr int kBad = 1500;
+  const std::string path = WriteLogWithABadRow(
+      "mpdrig-serve-bad-" + std::to_string(::getpid()) + ".csv", 2000, kBad, "repeated time");
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  testing::ChildProcess serve({MPDRIG_EXE, "serve", "--playback", path, "--rig", "lab-1", "--clock",
+                               "fast", "--domain", std::to_string(domain)},
+                              testing::ChildOptions::Stderr(testing::Output::Capture()));
+  ASSERT_TRUE(serve.started()) << serve.error();
+  const int code = serve.Wait(30.0);  // 1500 rows at the fast clock: well under a second
+  EXPECT_NE(code, testing::ChildProcess::kNoExit) << "still running: the playback hangs";
+  EXPECT_NE(code, 0);
+  EXPECT_NE(serve.err().find(path + ":" + std::to_string(kBad + 2) + ":"), std::string::npos)
+      << serve.err();
+
+  // --max-gap-s admits a long gap: the whole log plays and the service ends normally.
+  const std::string gap = WriteLogWithABadRow(
+      "mpdrig-serve-gap-" + std::to_string(::getpid()) + ".csv", 2000, kBad, "gap");
+  testing::ChildProcess admitted(
+      {MPDRIG_EXE, "serve", "--playback", gap, "--rig", "lab-1", "--clock", "fast", "--domain",
+       std::to_string(domain), "--max-gap-s", "20"},
+      testing::ChildOptions::Stderr(testing::Output::Capture()));
+  ASSERT_TRUE(admitted.started()) << admitted.error();
+  EXPECT_EQ(admitted.Wait(30.0), 0) << admitted.err();
 }
 
 TEST(LogPlayback, RefusesABadLogWithItsLine) {

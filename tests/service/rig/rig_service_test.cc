@@ -281,19 +281,41 @@ TEST_F(ServiceTest, LockstepPublishesEveryStepAndClosingTheChokeRaisesC2) {
   EXPECT_NEAR(after["rig-1"].back()[Channel::kChokePosition], 28.0 / 90.0, 1e-6);
 }
 
-// One huge step request: while rig-1 runs its 2^32 - 1 steps (49 days of
-// rig time at 100 Hz), rig-2's requests are served, and a stop ends the service at once.
-TEST_F(ServiceTest, HugeStepRequestStarvesNoOtherRigAndAStopEndsTheService) {
+// A step request cannot be cancelled and a rig's later requests wait behind it: 2^32 - 1 steps
+// (49 days of rig time at 100 Hz) ran about 15 h while the rig's own controller failed. Now a
+// request for more than an hour of rig time is refused on the status with the reason; one at the
+// limit (360 000 steps) starves no other rig, its rig's status moves while it runs, and a stop
+// ends the service at once.
+TEST_F(ServiceTest, AStepRequestIsBoundedAndALongOneStarvesNoOtherRig) {
   Start();
   mpdrig_StepRequest huge{const_cast<char*>("rig-1"), 1000,
                           std::numeric_limits<std::uint32_t>::max()};
   ASSERT_TRUE(step_->Write(huge).ok());
+  Acked(step_->handle());
+  const auto [refused, reason] = Step("rig-1", 10);  // served at once: nothing ahead of it
+  EXPECT_EQ(refused, 1u);
+  EXPECT_NE(reason.find("more than 3600 s of rig time"), std::string::npos) << reason;
+
+  mpdrig_StepRequest longest{const_cast<char*>("rig-1"), 1001, 360000};
+  ASSERT_TRUE(step_->Write(longest).ok());
   Acked(step_->handle());
   Step("rig-2", 10);
   Step("rig-2", 10);
   auto samples = TakeSensors();
   EXPECT_EQ(samples["rig-2"].size(), 20u) << "rig-2 served while rig-1's request runs";
   EXPECT_GT(samples["rig-1"].size(), 0u) << "rig-1's request runs too";
+  // rig-1's status moves while its request runs (every 0.5 s of wall time).
+  double first_s = -1.0, last_s = -1.0;
+  for (int attempt = 0; attempt < 30 && !(last_s > first_s && first_s >= 0.0); ++attempt) {
+    auto ready = status_->Wait(DDS_MSECS(100));
+    if (!ready.ok() || !*ready) continue;
+    (void)status_->TakeEach([&](const mpdrig_RigStatus& st, const dds_sample_info_t&) {
+      if (std::string(st.rig_id) != "rig-1" || st.last_completed_step_request == 1001) return;
+      if (first_s < 0.0) first_s = st.sim_time_s;
+      last_s = st.sim_time_s;
+    });
+  }
+  EXPECT_GT(last_s, first_s) << "no status of rig-1 while its long request ran";
 
   stop_ = true;
   const auto asked = std::chrono::steady_clock::now();
