@@ -155,7 +155,7 @@ def main():
     parser.add_argument("--browser", action="store_true",
                         help="also watch rig-1 in headless Chromium (needs python3-selenium)")
     args = parser.parse_args()
-    mpdrig = os.path.join(args.build, "service", "mpdrig")
+    mpdrig = os.path.join(args.build, "tools", "mpdrig")
     dashboard = os.path.join(args.build, "clients", "dashboard")
     rigs = [f"rig-{i + 1}" for i in range(args.rigs)]
     serve_args = [mpdrig, "serve", "--clock", "realtime", "--rate-hz", str(args.rate_hz),

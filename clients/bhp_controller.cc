@@ -52,6 +52,10 @@
 
 namespace {
 
+// The exit code of a run during which another controller had the choke (1: failure to start,
+// 2: usage, 3: rig lost).
+constexpr int kExitNotOwner = 4;
+
 using Complex = std::complex<double>;
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop = true; }
@@ -357,7 +361,7 @@ class Session {
       if (!acted.ok()) return Stopped(acted);
     }
     PrintSummary();
-    return 0;
+    return Ended();
   }
 
  private:
@@ -405,6 +409,7 @@ class Session {
     if (command && !args_.open_loop) {
       MPDRIG_RETURN_IF_ERROR(rig_.Choke(*command, Interrupt()));
       ++commands_;
+      MPDRIG_RETURN_IF_ERROR(CheckOwnership(r.time_s));
     }
     if (log_.is_open()) {
       log_ << r.time_s << ',' << r.pt1_barg << ','
@@ -420,13 +425,60 @@ class Session {
     return mpdrig::Status::Ok();
   }
 
+  // Whether this controller's choke commands are the ones in force, once a second of rig time:
+  // under exclusive ownership a stronger writer, or an equal one that wins the tie by its GUID,
+  // takes the choke and this controller's commands are dropped without a word. It says so (at
+  // once, and again when it gets the choke back) and the run ends with kExitNotOwner.
+  mpdrig::Status CheckOwnership(double time_s) {
+    if (time_s < next_ownership_check_s_) return mpdrig::Status::Ok();
+    next_ownership_check_s_ = time_s + 1.0;
+    auto other = rig_.ChokeCommandedByOther();
+    if (!other.ok()) return other.status();
+    // Twice in a row, a second apart: the status right after this controller's first command may
+    // still name the writer before it.
+    if (other->has_value() && !other_seen_s_) {
+      other_seen_s_ = time_s;
+    } else if (other->has_value() && !not_owner_since_s_) {
+      not_owner_since_s_ = *other_seen_s_;
+      std::fprintf(stderr,
+                   "bhp_controller: at rig time %.3f s the choke of %s obeys another controller "
+                   "(%s), not this one (strength %d): its commands are dropped. A stronger "
+                   "--strength takes it; an equal one may lose the tie\n",
+                   time_s, args_.rig_id.c_str(), (*other)->c_str(), args_.strength);
+    }
+    if (!other->has_value()) other_seen_s_.reset();
+    if (!other->has_value() && not_owner_since_s_) {
+      not_owner_s_ += time_s - *not_owner_since_s_;
+      not_owner_since_s_.reset();
+      std::fprintf(stderr,
+                   "bhp_controller: at rig time %.3f s the choke obeys this controller again\n",
+                   time_s);
+    }
+    last_time_s_ = time_s;
+    return mpdrig::Status::Ok();
+  }
+  // Rig time during which another controller had the choke, up to the last check.
+  double NotOwnerSeconds() const {
+    return not_owner_s_ + (not_owner_since_s_ ? last_time_s_ - *not_owner_since_s_ : 0.0);
+  }
+  // The exit code of a run that ended as asked: 0, or kExitNotOwner if another controller had
+  // the choke for part of it (its summary is then not this controller's doing).
+  int Ended() const {
+    if (NotOwnerSeconds() <= 0.0 && !not_owner_since_s_) return 0;
+    std::fprintf(stderr,
+                 "bhp_controller: another controller had the choke of %s for %.1f s of the run: "
+                 "this controller's summary is not its own doing (exit %d)\n",
+                 args_.rig_id.c_str(), NotOwnerSeconds(), kExitNotOwner);
+    return kExitNotOwner;
+  }
+
   // A failed call: a lost rig (clients/rig_watch.h) says why and exits with kExitRigLost,
   // without the summary (the run did not end as asked); Ctrl-C ends the run normally.
   int Stopped(const mpdrig::Status& why) {
     using mpdrig::client::Failure;
     if (rig_.last_failure() == Failure::kInterrupted) {
       PrintSummary();
-      return 0;
+      return Ended();
     }
     if (rig_.lost()) {
       std::fprintf(stderr, "bhp_controller: rig %s lost: %s; stopping after %ld choke commands\n",
@@ -471,6 +523,11 @@ class Session {
   std::optional<std::uint64_t> next_counter_;  // lockstep: the sample the next step brings
   bool finished_ = false;
   long commands_ = 0;
+  double next_ownership_check_s_ = -1e300;
+  std::optional<double> other_seen_s_;       // another owner at the last check, since then
+  std::optional<double> not_owner_since_s_;  // rig time since another controller has the choke
+  double not_owner_s_ = 0.0;                 // rig time it had it before
+  double last_time_s_ = 0.0;                 // of the last ownership check
 };
 
 int Run(const Args& args) {
@@ -604,7 +661,11 @@ int main(int argc, char** argv) {
       "A lost rig: when the rig's time or sample counter goes back (the service restarted), its\n"
       "sensor writer leaves (the service exited, or crashed and its lease ran out) or no sample\n"
       "comes for --timeout s, the controller says why on stderr and exits with status 3, without\n"
-      "its summary line: its integrator, set point and adaptation belong to the lost run.");
+      "its summary line: its integrator, set point and adaptation belong to the lost run.\n"
+      "Another controller on the same rig: the choke obeys the strongest live writer (a tie goes\n"
+      "by GUID) and drops the others' commands without a word. The controller checks the rig's\n"
+      "status every second of rig time; while another writer has the choke it says so on stderr,\n"
+      "and a run that lost the choke for any part of it ends with status 4 after its summary.");
   CLI11_PARSE(app, argc, argv);
   ControllerOptions& c = args.control;
   c.feedforward = !no_feedforward;

@@ -10,10 +10,12 @@
 #include <atomic>
 #include <cmath>
 #include <csignal>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -74,6 +76,12 @@ int Fail(const mpdrig::Status& status) {
 
 struct Recorded {
   long written = 0;
+  // Samples the rig published that never arrived (gaps in sample_counter: the reader fell behind
+  // a real-time rig's keep-last writer, e.g. rig_echo was stopped or starved), in how many gaps,
+  // and the longest gap in rig time with where it began.
+  std::uint64_t lost = 0;
+  long gaps = 0;
+  double longest_gap_s = 0.0, longest_gap_at_s = 0.0;
   std::vector<double> published_s, received_s;  // --timing
   std::string error;  // why the recording stopped early, if not Ctrl-C or a lost rig
 };
@@ -84,6 +92,7 @@ Recorded Record(mpdrig::client::Rig& rig, std::ostream& out, long max_samples, b
                 const mpdrig::client::Rig::Interrupt& interrupt) {
   Recorded r;
   double previous_time = -1e300;
+  std::optional<std::uint64_t> previous_counter;
   while (!g_stop && (max_samples == 0 || r.written < max_samples)) {
     auto s = rig.Next(interrupt);
     if (!s.ok()) {
@@ -95,6 +104,26 @@ Recorded Record(mpdrig::client::Rig& rig, std::ostream& out, long max_samples, b
     }
     // Only increasing times (a rig log's time is strictly increasing).
     if (!(s->time_s > previous_time)) continue;
+    // A hole in the recording is marked where it is (a comment line, which every reader of the
+    // format skips) and counted: the rows on either side are not neighbours in time.
+    if (previous_counter && s->sample_counter > *previous_counter + 1) {
+      const std::uint64_t missing = s->sample_counter - *previous_counter - 1;
+      char line[256];
+      std::snprintf(line, sizeof line,
+                    "# lost: %llu samples between time_s %.17g and %.17g (sample_counter %llu to "
+                    "%llu did not arrive)\n",
+                    static_cast<unsigned long long>(missing), previous_time, s->time_s,
+                    static_cast<unsigned long long>(*previous_counter + 1),
+                    static_cast<unsigned long long>(s->sample_counter - 1));
+      out << line;
+      r.lost += missing;
+      ++r.gaps;
+      if (s->time_s - previous_time > r.longest_gap_s) {
+        r.longest_gap_s = s->time_s - previous_time;
+        r.longest_gap_at_s = previous_time;
+      }
+    }
+    previous_counter = s->sample_counter;
     WriteRow(out, *s);
     if (timing) {
       r.published_s.push_back(s->published_s);
@@ -172,6 +201,14 @@ int main(int argc, char** argv) {
   out->flush();
   if (!*out) return Fail(mpdrig::Status::Error(out_path + ": write failed"));
   std::fprintf(stderr, "rig_echo: %ld samples of %s recorded\n", recorded.written, rig_id.c_str());
+  if (recorded.lost > 0) {
+    std::fprintf(stderr,
+                 "rig_echo: %llu samples lost in %ld gaps (marked '# lost:' in the log), the "
+                 "longest %.3f s after rig time %.3f s: this reader fell behind the rig (stopped, "
+                 "or starved of CPU); the rows around a gap are not neighbours in time\n",
+                 static_cast<unsigned long long>(recorded.lost), recorded.gaps,
+                 recorded.longest_gap_s, recorded.longest_gap_at_s);
+  }
   if (const auto& lost = (*rig)->lost()) {
     // A lost rig (clients/rig_watch.h) ends the recording: the file keeps what came before, on
     // whole rows, and the exit status says the recording did not end as asked.

@@ -29,8 +29,9 @@ packages=(
   # and its WebDriver with Selenium for the dashboard's test (tests/clients/dashboard_test.py)
   chromium chromium-driver python3-selenium
   # DDS Security for a class (deploy/security/make-class): the CA, identities, signed
-  # governance and permissions; tshark for the test that reads the wire (tests/security)
-  openssl tshark
+  # governance and permissions; tshark for the test that reads the wire (tests/security);
+  # libssl-dev: a participant checks that its private key belongs to its certificate
+  openssl tshark libssl-dev
   # Python client module (clients/python): bindings, numpy arrays, its tests and the live plot
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib
   # another DDS vendor against the service, as ROS 2 and MATLAB's DDS Blockset use it

@@ -532,6 +532,27 @@ Status Rig::SendCommand(int topic_index, const T& sample, const Interrupt& inter
   return Status::Ok();
 }
 
+Result<std::optional<std::string>> Rig::ChokeCommandedByOther() {
+  MPDRIG_RETURN_IF_ERROR(ClosedOrLost());
+  MPDRIG_RETURN_IF_ERROR(Drain());
+  const dds_entity_t writer = dds_->command_writers[kChoke].handle();
+  if (writer <= 0 || !rig_status_) return std::optional<std::string>();
+  std::string owner;  // the status's "choke: <owner>"
+  for (const std::string& entry : rig_status_->actuator_owners) {
+    if (entry.rfind("choke: ", 0) == 0) owner = entry.substr(7);
+  }
+  if (owner.empty()) return std::optional<std::string>();
+  // The service names a writer by its GUID in hex (rig_service.cc, DescribeWriter).
+  dds_guid_t guid{};
+  if (dds_get_guid(writer, &guid) < 0) return std::optional<std::string>();
+  char hex[2 * sizeof guid.v + 1];
+  for (std::size_t i = 0; i < sizeof guid.v; ++i) std::snprintf(hex + 2 * i, 3, "%02x", guid.v[i]);
+  if (owner.find(std::string("writer ") + hex) != std::string::npos) {
+    return std::optional<std::string>();
+  }
+  return std::optional<std::string>(owner);
+}
+
 Status Rig::Choke(double opening_deg, const Interrupt& interrupt) {
   mpdrig_ChokeCommand c{options_.rig_id.data(), opening_deg};
   return SendCommand(kChoke, c, interrupt);

@@ -178,6 +178,13 @@ class Rig {
   mpdrig::Status Outlet(double pressure_barg, const Interrupt& interrupt = {});
   mpdrig::Status Piston(const PistonCommand& command, const Interrupt& interrupt = {});
 
+  // Who commands the rig's choke, by the newest status's actuator_owners (exclusive ownership:
+  // the strongest live writer wins, a tie goes by GUID, and a loser's commands are dropped
+  // without a word): nullopt while this client's own writer does, or before the status names
+  // any writer (this client has not commanded yet, or the rig has not applied it); else the
+  // status's words for the owner ("strength 20, writer 1a2b...", or "none"). Does not wait.
+  Result<std::optional<std::string>> ChokeCommandedByOther();
+
   // Lockstep only: advances the rig `steps` sensor periods (commands written before are applied
   // from the first) and returns the last sample of them. Failure on a real-time rig.
   Result<Sensors> Step(std::uint32_t steps = 1, const Interrupt& interrupt = {});

@@ -641,7 +641,8 @@ Result<Comparison> ComparisonAccumulator::Finish(
   for (ChannelState& s : channels_) {
     ChannelMetrics metrics = SampleMetrics(s);
     if (std::isfinite(metrics.nrmse)) error_sum += metrics.nrmse, ++error_count;
-    CalcLag(s, &metrics);
+    // A constant measurement (NaN NRMSE) has no lag to find: its correlation would be rounding.
+    if (std::isfinite(metrics.nrmse)) CalcLag(s, &metrics);
     metrics.bands = CalcBands(s);
     if (s.transfer) result.transfer_functions.push_back(CalcTransferFunction(s));
     metrics.residual = CalcResidualAnalysis(s, metrics);
@@ -688,8 +689,12 @@ ChannelMetrics ComparisonAccumulator::SampleMetrics(const ChannelState& s) const
   metrics.measured_std_si = std::sqrt(s.sst / count);
   metrics.rms_si = std::sqrt(s.sse / count);
   metrics.bias_si = s.sum_e / count;
-  // A constant measurement has no variation to explain: NRMSE undefined (NaN).
-  metrics.nrmse = Nrmse(s.sse, s.sst);
+  // A constant measurement (within rounding: IsConstantSpread) has no variation to explain:
+  // NRMSE undefined (NaN), the channel left out of the mean error. Dividing by a spread of
+  // rounding gave "error 2e+10" on a log of identical rows.
+  metrics.nrmse = IsConstantSpread(channel.channel, channel.mean_si, metrics.measured_std_si)
+                      ? std::numeric_limits<double>::quiet_NaN()
+                      : Nrmse(s.sse, s.sst);
   metrics.fit_percent = 100.0 * (1.0 - metrics.nrmse);
   return metrics;
 }

@@ -2,8 +2,10 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include "model/common/status.h"
+#include "model/riglog/channels.h"
 
 namespace mpdrig {
 namespace {
@@ -50,8 +52,19 @@ std::vector<WindowSums> ChannelWindowSums(const MeasuredLog& log, const ModelTra
       sums[c].ss_tot += (y[n] - mean[c]) * (y[n] - mean[c]);
       ++sums[c].count;
     }
+    if (sums[c].count > 0) {
+      sums[c].constant = IsConstantSpread(log.channels[c].channel, mean[c],
+                                          std::sqrt(sums[c].ss_tot / sums[c].count));
+    }
   }
   return sums;
+}
+
+bool IsConstantSpread(Channel channel, double mean_si, double std_si) {
+  const std::optional<riglog::PhysicalRange> range =
+      riglog::PhysicalRangeOf(riglog::QuantityOf(channel));
+  const double span = range ? range->max_si - range->min_si : 0.0;
+  return !(std_si > 1e-9 * std::abs(mean_si) && std_si > 1e-12 * span);
 }
 
 double WindowError(const MeasuredLog& log, const ModelTraces& model, double begin_s, double end_s) {

@@ -5,6 +5,7 @@
 // and diagnose's scores all take their NRMSE from here, so a "mean NRMSE" means one thing.
 #pragma once
 
+#include <limits>
 #include <vector>
 
 #include "model/analysis/log_replay.h"
@@ -15,11 +16,23 @@ namespace mpdrig {
 // NRMSE from the two sums; NaN where the measurement is constant (no variation to explain).
 double Nrmse(double ss_res, double ss_tot);
 
+// Whether a measurement that spreads by `std_si` (its standard deviation) about `mean_si` is
+// constant: its spread is rounding, not variation. Relative to its level, 1e-9 (a double carries
+// 16 digits, a lab log 4-6; rounding in the model's arithmetic or a conversion is far below
+// 1e-9, the coarsest variation a log's digits can show far above), and, for a level near 0,
+// 1e-12 of the quantity's physical span (riglog::PhysicalRangeOf: 2e-4 Pa of pressure,
+// 2e-13 m^3/s of flow). A constant channel has no variation to explain: its NRMSE is
+// undefined (NaN), and it is left out of an error averaged over channels.
+bool IsConstantSpread(Channel channel, double mean_si, double std_si);
+
 struct WindowSums {
   double ss_res = 0.0;
   double ss_tot = 0.0;
-  long count = 0;  // measured samples in the window
-  double nrmse() const { return Nrmse(ss_res, ss_tot); }
+  long count = 0;         // measured samples in the window
+  bool constant = false;  // the measurement is constant there (IsConstantSpread): NRMSE NaN
+  double nrmse() const {
+    return constant ? std::numeric_limits<double>::quiet_NaN() : Nrmse(ss_res, ss_tot);
+  }
 };
 
 // Each channel's mean over the measured samples of [begin_s, end_s] (0 where there is none).

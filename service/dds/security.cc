@@ -1,6 +1,12 @@
 #include "service/dds/security.h"
 
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
 #include <sys/stat.h>
+
+#include <cstdio>
+#include <memory>
 
 #include <filesystem>
 #include <fstream>
@@ -14,6 +20,33 @@ namespace fs = std::filesystem;
 constexpr const char* kHowToMake =
     " (deploy/security/make-class OUT NAME... makes the directories OUT/service, "
     "OUT/instructor and OUT/NAME)";
+
+// Whether the private key in `key_path` belongs to the certificate in `certificate_path`: else
+// Cyclone accepts the pair, the handshake fails on every peer, and the client only times out
+// ("the rig is not running") instead of saying what is wrong.
+Status CheckKeyMatchesCertificate(const std::string& certificate_path,
+                                  const std::string& key_path) {
+  auto read = [](const std::string& path, auto reader) {
+    std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "r"), &std::fclose);
+    return file ? reader(file.get()) : nullptr;
+  };
+  std::unique_ptr<X509, void (*)(X509*)> certificate(
+      read(certificate_path, [](FILE* f) { return PEM_read_X509(f, nullptr, nullptr, nullptr); }),
+      &X509_free);
+  if (!certificate) return Status::Error(certificate_path + " is not a readable PEM certificate");
+  std::unique_ptr<EVP_PKEY, void (*)(EVP_PKEY*)> key(
+      read(key_path, [](FILE* f) { return PEM_read_PrivateKey(f, nullptr, nullptr, nullptr); }),
+      &EVP_PKEY_free);
+  if (!key) {
+    return Status::Error(key_path + " is not a readable PEM private key (or it has a passphrase)");
+  }
+  if (X509_check_private_key(certificate.get(), key.get()) != 1) {
+    return Status::Error(key_path + " does not match the certificate " + certificate_path +
+                         ": the key belongs to another identity (copy both from one directory "
+                         "that deploy/security/make-class made)");
+  }
+  return Status::Ok();
+}
 
 // Reads a file of the directory, or says what is wrong with it.
 Result<std::string> ReadPart(const fs::path& path) {
@@ -84,6 +117,7 @@ Result<SecurityFiles> LoadSecurityDirectory(const std::string& dir) {
     if (!path.ok()) return path.status();
     *part.out = *path;
   }
+  MPDRIG_RETURN_IF_ERROR(CheckKeyMatchesCertificate(files.identity_certificate, files.private_key));
   // The private key is the identity: one that others on the machine can read is no identity.
   struct stat key_stat {};
   if (::stat(files.private_key.c_str(), &key_stat) == 0 && (key_stat.st_mode & 077) != 0) {

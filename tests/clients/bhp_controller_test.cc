@@ -2,17 +2,20 @@
 // domain of the test's own, lockstep clock (deterministic on a loaded machine): two rigs under the
 // same heave, one with its choke fixed, one controlled; the controlled one's bottom-hole pressure
 // must oscillate a clear factor less, around the same mean.
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <memory>
 #include <ostream>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
 #include "tests/support/process.h"
+#include "tests/support/shell.h"
 #include "tests/support/test_domain.h"
 
 namespace mpdrig {
@@ -117,6 +120,53 @@ INSTANTIATE_TEST_SUITE_P(LabNoise, BhpController,
                          [](const ::testing::TestParamInfo<Excitation>& info) {
                            return info.param.name;
                          });
+
+// Two controllers on one rig: the choke's topic has exclusive ownership, so the strongest live
+// writer's commands are the ones in force and the other's are dropped without a word; of two of
+// equal strength one wins the tie by its GUID. The one that does not own the choke must say so
+// and not end as if its summary were its own doing (exit 4); the owner exits 0. Before: both
+// exited 0 with summaries of their commands.
+TEST(BhpControllerOwnership, TheControllerThatDoesNotOwnTheChokeSaysSo) {
+  const int claimed = testing::ClaimTestDomain();
+  ASSERT_GT(claimed, 0);
+  const std::string domain = std::to_string(claimed);
+  testing::ChildProcess serve({MPDRIG_EXE, "serve", "--clock", "realtime", "--rate-hz", "100",
+                               "--heave-amp-m", "0.05", "--heave-hz", "0.2", "--pump-lpm", "5",
+                               "--choke-deg", "31", "--rig", "rig-1", "--domain", domain},
+                              testing::ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
+  // --duration is the rig time to stop at: each pair runs about 7 s past the previous one.
+  double until_s = 0.0;
+  auto controller = [&](const char* strength, const std::string& err) {
+    testing::ChildOptions options;
+    options.out = testing::Output::Discard();
+    options.err = testing::Output::File(err);
+    return std::make_unique<testing::ChildProcess>(
+        std::vector<std::string>{BHP_CONTROLLER_EXE, "--domain", domain, "--rig", "rig-1",
+                                 "--setpoint-barg", "3.6", "--duration", std::to_string(until_s),
+                                 "--timeout", "20", "--strength", strength},
+        options);
+  };
+  const std::string dir = ::testing::TempDir();
+  for (const auto& [a, b] : {std::pair{"20", "10"}, std::pair{"10", "10"}}) {
+    SCOPED_TRACE(std::string("strengths ") + a + " and " + b);
+    const std::string err_a = dir + "owner_a.err", err_b = dir + "owner_b.err";
+    until_s += 8.0;
+    auto first = controller(a, err_a);
+    auto second = controller(b, err_b);
+    ASSERT_TRUE(first->started() && second->started());
+    const int code_a = first->Wait(60.0), code_b = second->Wait(60.0);
+    const std::string said_a = testing::ReadFile(err_a), said_b = testing::ReadFile(err_b);
+    // Exactly one owns the choke at the end: 0 and 4, in some order.
+    EXPECT_EQ(std::min(code_a, code_b), 0) << said_a << said_b;
+    EXPECT_EQ(std::max(code_a, code_b), 4) << said_a << said_b;
+    const std::string& loser = code_a == 4 ? said_a : said_b;
+    EXPECT_NE(loser.find("obeys another controller"), std::string::npos) << loser;
+    if (std::string(a) != b) {
+      EXPECT_EQ(code_a, 0) << "the stronger controller owns the choke: " << said_a;
+    }
+  }
+}
 
 }  // namespace
 }  // namespace mpdrig

@@ -319,7 +319,16 @@ TEST_F(SecureClass, ServiceRefusesAnInvalidSecurityDirectorySayingWhy) {
     fs::copy_file(dir_ / "alice" / file, dir_ / "mixed" / file);
   }
   fs::copy_file(dir_ / "bob" / "permissions.p7s", dir_ / "mixed" / "permissions.p7s");
+  // alice's files with bob's private key: Cyclone took the pair and every handshake failed, so
+  // a client waited 6 s and said the rig was not running.
+  fs::create_directories(dir_ / "keyswap");
+  for (const char* file : {"identity_ca.pem", "identity.pem", "permissions_ca.pem",
+                           "governance.p7s", "permissions.p7s"}) {
+    fs::copy_file(dir_ / "alice" / file, dir_ / "keyswap" / file);
+  }
+  fs::copy_file(dir_ / "bob" / "identity_key.pem", dir_ / "keyswap" / "identity_key.pem");
   const Case cases[] = {
+      {(dir_ / "keyswap").string(), "does not match the certificate"},
       {(dir_ / "nowhere").string(), "does not exist"},
       {(dir_ / "broken").string(), "missing " + (dir_ / "broken" / "identity.pem").string()},
       {(dir_ / "swapped").string(), "is not signed DDS Security permissions"},
@@ -348,6 +357,15 @@ TEST_F(SecureClass, ServiceRefusesAnInvalidSecurityDirectorySayingWhy) {
     EXPECT_GT(echo.Wait(20.0), 0);
   }
   EXPECT_NE(ReadFile(log).find("is not signed DDS Security permissions"), std::string::npos)
+      << ReadFile(log);
+  {
+    testing::ChildProcess echo(
+        {RIG_ECHO_EXE, "--security", (dir_ / "keyswap").string(), "--rig", "alice", "--domain",
+         std::to_string(domain_), "--samples", "1", "--out", "/dev/null"},
+        Logged(log));
+    EXPECT_GT(echo.Wait(20.0), 0);
+  }
+  EXPECT_NE(ReadFile(log).find("does not match the certificate"), std::string::npos)
       << ReadFile(log);
   {
     testing::ChildProcess echo(

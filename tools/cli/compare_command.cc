@@ -1,5 +1,6 @@
 // mpdrig compare: replay a measured log's inputs through the model; write the metrics as JSON and
 // a self-contained HTML report (model/analysis/compare.h, tools/report/).
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -88,12 +89,21 @@ int RunCompare(const CompareArgs& args) {
     std::printf("compared %zu channels over %.6g s: error (mean NRMSE) %.4g",
                 comparison->channels.size(), comparison->duration_s, comparison->error);
     const ChannelMetrics* worst = nullptr;
+    std::size_t constant = 0;
     for (const ChannelMetrics& channel : comparison->channels) {
+      if (!std::isfinite(channel.nrmse)) {
+        ++constant;  // nothing to explain on it
+        continue;
+      }
       if (worst == nullptr || channel.nrmse > worst->nrmse) worst = &channel;
     }
     if (worst != nullptr) {
       std::printf(", worst %s (fit %.1f %%)",
                   std::string(riglog::ChannelName(worst->channel)).c_str(), worst->fit_percent);
+    }
+    if (constant > 0) {
+      std::printf("; %zu channel%s constant (within rounding: nothing to explain, left out)",
+                  constant, constant == 1 ? "" : "s");
     }
     std::printf("\n");
   }

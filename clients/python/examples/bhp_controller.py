@@ -228,26 +228,6 @@ def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop:
         if s.time_s >= duration_s - 1e-9:
             break
     return swing
-    for s in rig.stream():
-        z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
-        if wants_estimate:
-            # Lockstep: the estimate of this very sample; real time: the newest one.
-            est = rig.estimate(s.sample_counter if rig.lockstep else None)
-            z = complex(est.piston_velocity_est_mps,
-                        2.0 * math.pi * est.disturbance_frequency_hz * est.piston_position_est_m)
-            frequency_hz = est.disturbance_frequency_hz
-            if use_estimate:
-                bhp = est.BHP_est_barg
-        if not open_loop:
-            command = controller.update(s.time_s, bhp, s.choke_position_deg, z, frequency_hz)
-            if command is not None:
-                rig.choke(command)
-        if s.time_s > duration_s - measure_last_s:
-            swing.add(s.time_s, s.PT1_barg)
-            swing.frequency_hz = swing.frequency_hz or frequency_hz
-        if s.time_s >= duration_s - 1e-9:
-            break
-    return swing
 
 
 def main() -> int:

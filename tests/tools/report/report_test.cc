@@ -294,5 +294,49 @@ TEST(CompareCommandTest, ReportsOnANoiseFreeLogWithAConstantInput) {
   EXPECT_NE(html.find("</html>"), std::string::npos);
 }
 
+// A still rig, noise-free: every channel constant but for rounding (1e-12 bar), which the model
+// matches. There is nothing to explain: each channel is left out as constant, not divided by its
+// rounding. Before: "worst PT10 (fit 47.2 %)"; on identical rows "error 2.066e+10".
+TEST(CompareCommandTest, ConstantChannelsAreLeftOutNotDividedByTheirRounding) {
+  const fs::path dir = TempDir();
+  const std::string exe = MPDRIG_EXE;
+  const std::string log = (dir / "still_rig.csv").string();
+  std::string output;
+  ASSERT_EQ(RunShell(exe + " simulate --piston 0 --choke-deg 31 --pump-lpm 5 --duration 20" +
+                         " --sensor-noise none --out " + log,
+                     &output),
+            0)
+      << output;
+  ASSERT_EQ(RunShell(exe + " compare " + log + " --json " + log + ".json 2>/dev/null", &output), 0)
+      << output;
+  EXPECT_EQ(output.find("worst"), std::string::npos) << output;
+  EXPECT_NE(output.find("channels constant (within rounding"), std::string::npos) << output;
+  const std::string json = ReadFile(log + ".json");
+  EXPECT_NE(json.find("\"nrmse\":null"), std::string::npos) << "constant channels: null";
+  // P1's lag was 10 s (the window's edge) with a correlation of 1.38: rounding, not a lag.
+  EXPECT_EQ(json.find("\"lag_s\":10,"), std::string::npos) << "a lag found in rounding";
+
+  // Identical rows, written by hand: one varying channel (PT5) is compared, the rest are not.
+  const std::string rows = (dir / "identical_rows.csv").string();
+  {
+    std::ofstream out(rows);
+    out << "time_s,piston_position_m,choke_position_deg,FT2_lpm,C2_barg,PT1_barg,PT5_barg\n";
+    for (int i = 0; i < 20000; ++i) {
+      out << 0.01 * i << ",0,31,5,3.9521,4.2138," << 4.1 + 0.01 * std::sin(0.05 * i) << "\n";
+    }
+  }
+  ASSERT_EQ(RunShell(exe + " compare " + rows + " --json " + rows + ".json 2>/dev/null", &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("worst PT5"), std::string::npos) << output;
+  EXPECT_NE(output.find("2 channels constant"), std::string::npos) << output;
+  double error = 0.0;
+  const std::size_t at = output.find("error (mean NRMSE) ");
+  ASSERT_NE(at, std::string::npos) << output;
+  ASSERT_EQ(std::sscanf(output.c_str() + at, "error (mean NRMSE) %lf", &error), 1) << output;
+  EXPECT_LT(error, 1e4) << "the error of the one varying channel, not of rounding (2e10): "
+                        << output;
+}
+
 }  // namespace
 }  // namespace mpdrig
