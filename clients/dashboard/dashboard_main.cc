@@ -10,6 +10,9 @@
 //                                           reset, fit_now); answers with its command_id
 //   GET  /api/health                        DDS open or not, samples, CPU (does not count as
 //                                           watching: a monitor does not keep DDS open)
+//
+// The connections are bounded: request size, deadlines, open connections
+// (clients/dashboard/guarded_server.h).
 #include <signal.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
@@ -22,6 +25,7 @@
 #include <httplib.h>
 #include <CLI/CLI.hpp>
 
+#include "clients/dashboard/guarded_server.h"
 #include "clients/dashboard/json_out.h"
 #include "clients/dashboard/page.h"
 #include "clients/dashboard/rig_feed.h"
@@ -56,13 +60,6 @@ std::string ErrorJson(const std::string& message) {
 }
 
 void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed) {
-  // httplib's default also sets SO_REUSEPORT, with which a second dashboard on the same port
-  // would start "fine" and take half the connections: only SO_REUSEADDR (a restart may bind at
-  // once), so that a port in use is an error.
-  server->set_socket_options([](socket_t sock) {
-    int yes = 1;
-    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  });
   server->set_default_headers({{"Cache-Control", "no-store"}});
   server->Get("/", [](const httplib::Request&, httplib::Response& res) {
     res.set_content(mpdrig::dashboard::PageHtml(), "text/html; charset=utf-8");
@@ -191,10 +188,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "dashboard: %s\n", feed.status().message().c_str());
     return 1;
   }
-  httplib::Server server;
+  mpdrig::dashboard::GuardedServer server{mpdrig::dashboard::ServerLimits{}};
   Route(&server, feed->get());
-  const int port = args.port == 0 ? server.bind_to_any_port(args.host)
-                                  : (server.bind_to_port(args.host, args.port) ? args.port : -1);
+  const int port = server.Bind(args.host, args.port);
   if (port <= 0) {
     std::fprintf(stderr, "dashboard: cannot listen on %s:%d (in use? try another --port)\n",
                  args.host.c_str(), args.port);
@@ -205,5 +201,6 @@ int main(int argc, char** argv) {
   std::thread stopper(StopOnSignal, &server, signals, args.duration_s);
   const bool listened = server.listen_after_bind();
   stopper.join();
+  server.StopConnections();
   return listened ? 0 : 1;
 }
