@@ -3,7 +3,7 @@
 it: a real `dashboard` on 127.0.0.1, a free port and a DDS domain of its own, each check well
 under 20 s, all traffic to 127.0.0.1, every loop bounded.
 
-  dashboard_guard_test.py DASHBOARD_EXE CHECK
+  dashboard_guard_test.py DASHBOARD_EXE CHECK [MPDRIG_EXE]
 
 CHECK is one of:
   cross_site  a write (POST /api/shadow) without the page's Origin (or Referer) and the page's
@@ -12,6 +12,10 @@ CHECK is one of:
               token or with a wrong one, no Origin nor Referer; the page carries a token, and a
               write made as the page makes it passes the guard (it reaches the feed, which answers
               that no shadow listens: 400, not 403).
+  cross_site_shadow  (needs MPDRIG_EXE) as it was found: a rig and its shadow run (`mpdrig serve`,
+              `mpdrig shadow`); another site's text/plain POST of set wave_speed_mps=400 is
+              refused and the shadow's wave speed stays; the same write made as the page makes it
+              is taken, and the shadow then reports wave_speed_mps=400.
   slow        50 clients each send a header line every 2 s (a slowloris): a normal request is
               answered within 1 s meanwhile, and the slow ones are cut off (408) within the
               request deadline (5 s) plus 2 s.
@@ -42,8 +46,8 @@ HOST = "127.0.0.1"
 class Dashboard:
     """The dashboard binary on 127.0.0.1 and a free port; it stops by itself after 60 s."""
 
-    def __init__(self, exe):
-        domain = claim_test_domain()
+    def __init__(self, exe, domain=None):
+        domain = domain or claim_test_domain()
         self.proc = subprocess.Popen([exe, "--host", HOST, "--port", "0", "--domain", str(domain),
                                       "--duration", "60"], stdout=subprocess.PIPE, text=True,
                                      pass_fds=(claims[domain],))
@@ -270,17 +274,80 @@ def check_big_body(dash):
     dash.timed_get("after", 1.0)
 
 
+def check_cross_site_shadow(dash, mpdrig_exe, domain):
+    rig, wanted = "mystery", "wave_speed_mps=400"
+    started = time.monotonic()
+    procs = [subprocess.Popen([mpdrig_exe, "serve", "--clock", "realtime", "--rate-hz", "50",
+                               "--domain", str(domain), "--rig", rig, "--cells", "20",
+                               "--duration", "40"], stdout=subprocess.DEVNULL,
+                              pass_fds=(claims[domain],)),
+             subprocess.Popen([mpdrig_exe, "shadow", "--rig", rig, "--domain", str(domain),
+                               "--cells", "20", "--window-s", "2", "--warmup-s", "1",
+                               "--status-period-s", "0.2", "--duration", "40"],
+                              stdout=subprocess.DEVNULL, pass_fds=(claims[domain],))]
+    try:
+        def shadow_status():
+            _, text, _ = dash.request("GET", f"/api/state?rig={rig}&since=999999999")
+            return json.loads(text).get("shadow_status")
+
+        status = None
+        while status is None and time.monotonic() - started < 15:
+            time.sleep(0.3)
+            status = shadow_status()
+        assert status, "the shadow's status did not reach the dashboard within 15 s"
+        print(f"shadow up after {time.monotonic() - started:.1f} s: {status['parameters']}",
+              flush=True)
+        assert wanted not in status["parameters"]
+        path = f"/api/shadow?rig={rig}&action=set&arg={wanted.replace('=', '%3D')}"
+        status_code, text, _ = dash.request("POST", path, body=wanted, headers={
+            "Origin": "http://evil.example", "Content-Type": "text/plain"})
+        print(f"another site's text/plain POST: {status_code} {text}", flush=True)
+        time.sleep(2.0)  # ten status periods: what the shadow took would show
+        status = shadow_status()
+        print(f"2 s later the shadow has: {status['parameters']}", flush=True)
+        assert wanted not in status["parameters"], "another site's POST set the wave speed"
+        assert status_code == 403
+        _, page, _ = dash.request("GET", "/")
+        token = re.search(r'name="mpdrig-token" content="([0-9a-f]+)"', page).group(1)
+        status_code, text, _ = dash.request("POST", path, body="", headers={
+            "Origin": dash.origin, "X-Mpdrig-Token": token})
+        print(f"the page's POST: {status_code} {text}", flush=True)
+        assert status_code == 200 and json.loads(text)["ok"], text
+        command_id = json.loads(text)["command_id"]
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline:
+            status = shadow_status()
+            if status["last_command_id"] == command_id and wanted in status["parameters"]:
+                break
+            time.sleep(0.2)
+        print(f"the shadow then has: {status['parameters']}", flush=True)
+        assert wanted in status["parameters"], "the page's write did not reach the shadow"
+    finally:
+        for proc in procs:
+            proc.terminate()
+        for proc in procs:
+            try:
+                proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+
+
 CHECKS = {"cross_site": check_cross_site, "slow": check_slow, "idle": check_idle,
           "big_body": check_big_body}
 
 
 def main():
-    if len(sys.argv) != 3 or sys.argv[2] not in CHECKS:
+    shadowed = len(sys.argv) == 4 and sys.argv[2] == "cross_site_shadow"
+    if not shadowed and (len(sys.argv) != 3 or sys.argv[2] not in CHECKS):
         print(__doc__)
         return 2
-    dash = Dashboard(sys.argv[1])
+    domain = claim_test_domain()
+    dash = Dashboard(sys.argv[1], domain)
     try:
-        CHECKS[sys.argv[2]](dash)
+        if shadowed:
+            check_cross_site_shadow(dash, sys.argv[3], domain)
+        else:
+            CHECKS[sys.argv[2]](dash)
     finally:
         dash.stop()
     print(f"{sys.argv[2]}: passed")
