@@ -78,16 +78,24 @@ std::string PageWithToken(const std::string& token) {
 void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed,
            const mpdrig::dashboard::WriteGuard* guard) {
   server->set_default_headers({{"Cache-Control", "no-store"}});
-  // Every write passes the guard before it is routed.
-  server->set_pre_routing_handler([guard](const httplib::Request& req, httplib::Response& res) {
-    if (req.method == "GET" || req.method == "HEAD")
-      return httplib::Server::HandlerResponse::Unhandled;
+  // Every write passes the guard before it is routed, and before its body is asked for
+  // ("Expect: 100-continue": a refused write's body is never sent).
+  auto refused = [guard](const httplib::Request& req, httplib::Response& res) {
+    if (req.method == "GET" || req.method == "HEAD") return false;
     const mpdrig::Status allowed = guard->Check(req);
-    if (allowed.ok()) return httplib::Server::HandlerResponse::Unhandled;
+    if (allowed.ok()) return false;
     res.status = 403;
     res.set_content(ErrorJson(allowed.message()), "application/json");
-    return httplib::Server::HandlerResponse::Handled;
+    return true;
+  };
+  server->set_pre_routing_handler([refused](const httplib::Request& req, httplib::Response& res) {
+    return refused(req, res) ? httplib::Server::HandlerResponse::Handled
+                             : httplib::Server::HandlerResponse::Unhandled;
   });
+  server->set_expect_100_continue_handler(
+      [refused](const httplib::Request& req, httplib::Response& res) {
+        return refused(req, res) ? 403 : 100;
+      });
   server->Get(
       "/", [page = PageWithToken(guard->token())](const httplib::Request&, httplib::Response& res) {
         res.set_content(page, "text/html; charset=utf-8");

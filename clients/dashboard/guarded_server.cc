@@ -22,8 +22,10 @@ struct GuardedServer::Connection {
   int fd = -1;
   std::string in;  // received and not yet parsed: the next request, and any pipelined after it
   Clock::time_point deadline;
-  bool in_request = false;  // the next request's first byte has arrived: the request deadline
-  bool draining = false;    // refused and answered: what still arrives is discarded until EOF
+  bool in_request = false;        // the next request's first byte has arrived: the request deadline
+  bool draining = false;          // refused and answered: what still arrives is discarded until EOF
+  bool fresh = false;             // back from a worker with bytes buffered: inspect them at once
+  std::size_t request_bytes = 0;  // the complete request's head and declared body
   std::size_t discarded = 0;
   int served = 0;
 };
@@ -115,6 +117,8 @@ void Address(int fd, bool peer, std::string& ip, int& port) {
 // is read here within the request's deadline and the body limit); writes wait at most `write_s`.
 class ConnectionStream final : public httplib::Stream {
  public:
+  static constexpr std::size_t kFlushBytes = 64 * 1024;
+
   ConnectionStream(GuardedServer::Connection* connection, const ServerLimits& limits)
       : connection_(connection), limits_(limits), body_left_(limits.max_body_bytes) {}
 
@@ -133,7 +137,8 @@ class ConnectionStream final : public httplib::Stream {
       used_ += n;
       return static_cast<ssize_t>(n);
     }
-    if (body_left_ == 0 || !WaitFor(connection_->fd, POLLIN, connection_->deadline)) {
+    // Only a body after "Expect: 100-continue" is read here: the client waits for the 100.
+    if (!Flush() || body_left_ == 0 || !WaitFor(connection_->fd, POLLIN, connection_->deadline)) {
       failed_ = true;
       return -1;
     }
@@ -143,27 +148,35 @@ class ConnectionStream final : public httplib::Stream {
       return n < 0 ? -1 : 0;
     }
     body_left_ -= static_cast<std::size_t>(n);
+    direct_ += static_cast<std::size_t>(n);
     return n;
   }
 
+  // An answer goes out in one send where it fits (httplib writes the head and the body apart:
+  // two small sends on a kept-alive connection would meet Nagle and the delayed ACK, 40 ms).
   ssize_t write(const char* ptr, size_t size) override {
+    out_.append(ptr, size);
+    if (out_.size() >= kFlushBytes && !Flush()) return -1;
+    return static_cast<ssize_t>(size);
+  }
+
+  // Sends what write() gathered, waiting at most `write_s`; false if it could not.
+  bool Flush() {
     const auto deadline = Clock::now() + Seconds(limits_.write_s);
     std::size_t done = 0;
-    while (done < size) {
-      const ssize_t n = send(connection_->fd, ptr + done, size - done, MSG_DONTWAIT | MSG_NOSIGNAL);
+    while (done < out_.size() && !failed_) {
+      const ssize_t n = send(connection_->fd, out_.data() + done, out_.size() - done,
+                             MSG_DONTWAIT | MSG_NOSIGNAL);
       if (n > 0) {
         done += static_cast<std::size_t>(n);
       } else if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR)) {
-        if (!WaitFor(connection_->fd, POLLOUT, deadline)) break;
+        if (!WaitFor(connection_->fd, POLLOUT, deadline)) failed_ = true;
       } else {
-        break;
+        failed_ = true;
       }
     }
-    if (done < size) {
-      failed_ = true;
-      return -1;
-    }
-    return static_cast<ssize_t>(size);
+    out_.clear();
+    return !failed_;
   }
 
   void get_remote_ip_and_port(std::string& ip, int& port) const override {
@@ -174,14 +187,18 @@ class ConnectionStream final : public httplib::Stream {
   }
   socket_t socket() const override { return connection_->fd; }
 
-  std::size_t used() const { return used_; }
+  std::size_t used() const { return used_; }      // from the buffer
+  std::size_t direct() const { return direct_; }  // from the socket
+
   bool failed() const { return failed_; }
 
  private:
   GuardedServer::Connection* connection_;
   const ServerLimits& limits_;
   std::size_t used_ = 0;
+  std::size_t direct_ = 0;
   std::size_t body_left_;
+  std::string out_;
   bool failed_ = false;
 };
 
@@ -195,6 +212,7 @@ struct Verdict {
   enum Kind { kNeedMore, kComplete, kRefuse } kind = kNeedMore;
   int status = 0;
   std::string message;
+  std::size_t request_bytes = 0;  // kComplete: head and declared body
 };
 
 Verdict Refuse(int status, std::string message) {
@@ -255,9 +273,10 @@ Verdict Inspect(std::string* buffer, const ServerLimits& limits) {
   // so the request gets the length it means.
   if (takes_body && !length_given) {
     buffer->insert(end + 2, "Content-Length: 0\r\n");
-    return {Verdict::kComplete, 0, {}};
+    return {Verdict::kComplete, 0, {}, head_bytes + 19};
   }
-  if (expect_continue || in.size() >= head_bytes + length) return {Verdict::kComplete, 0, {}};
+  if (expect_continue || in.size() >= head_bytes + length)
+    return {Verdict::kComplete, 0, {}, head_bytes + static_cast<std::size_t>(length)};
   return {};
 }
 
@@ -377,10 +396,8 @@ void GuardedServer::Poll() {
     fds.assign(1, pollfd{wake_fd_, POLLIN, 0});
     auto first_deadline = Clock::time_point::max();
     for (const auto& connection : connections) {
-      // A connection back from a worker may hold the next request already (pipelining).
-      const bool buffered = !connection->draining && !connection->in.empty();
       fds.push_back(pollfd{connection->fd, POLLIN, 0});
-      first_deadline = std::min(first_deadline, buffered ? now : connection->deadline);
+      first_deadline = std::min(first_deadline, connection->fresh ? now : connection->deadline);
     }
     int timeout_ms = -1;
     if (first_deadline != Clock::time_point::max()) {
@@ -411,7 +428,9 @@ void GuardedServer::Poll() {
                connection->discarded < kMaxDrainBytes && now < connection->deadline;
       } else {
         if (readable) keep = ReadAvailable(connection);
-        if (keep && !connection->in.empty()) {
+        // Only what changed is inspected: new bytes, or a connection back from a worker that
+        // may hold the next request already (pipelining).
+        if (keep && (readable || connection->fresh) && !connection->in.empty()) {
           if (!connection->in_request) {
             connection->in_request = true;
             connection->deadline = now + Seconds(limits_.request_s);
@@ -419,6 +438,7 @@ void GuardedServer::Poll() {
           const Verdict verdict = Inspect(&connection->in, limits_);
           if (verdict.kind == Verdict::kComplete) {
             complete = true;
+            connection->request_bytes = verdict.request_bytes;
           } else if (verdict.kind == Verdict::kRefuse) {
             SendRefusal(connection->fd, verdict.status, verdict.message);
             shutdown(connection->fd, SHUT_WR);
@@ -436,6 +456,7 @@ void GuardedServer::Poll() {
           keep = false;  // a silent connection past its idle time closes without a word
         }
       }
+      connection->fresh = false;
       if (!keep) {
         CloseSocket(connection->fd);
         connections[i].reset();
@@ -477,16 +498,27 @@ void GuardedServer::Serve(std::unique_ptr<Connection> connection) {
   ConnectionStream stream(connection.get(), limits_);
   const bool last = connection->served + 1 >= limits_.max_requests_per_connection;
   bool connection_closed = false;
-  const bool answered = process_request(stream, last, connection_closed, nullptr);
+  const bool answered = process_request(stream, last, connection_closed, nullptr) && stream.Flush();
   ++connection->served;
-  connection->in.erase(0, stream.used());
-  if (!answered || connection_closed || last || stream.failed()) {
+  // A body httplib did not read (a write refused before its body, a GET with one) is dropped
+  // here, not taken for the next request; one still on its way ("Expect: 100-continue" refused)
+  // closes the connection.
+  const std::size_t end = connection->request_bytes;
+  bool body_to_come = false;
+  if (stream.used() + stream.direct() >= end)
+    connection->in.erase(0, stream.used());
+  else if (connection->in.size() + stream.direct() >= end)
+    connection->in.erase(0, end - stream.direct());
+  else
+    body_to_come = true;
+  if (!answered || connection_closed || last || stream.failed() || body_to_come) {
     CloseSocket(connection->fd);
     std::lock_guard<std::mutex> lock(mutex_);
     --open_connections_;
     return;
   }
   connection->in_request = false;
+  connection->fresh = !connection->in.empty();
   connection->deadline = Clock::now() + Seconds(limits_.idle_s);
   ToPoller(std::move(connection));
 }
