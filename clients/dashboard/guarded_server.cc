@@ -14,6 +14,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "clients/dashboard/json_out.h"
+
 namespace mpdrig::dashboard {
 
 using Clock = std::chrono::steady_clock;
@@ -72,7 +74,9 @@ const char* Reason(int status) {
 // A refusal the poller writes itself (the request never reaches httplib): small enough for the
 // socket's send buffer, so it is written without waiting or not at all.
 void SendRefusal(int fd, int status, const std::string& message) {
-  std::string body = "{\"ok\":false,\"error\":\"" + message + "\"}";
+  std::string body = "{\"ok\":false,\"error\":";
+  AppendString(&body, message);
+  body += '}';
   char head[256];
   std::snprintf(head, sizeof head,
                 "HTTP/1.1 %d %s\r\nContent-Type: application/json\r\nContent-Length: %zu\r\n"
@@ -272,8 +276,9 @@ Verdict Inspect(std::string* buffer, const ServerLimits& limits) {
   // No length and no chunks: no body (RFC 9112 6.3). httplib would read one until EOF instead,
   // so the request gets the length it means.
   if (takes_body && !length_given) {
-    buffer->insert(end + 2, "Content-Length: 0\r\n");
-    return {Verdict::kComplete, 0, {}, head_bytes + 19};
+    const std::string zero = "Content-Length: 0\r\n";
+    buffer->insert(end + 2, zero);
+    return {Verdict::kComplete, 0, {}, head_bytes + zero.size()};
   }
   if (expect_continue || in.size() >= head_bytes + length)
     return {Verdict::kComplete, 0, {}, head_bytes + static_cast<std::size_t>(length)};
