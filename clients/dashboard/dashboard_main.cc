@@ -17,7 +17,6 @@
 // request size, deadlines, open connections (clients/dashboard/guarded_server.h).
 #include <signal.h>
 #include <sys/resource.h>
-#include <sys/socket.h>
 
 #include <cstdio>
 #include <cstdlib>
