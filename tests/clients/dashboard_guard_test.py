@@ -18,7 +18,7 @@ CHECK is one of:
               is taken, and the shadow then reports wave_speed_mps=400.
   slow        50 clients each send a header line every 2 s (a slowloris): a normal request is
               answered within 1 s meanwhile, and the slow ones are cut off (408) within the
-              request deadline (5 s) plus 2 s.
+              request deadline (5 s) plus 4 s (one 2 s tick of looking, and slack).
   idle        200 connections that send nothing: a normal request is answered within 1 s, and the
               dashboard has closed them within its idle time (5 s) plus 2 s.
   big_body    a POST declaring a 200 MB body is refused with 413 within 1 s of its head, without
@@ -205,7 +205,7 @@ def check_slow(dash):
                                  f"within {time.monotonic() - started:.0f} s"
     print(f"slow clients cut off after {min(cut_at.values()):.1f}-{max(cut_at.values()):.1f} s",
           flush=True)
-    assert max(cut_at.values()) < 5.0 + 2.0 + 0.5
+    assert max(cut_at.values()) < 5.0 + period_s + 2.0  # a tick of looking, and a loaded machine
 
 
 def check_idle(dash):
