@@ -8,8 +8,8 @@ under 20 s, all traffic to 127.0.0.1, every loop bounded.
 CHECK is one of:
   cross_site  a write (POST /api/shadow) without the page's Origin (or Referer) and the page's
               X-Mpdrig-Token is refused with 403 and a JSON reason: another site's text/plain
-              POST, a foreign Origin or Referer with the right token, our Origin without the
-              token or with a wrong one, no Origin nor Referer; the page carries a token, and a
+              POST, a foreign Origin or Referer with the right token (also one that only looks
+              like ours), our Origin without the token or with a wrong one, no Origin nor Referer; the page carries a token, and a
               write made as the page makes it passes the guard (it reaches the feed, which answers
               that no shadow listens: 400, not 403).
   cross_site_shadow  (needs MPDRIG_EXE) as it was found: a rig and its shadow run (`mpdrig serve`,
@@ -138,6 +138,12 @@ def check_cross_site(dash):
             ({"Origin": "null", "X-Mpdrig-Token": token}, ""),
         "our host on another port": ({"Origin": f"http://{HOST}:{dash.port + 1}",
                                       "X-Mpdrig-Token": token}, ""),
+        "our host:port as a user name before another site":
+            ({"Origin": f"http://{HOST}:{dash.port}@evil.example", "X-Mpdrig-Token": token}, ""),
+        "a site named after our host": ({"Origin": f"http://{HOST}.evil.example:{dash.port}",
+                                         "X-Mpdrig-Token": token}, ""),
+        "https (the dashboard serves http only)": ({"Origin": f"https://{HOST}:{dash.port}",
+                                                    "X-Mpdrig-Token": token}, ""),
         "a foreign Referer and no Origin, with the right token":
             ({"Referer": evil + "/attack.html", "X-Mpdrig-Token": token}, ""),
         "neither Origin nor Referer, with the right token": ({"X-Mpdrig-Token": token}, ""),
@@ -161,6 +167,8 @@ def check_cross_site(dash):
     # feed, which says that no shadow listens on this domain.
     for what, headers in {"page, Origin": {"Origin": own, "X-Mpdrig-Token": token},
                           "page by localhost": {"Origin": f"http://localhost:{dash.port}",
+                                                "X-Mpdrig-Token": token},
+                          "page by LocalHost": {"Origin": f"http://LocalHost:{dash.port}",
                                                 "X-Mpdrig-Token": token},
                           "page, Referer only": {"Referer": own + "/?rig=mystery",
                                                  "X-Mpdrig-Token": token}}.items():
