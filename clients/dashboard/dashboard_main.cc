@@ -10,9 +10,13 @@
 //                                           reset, fit_now); answers with its command_id
 //   GET  /api/health                        DDS open or not, samples, CPU (does not count as
 //                                           watching: a monitor does not keep DDS open)
+//
+// Writes (any method but GET and HEAD) are taken only from the dashboard's own page: the Origin
+// (or Referer) must name this dashboard and the X-Mpdrig-Token header carry the token the page
+// was served with; else 403 (clients/dashboard/write_guard.h). The connections are bounded:
+// request size, deadlines, open connections (clients/dashboard/guarded_server.h).
 #include <signal.h>
 #include <sys/resource.h>
-#include <sys/socket.h>
 
 #include <cstdio>
 #include <cstdlib>
@@ -22,9 +26,11 @@
 #include <httplib.h>
 #include <CLI/CLI.hpp>
 
+#include "clients/dashboard/guarded_server.h"
 #include "clients/dashboard/json_out.h"
 #include "clients/dashboard/page.h"
 #include "clients/dashboard/rig_feed.h"
+#include "clients/dashboard/write_guard.h"
 
 namespace {
 
@@ -35,6 +41,7 @@ struct Args {
   int port = 8080;
   std::string host = "127.0.0.1";
   std::vector<std::string> rigs;
+  std::vector<std::string> allow_hosts;  // more names of this machine a write may come from
   std::string dds_config;
   std::string security;  // make-class's OUT/NAME; empty: no DDS Security
   double idle_s = 5.0;
@@ -55,18 +62,43 @@ std::string ErrorJson(const std::string& message) {
   return out + "}";
 }
 
-void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed) {
-  // httplib's default also sets SO_REUSEPORT, with which a second dashboard on the same port
-  // would start "fine" and take half the connections: only SO_REUSEADDR (a restart may bind at
-  // once), so that a port in use is an error.
-  server->set_socket_options([](socket_t sock) {
-    int yes = 1;
-    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  });
+// The page with this process's write token in it (page.html's placeholder).
+std::string PageWithToken(const std::string& token) {
+  std::string page = mpdrig::dashboard::PageHtml();
+  const std::string placeholder = "{{MPDRIG_TOKEN}}";
+  const std::size_t at = page.find(placeholder);
+  if (at == std::string::npos) {
+    std::fprintf(stderr, "dashboard: the page has no token placeholder (page.html)\n");
+    std::abort();
+  }
+  return page.replace(at, placeholder.size(), token);
+}
+
+void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed,
+           const mpdrig::dashboard::WriteGuard* guard) {
   server->set_default_headers({{"Cache-Control", "no-store"}});
-  server->Get("/", [](const httplib::Request&, httplib::Response& res) {
-    res.set_content(mpdrig::dashboard::PageHtml(), "text/html; charset=utf-8");
+  // Every write passes the guard before it is routed, and before its body is asked for
+  // ("Expect: 100-continue": a refused write's body is never sent).
+  auto refused = [guard](const httplib::Request& req, httplib::Response& res) {
+    if (req.method == "GET" || req.method == "HEAD") return false;
+    const mpdrig::Status allowed = guard->Check(req);
+    if (allowed.ok()) return false;
+    res.status = 403;
+    res.set_content(ErrorJson(allowed.message()), "application/json");
+    return true;
+  };
+  server->set_pre_routing_handler([refused](const httplib::Request& req, httplib::Response& res) {
+    return refused(req, res) ? httplib::Server::HandlerResponse::Handled
+                             : httplib::Server::HandlerResponse::Unhandled;
   });
+  server->set_expect_100_continue_handler(
+      [refused](const httplib::Request& req, httplib::Response& res) {
+        return refused(req, res) ? 403 : 100;
+      });
+  server->Get(
+      "/", [page = PageWithToken(guard->token())](const httplib::Request&, httplib::Response& res) {
+        res.set_content(page, "text/html; charset=utf-8");
+      });
   server->Get("/api/rigs", [feed](const httplib::Request&, httplib::Response& res) {
     feed->Touch();
     res.set_content(feed->RigsJson(), "application/json");
@@ -140,6 +172,9 @@ int main(int argc, char** argv) {
                  "address to listen on (127.0.0.1: this machine only; 0.0.0.0: the lab's network)")
       ->capture_default_str();
   app.add_option("--rig", args.rigs, "a rig to show (repeatable; default: every rig seen)");
+  app.add_option("--allow-host", args.allow_hosts,
+                 "another name of this machine the page may be opened by, for writes (repeatable; "
+                 "127.0.0.1, localhost, --host and the host name are always allowed)");
   app.add_option("--dds-config", args.dds_config,
                  "Cyclone DDS configuration: a file or inline XML (default: loopback only)");
   app.add_option("--security", args.security,
@@ -191,19 +226,22 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "dashboard: %s\n", feed.status().message().c_str());
     return 1;
   }
-  httplib::Server server;
-  Route(&server, feed->get());
-  const int port = args.port == 0 ? server.bind_to_any_port(args.host)
-                                  : (server.bind_to_port(args.host, args.port) ? args.port : -1);
+  mpdrig::dashboard::GuardedServer server{mpdrig::dashboard::ServerLimits{}};
+  const int port = server.Bind(args.host, args.port);
   if (port <= 0) {
     std::fprintf(stderr, "dashboard: cannot listen on %s:%d (in use? try another --port)\n",
                  args.host.c_str(), args.port);
     return 1;
   }
+  std::vector<std::string> hosts = args.allow_hosts;
+  hosts.push_back(args.host);
+  const mpdrig::dashboard::WriteGuard guard(hosts, port);
+  Route(&server, feed->get(), &guard);
   std::printf("dashboard: http://%s:%d/ (DDS domain %d)\n", args.host.c_str(), port, args.domain);
   std::fflush(stdout);
   std::thread stopper(StopOnSignal, &server, signals, args.duration_s);
   const bool listened = server.listen_after_bind();
   stopper.join();
+  server.StopConnections();
   return listened ? 0 : 1;
 }
