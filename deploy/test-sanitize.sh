@@ -20,5 +20,18 @@ export MPDRIG_DIAGNOSE_CASES="${MPDRIG_DIAGNOSE_CASES:-1}"
 # The container and network-namespace tests deploy the Release binaries (images, other hosts), and
 # the interop test drives another vendor's DDS (Fast DDS 2.9, which itself trips ASan): they test
 # the deployment and the wire, not our memory, and run in the Release suite.
+# The statistical tests of the model (diagnose over the whole catalogue at two noise levels, the
+# simulated frequency response on the method-of-lines scheme, the shadow at three heaves, the fit
+# at lab noise) repeat the same code paths over more effects, seeds and excitations: that is what
+# the Release suite checks, and it is most of this suite's time under the sanitizers (3-5x slower
+# each). Here one case of each runs, so the sanitizers still see every path: diagnose with and
+# without a hidden effect, the SUNDIALS scheme, the shadow. MPDRIG_SANITIZE_ALL=1 runs them all.
+repeats='DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|DiagnoseTwoEffects|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise'
+# (ctest's names of parameterised tests go on with "  # GetParam() = ...": no $ anchors)
+one_each='DiagnoseHiddenEffect.*/sensor_lag_lab |DiagnoseWithoutHiddenEffect.*/lab |SimulatedVsAnalytic.*MethodOfLinesOpen |ShadowAtLabNoise.*/fast_0p8Hz '
+if [[ "${MPDRIG_SANITIZE_ALL:-0}" == 1 ]]; then repeats='^$'; fi
 ctest --test-dir "$build" -j"$(nproc)" --output-on-failure --timeout 1800 \
-  -LE 'container|netns|interop' "$@"
+  -LE 'container|netns|interop' -E "$repeats" "$@"
+if [[ "$repeats" != '^$' ]]; then
+  ctest --test-dir "$build" -j"$(nproc)" --output-on-failure --timeout 1800 -R "$one_each" "$@"
+fi

@@ -76,6 +76,24 @@ class RigFeedTest : public ::testing::Test {
   std::vector<dds::Entity> topics_;
 };
 
+// A rig id from a URL (`/api/state?rig=%ff`) is not UTF-8: it must not make the JSON invalid.
+// Well-formed UTF-8 passes as it is; each stray, overlong or surrogate byte sequence is U+FFFD.
+TEST(DashboardJson, InvalidUtf8BecomesTheReplacementCharacter) {
+  std::string out;
+  AppendString(&out, "rig-\xff");
+  EXPECT_EQ(out, "\"rig-\\ufffd\"");
+  out.clear();
+  AppendString(&out, "Tr\xc3\xb8ndheim \xe2\x82\xac \xf0\x9f\x8c\x8a");  // ø, euro, a wave
+  EXPECT_EQ(out, "\"Tr\xc3\xb8ndheim \xe2\x82\xac \xf0\x9f\x8c\x8a\"");
+  out.clear();
+  // Overlong '/', a surrogate, a truncated sequence at the end.
+  AppendString(&out, "\xc0\xaf|\xed\xa0\x80|\xe2\x82");
+  EXPECT_EQ(out.find('\xc0'), std::string::npos) << out;
+  EXPECT_EQ(out.find('\xed'), std::string::npos) << out;
+  EXPECT_EQ(out.find('\xe2'), std::string::npos) << out;
+  EXPECT_NE(out.find("\\ufffd"), std::string::npos) << out;
+}
+
 TEST_F(RigFeedTest, ReadsOnlyWhileWatched) {
   auto sensors = dds::Writer<mpdrig_RigSensors>::Create(
       participant_.handle(), Topic(&mpdrig_RigSensors_desc, "mpdrig_sensors"), dds::SensorQos());
