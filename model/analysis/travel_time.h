@@ -55,7 +55,7 @@ namespace mpdrig {
 struct TravelTimeOptions {
   double min_wave_speed_mps = 300.0;   // the lags searched: |tau| <= d / min_wave_speed
   double max_wave_speed_mps = 3000.0;  // and >= d / max_wave_speed (water alone: 1484 m/s)
-  double band_low_hz = 0.5;            // f_lo of the band weight
+  double band_low_hz = 3.0;            // f_lo of the band weight
   double band_high_hz = 10.0;          // f_hi, at most 0.4 times the Nyquist frequency
   double min_peak = 0.2;               // a peak counts from this share of the pair's largest
   double window_begin_s = -1e300;      // only samples in [begin, end] (e.g. one choke move)

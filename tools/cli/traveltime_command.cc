@@ -1,0 +1,248 @@
+// mpdrig traveltime: the speed of pressure fronts along the pipe from a log's transmitters
+// PT1..PT10 (model/analysis/travel_time.h; thesis 8.3.2): per-pair delays from cross-correlation,
+// the wave speed fitted over all pairs with its uncertainty; a table on stdout, JSON on request,
+// progress on stderr.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "model/analysis/measured_log.h"
+#include "model/analysis/travel_time.h"
+#include "model/riglog/rig_log_reader.h"
+#include "tools/cli/commands.h"
+#include "tools/cli/model_options.h"
+
+namespace mpdrig::cli {
+namespace {
+
+struct TravelTimeArgs {
+  std::string log_path;
+  std::string json_path;
+  std::string window;
+  riglog::ReadOptions read;
+  TravelTimeOptions options;
+  bool quiet = false;
+};
+
+std::string JsonNumber(double value) {
+  if (!std::isfinite(value)) return "null";
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.10g", value);
+  return buffer;
+}
+
+std::string JsonString(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) >= 0x20) out += c;
+  }
+  return out + "\"";
+}
+
+Status ParseWindow(const std::string& spec, TravelTimeOptions* options) {
+  const std::size_t colon = spec.find(':');
+  if (colon == std::string::npos) {
+    return Status::Error("--window-s expects T0:T1 in seconds (either may be empty), got '" + spec +
+                         "'");
+  }
+  const auto parse = [&](const std::string& text, double* out) -> Status {
+    if (text.empty()) return Status::Ok();
+    std::size_t used = 0;
+    try {
+      *out = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != text.size() || !std::isfinite(*out)) {
+      return Status::Error("--window-s: '" + text + "' is not a finite number");
+    }
+    return Status::Ok();
+  };
+  MPDRIG_RETURN_IF_ERROR(parse(spec.substr(0, colon), &options->window_begin_s));
+  MPDRIG_RETURN_IF_ERROR(parse(spec.substr(colon + 1), &options->window_end_s));
+  if (!(options->window_begin_s < options->window_end_s)) {
+    return Status::Error("--window-s " + spec + ": T0 must be before T1");
+  }
+  return Status::Ok();
+}
+
+// Time and the pipe transmitters of the log, read one sample at a time (the other columns are
+// not kept).
+Status ReadTransmitters(const TravelTimeArgs& args, std::vector<double>* time_s,
+                        std::vector<PressureTrace>* traces) {
+  auto reader = riglog::RigLogReader::Open(args.log_path, args.read);
+  if (!reader.ok()) return reader.status();
+  std::vector<std::size_t> columns;
+  for (int k = 0; k < kPipeTransmitterCount; ++k) {
+    const Channel channel = static_cast<Channel>(static_cast<int>(Channel::kPT1) + k);
+    const auto column = reader->FindColumn(riglog::ChannelName(channel));
+    if (!column) continue;
+    columns.push_back(*column);
+    traces->push_back({std::string(riglog::ChannelName(channel)), *PipePositionM(channel), {}});
+  }
+  if (traces->size() < 3) {
+    return Status::Error(args.log_path + ": needs at least three of PT1..PT10 (has " +
+                         std::to_string(traces->size()) + ")");
+  }
+  std::vector<double> values;
+  while (true) {
+    auto more = reader->Next(&values);
+    if (!more.ok()) return more.status();
+    if (!*more) break;
+    time_s->push_back(values[reader->time_index()]);
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      (*traces)[c].pressure_pa.push_back(values[columns[c]]);
+    }
+    if (!args.quiet && reader->samples_read() % 100000 == 0) {
+      std::fprintf(stderr, "mpdrig traveltime: read %lld samples\r",
+                   static_cast<long long>(reader->samples_read()));
+    }
+  }
+  return Status::Ok();
+}
+
+std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args) {
+  std::ostringstream out;
+  out << "{\n  \"log\": " << JsonString(args.log_path) << ",\n";
+  out << "  \"wave_speed_mps\": " << JsonNumber(r.wave_speed_mps) << ",\n";
+  out << "  \"wave_speed_uncertainty_mps\": " << JsonNumber(r.wave_speed_uncertainty_mps) << ",\n";
+  out << "  \"stack_wave_speed_mps\": " << JsonNumber(r.stack_wave_speed_mps) << ",\n";
+  out << "  \"residual_rms_s\": " << JsonNumber(r.residual_rms_s) << ",\n";
+  out << "  \"pairs_used\": " << r.pairs_used << ",\n";
+  out << "  \"sample_rate_hz\": " << JsonNumber(r.sample_rate_hz) << ",\n";
+  out << "  \"duration_s\": " << JsonNumber(r.duration_s) << ",\n";
+  out << "  \"band_hz\": [" << JsonNumber(r.band_low_hz) << ", " << JsonNumber(r.band_high_hz)
+      << "],\n";
+  out << "  \"transmitters\": [";
+  for (std::size_t k = 0; k < r.transmitters.size(); ++k) {
+    out << (k ? ", " : "") << JsonString(r.transmitters[k]);
+  }
+  out << "],\n  \"pairs\": [";
+  for (std::size_t k = 0; k < r.pairs.size(); ++k) {
+    const PairDelay& p = r.pairs[k];
+    out << (k ? "," : "") << "\n    {\"from\": " << JsonString(p.first)
+        << ", \"to\": " << JsonString(p.second) << ", \"distance_m\": " << JsonNumber(p.distance_m)
+        << ", \"delay_s\": " << JsonNumber(p.delay_s)
+        << ", \"delay_up_s\": " << JsonNumber(p.delay_up_s)
+        << ", \"delay_down_s\": " << JsonNumber(p.delay_down_s)
+        << ", \"peak_correlation\": " << JsonNumber(p.peak_correlation)
+        << ", \"used\": " << (p.used ? "true" : "false");
+    if (!p.note.empty()) out << ", \"note\": " << JsonString(p.note);
+    out << "}";
+  }
+  out << "\n  ]\n}\n";
+  return out.str();
+}
+
+void PrintSummary(const TravelTimeResult& r) {
+  std::printf("%-5s %-5s %8s %9s %9s %9s %6s  %s\n", "from", "to", "dist m", "delay s", "up s",
+              "down s", "c m/s", "");
+  for (const PairDelay& p : r.pairs) {
+    const double c = std::isfinite(p.delay_s) ? p.distance_m / p.delay_s : NAN;
+    std::printf("%-5s %-5s %8.0f %9.4f %9.4f %9.4f %6.0f  %s\n", p.first.c_str(), p.second.c_str(),
+                p.distance_m, p.delay_s, p.delay_up_s, p.delay_down_s, c,
+                p.used ? "" : p.note.c_str());
+  }
+  std::printf(
+      "wave speed %.1f +- %.1f m/s (distance = c delay over %d pairs of %zu; delay rms %.2g s; "
+      "%.0f Hz, %.1f s, band %.2g-%.3g Hz)\n",
+      r.wave_speed_mps, r.wave_speed_uncertainty_mps, r.pairs_used, r.pairs.size(),
+      r.residual_rms_s, r.sample_rate_hz, r.duration_s, r.band_low_hz, r.band_high_hz);
+}
+
+int RunTravelTime(const TravelTimeArgs& args) {
+  const std::string name = "traveltime";
+  TravelTimeOptions options = args.options;
+  if (!args.window.empty()) {
+    const Status window = ParseWindow(args.window, &options);
+    if (!window.ok()) return Fail(name, window);
+  }
+  const Status valid = options.Validate();
+  if (!valid.ok()) return Fail(name, valid);
+  std::vector<double> time_s;
+  std::vector<PressureTrace> traces;
+  const Status read = ReadTransmitters(args, &time_s, &traces);
+  if (!read.ok()) return Fail(name, read);
+  if (!args.quiet) {
+    std::fprintf(stderr,
+                 "mpdrig traveltime: %zu samples of %zu transmitters; correlating %zu pairs\n",
+                 time_s.size(), traces.size(), traces.size() * (traces.size() - 1) / 2);
+  }
+  auto result = EstimateTravelTime(time_s, traces, options);
+  if (!result.ok()) return Fail(name, result.status().Within(args.log_path));
+  if (!args.json_path.empty()) {
+    const Status written = WriteText(args.json_path, TravelTimeJson(*result, args));
+    if (!written.ok()) return Fail(name, written);
+  }
+  if (args.json_path != "-") PrintSummary(*result);
+  return 0;
+}
+
+}  // namespace
+
+void AddTravelTimeCommand(CLI::App* app, int* exit_code) {
+  auto args = std::make_shared<TravelTimeArgs>();
+  CLI::App* command = app->add_subcommand(
+      "traveltime", "Speed of pressure fronts between the pipe's transmitters PT1..PT10");
+  command->footer(
+      "How fast does a pressure front travel along the copper pipe? The thesis (8.3.2) read the\n"
+      "delay of the front after a fast choke move between the pipe's two ends by hand, 0.70-0.91 "
+      "s\n"
+      "over 900 m in 12 runs, and found c = 1173 +- 74.5 m/s. This does the same for every pair "
+      "of\n"
+      "the transmitters PT1..PT10 (0, 100, ..., 900 m along the pipe):\n"
+      "  1. each pressure's time derivative (takes away the static levels, weights the fronts),\n"
+      "  2. the cross-correlation of every pair, weighted to a band (--band-low-hz 3 to\n"
+      "     --band-high-hz 10: below it the heave's sines and sweeps, standing waves that\n"
+      "     correlate at every lag; above it the transmitters' noise),\n"
+      "  3. a front coming up from the piston shows as a peak at +d/c, one coming down from the\n"
+      "     choke at -d/c; the peak is located between samples (a parabola through three),\n"
+      "     and the pair's delay is the mean of the two,\n"
+      "  4. distance = c delay fitted over all pairs; its standard error, widened because the\n"
+      "     pairs share transmitters, is the uncertainty.\n"
+      "Any fast move of the choke or the piston, or any broadband excitation, will do; a log of\n"
+      "slow sines alone has no front to time. Pairs closer than the fronts are wide (a slow choke\n"
+      "move) are left out and say so. --window-s picks one move, as the thesis read them.\n"
+      "Examples:\n"
+      "  mpdrig synth --seed 1 --out lab.csv && mpdrig traveltime lab.csv\n"
+      "  mpdrig traveltime lab.csv --window-s 30:40 --json tt.json\n"
+      "JSON: wave_speed_mps, wave_speed_uncertainty_mps, stack_wave_speed_mps, residual_rms_s,\n"
+      "pairs_used, sample_rate_hz, duration_s, band_hz, transmitters, pairs[{from, to, "
+      "distance_m,\n"
+      "delay_s, delay_up_s, delay_down_s, peak_correlation, used, note}] "
+      "(docs/rig-measurements.md).\n"
+      "Progress goes to stderr. The wave speed is what `--set wave_speed_mps=...` takes.");
+  command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command->add_option("--json", args->json_path, "result as JSON ('-' for stdout)");
+  command
+      ->add_option("--window-s", args->window,
+                   "use only the samples in [T0, T1] s, e.g. one choke move: 30:40")
+      ->type_name("T0:T1");
+  command
+      ->add_option("--band-low-hz", args->options.band_low_hz,
+                   "lower edge of the correlation band (f^4/(f^4 + f_lo^4))")
+      ->capture_default_str();
+  command
+      ->add_option("--band-high-hz", args->options.band_high_hz,
+                   "upper edge (exp(-(f/f_hi)^2)), at most 0.4 times the Nyquist frequency")
+      ->capture_default_str();
+  command
+      ->add_option("--min-speed-mps", args->options.min_wave_speed_mps,
+                   "slowest wave speed searched")
+      ->capture_default_str();
+  command
+      ->add_option("--max-speed-mps", args->options.max_wave_speed_mps,
+                   "fastest wave speed searched")
+      ->capture_default_str();
+  AddLogReadOptions(command, &args->read);
+  command->add_flag("--quiet", args->quiet, "no progress on stderr");
+  command->callback([args, exit_code] { *exit_code = RunTravelTime(*args); });
+}
+
+}  // namespace mpdrig::cli
