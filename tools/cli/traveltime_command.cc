@@ -112,6 +112,7 @@ std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args
   out << "  \"wave_speed_uncertainty_mps\": " << JsonNumber(r.wave_speed_uncertainty_mps) << ",\n";
   out << "  \"stack_wave_speed_mps\": " << JsonNumber(r.stack_wave_speed_mps) << ",\n";
   out << "  \"residual_rms_s\": " << JsonNumber(r.residual_rms_s) << ",\n";
+  out << "  \"front_width_s\": " << JsonNumber(r.front_width_s) << ",\n";
   out << "  \"pairs_used\": " << r.pairs_used << ",\n";
   out << "  \"sample_rate_hz\": " << JsonNumber(r.sample_rate_hz) << ",\n";
   out << "  \"duration_s\": " << JsonNumber(r.duration_s) << ",\n";
@@ -189,12 +190,10 @@ void AddTravelTimeCommand(CLI::App* app, int* exit_code) {
   CLI::App* command = app->add_subcommand(
       "traveltime", "Speed of pressure fronts between the pipe's transmitters PT1..PT10");
   command->footer(
-      "How fast does a pressure front travel along the copper pipe? The thesis (8.3.2) read the\n"
-      "delay of the front after a fast choke move between the pipe's two ends by hand, 0.70-0.91 "
-      "s\n"
-      "over 900 m in 12 runs, and found c = 1173 +- 74.5 m/s. This does the same for every pair "
-      "of\n"
-      "the transmitters PT1..PT10 (0, 100, ..., 900 m along the pipe):\n"
+      "How fast does a pressure front travel along the copper pipe? The thesis (8.3.2) read\n"
+      "the delay of the front after a fast choke move between the pipe's two ends by hand,\n"
+      "0.70-0.91 s over 900 m in 12 runs, and found c = 1173 +- 74.5 m/s. This does the same\n"
+      "for every pair of the transmitters PT1..PT10 (0, 100, ..., 900 m along the pipe):\n"
       "  1. each pressure's time derivative (takes away the static levels, weights the fronts),\n"
       "  2. the cross-correlation of every pair, weighted to a band (--band-low-hz 3 to\n"
       "     --band-high-hz 10: below it the heave's sines and sweeps, standing waves that\n"
@@ -211,10 +210,9 @@ void AddTravelTimeCommand(CLI::App* app, int* exit_code) {
       "  mpdrig synth --seed 1 --out lab.csv && mpdrig traveltime lab.csv\n"
       "  mpdrig traveltime lab.csv --window-s 30:40 --json tt.json\n"
       "JSON: wave_speed_mps, wave_speed_uncertainty_mps, stack_wave_speed_mps, residual_rms_s,\n"
-      "pairs_used, sample_rate_hz, duration_s, band_hz, transmitters, pairs[{from, to, "
-      "distance_m,\n"
-      "delay_s, delay_up_s, delay_down_s, peak_correlation, used, note}] "
-      "(docs/rig-measurements.md).\n"
+      "front_width_s, pairs_used, sample_rate_hz, duration_s, band_hz, transmitters,\n"
+      "pairs[{from, to, distance_m, delay_s, delay_up_s, delay_down_s, peak_correlation, used,\n"
+      "note}] (docs/rig-measurements.md).\n"
       "Progress goes to stderr. The wave speed is what `--set wave_speed_mps=...` takes.");
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
       ->required()
