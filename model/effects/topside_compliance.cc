@@ -29,11 +29,17 @@
 //     E = 0.1 GPa:  C_r = 4.36e-11;   E = 0.01 GPa:  C_r = 4.31e-10
 //   PVC 19x25 mm (e = 3 mm), E = 1.5 GPa, 2.5 m:  V_p = 7.09e-4 m^3,
 //     0.019/(1.5e9 0.003) + 1/K = 4.677e-9 1/Pa (c_PVC = 462 m/s, the thesis's)  C_p = 3.3e-12
-//   C = C_r + C_p: default 8.2e-11 m^3/Pa (mean E), plausible 4.7e-11 (E = 0.1 GPa) to 4.35e-10
-//   (E = 0.01 GPa). Against the copper pipe's own C_pipe = 2.5e-10 at c = 850 m/s (1.3e-10 at
-//   1173 m/s): r = 0.33 at the default. Bounds 0 to 2e-9 (a hose four times softer than the
-//   softest rubber). Reinforced hoses are stiffer than their rubber alone: the rig's own 0.49 ->
-//   0.44 Hz shift asks r = 0.12, C = 2.7e-11 (docs/rig-measurements.md).
+//   C = C_r + C_p: default 8.2e-11 m^3/Pa (mean E); 4.7e-11 (E = 0.1 GPa) to 4.35e-10
+//   (E = 0.01 GPa) over the thesis's range of rubber. Against the copper pipe's own
+//   C_pipe = 2.5e-10 at c = 850 m/s (1.3e-10 at 1173 m/s): r = 0.33 at the default. Bounds 0 to
+//   2e-9 (a hose four times softer than the softest rubber).
+// Plausible on the rig (where `mpdrig synth` draws a hidden one, and diagnose scans): 2.5e-11 to
+//   1.0e-10, from the rig's own resonances (thesis 9.1; docs/rig-measurements.md): cutting the
+//   tubes off raised the closed resonance from 0.44 to 0.49 Hz, which at the copper pipe's
+//   c = 882 m/s (2L 0.49 Hz) asks r = 0.118, C = 2.7e-11 (a reinforced hose: rubber at
+//   E = 0.18 GPa); the most the tubes can be is all of the closed resonance's drop from the
+//   fronts' c/2L = 0.65 Hz (c = 1173 m/s) to 0.44 Hz: r = 0.77, C = 1.0e-10. Softer (the bare
+//   rubber's E = 0.01 GPa) would put the closed-choke resonance below what the rig shows.
 //
 // Boundary closure (pipe_extension.h), implicit Euler over the step: with P(u) the pressure the
 // pipe imposes for the new outlet velocity u (falling in u along the alpha characteristic),
@@ -132,7 +138,7 @@ const EffectInfo& TopsideComplianceEffect() {
       "lowers the closed-choke resonance towards the open one's (tan(wL/c) = -(C/C_pipe) wL/c) "
       "and makes the choke flow FT3 lag the pipe's outlet flow FT1",
       {{"compliance_m3_per_pa", "m^3/Pa", "topside tube compliance C = V_t / K_eff", 8.2e-11, 0.0,
-        2.0e-9, true, 4.7e-11, 4.35e-10}},
+        2.0e-9, true, 2.5e-11, 1.0e-10}},
       [](const EffectContext& context) {
         return std::make_unique<TopsideCompliance>(context.Get("compliance_m3_per_pa"),
                                                    context.pipe.area_m2,
