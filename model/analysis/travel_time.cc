@@ -15,7 +15,8 @@ namespace mpdrig {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kTaperShare = 0.05;   // Tukey taper on each end of the window
+constexpr double kTaperShare = 0.05;   // Tukey taper on each end of the window: 5 %,
+constexpr double kTaperMaxS = 0.25;    // at most 0.25 s (it reweights the fronts inside it)
 constexpr double kSearchShare = 0.25;  // a pair's peak is sought within 25 % of the stack's lag
 constexpr double kOutlierMads = 4.0;
 constexpr double kStackStep = 0.0025;  // relative step of the stack's grid in c
@@ -67,7 +68,8 @@ std::vector<double> TaperedDerivative(const std::vector<double>& p, double dt) {
     const std::size_t lo = i == 0 ? 0 : i - 1, hi = i + 1 == n ? i : i + 1;
     d[i] = (p[hi] - p[lo]) / (dt * static_cast<double>(hi - lo));
   }
-  const std::size_t taper = std::max<std::size_t>(1, static_cast<std::size_t>(kTaperShare * n));
+  const std::size_t taper = std::max<std::size_t>(
+      1, static_cast<std::size_t>(std::min(kTaperShare * n, kTaperMaxS / dt)));
   for (std::size_t i = 0; i < taper && i < n; ++i) {
     const double w = 0.5 * (1.0 - std::cos(std::numbers::pi * static_cast<double>(i) / taper));
     d[i] *= w;
@@ -89,6 +91,7 @@ struct Correlation {
     return (1.0 - w) * r[k] + w * r[k + 1];
   }
   double Largest() const { return *std::max_element(r.begin(), r.end()); }
+  double null_sigma = 0.0;  // r's standard deviation at any lag were the two independent
 };
 
 // The peak of r nearest `lag_s` (signed) within kSearchShare of it: the largest sample in the
@@ -296,6 +299,14 @@ Result<TravelTimeResult> EstimateTravelTime(const std::vector<double>& time_s,
       pair.c.dt = dt / static_cast<double>(upsample);
       pair.c.r.resize(2 * static_cast<std::size_t>(fine_lag) + 1);
       const double norm = std::sqrt(series[i].energy * series[j].energy);
+      // Two independent series with these spectra: the normalised correlation at any lag has
+      // variance sum S_i S_j / (sum S_i sum S_j) (each frequency an independent term).
+      double product = 0.0;
+      for (std::size_t k = 0; k < series[i].spectrum.size(); ++k) {
+        const double hermitian = (k == 0 || 2 * k == size) ? 1.0 : 2.0;
+        product += hermitian * std::norm(series[i].spectrum[k]) * std::norm(series[j].spectrum[k]);
+      }
+      pair.c.null_sigma = std::sqrt(product) / norm;
       for (int m = -fine_lag; m <= fine_lag; ++m) {
         const std::size_t index =
             m >= 0 ? static_cast<std::size_t>(m) : fine_size - static_cast<std::size_t>(-m);
@@ -339,7 +350,8 @@ Result<TravelTimeResult> EstimateTravelTime(const std::vector<double>& time_s,
       delay.second = series[p.j].name;
       delay.distance_m = p.distance;
       const double lag = slowness * p.distance;
-      const double floor = options.min_peak * std::max(p.c.Largest(), 0.0);
+      const double floor = std::max(options.min_peak * std::max(p.c.Largest(), 0.0),
+                                    options.min_peak_sigmas * p.c.null_sigma);
       double up_height = 0.0, down_height = 0.0, up_width = 0.0, down_width = 0.0;
       const double up = PeakNear(p.c, lag, floor, &up_height, &up_width);
       const double down = PeakNear(p.c, -lag, floor, &down_height, &down_width);
@@ -348,6 +360,7 @@ Result<TravelTimeResult> EstimateTravelTime(const std::vector<double>& time_s,
       delay.delay_up_s = up;
       delay.delay_down_s = -down;
       delay.peak_correlation = std::max(up_height, down_height);
+      delay.peak_sigmas = delay.peak_correlation / p.c.null_sigma;
       if (!std::isnan(up) && !std::isnan(down)) {
         delay.delay_s = 0.5 * (up - down);
       } else if (!std::isnan(up)) {

@@ -11,7 +11,8 @@
 // Method, for every pair (i, j) of transmitters at x_i < x_j, d = x_j - x_i:
 //   1. the time derivative of each pressure (centred differences; it takes away the hydrostatic
 //      offsets and the slow pressure level, and weights the fronts' fast part), the window's ends
-//      tapered (Tukey, 5 % each side);
+//      tapered (Tukey, 5 % or at most 0.25 s each side: a taper reweights the fronts
+//      inside it, the later ones more, and so shifts their apparent delays);
 //   2. the cross-correlation r_ij(tau) = sum_t p_i'(t) p_j'(t + tau) through FFTs, weighted by a
 //      band W(f) = f^4/(f^4 + f_lo^4) exp(-(f/f_hi)^2): f_lo takes out the heave's standing waves
 //      (a sine correlates at every lag), f_hi the transmitters' white noise (in the derivative its
@@ -23,7 +24,11 @@
 //      which lie at +-(x_i + x_j)/c and +-(2L - x_i - x_j)/c, different for every pair). Then each
 //      pair's peaks are sought near +-s d: the largest r within 25 % of the stack's lag, refined
 //      by a parabola through three points (sub-sample), kept if it is a true local maximum and at
-//      least `min_peak` of the pair's largest correlation. The correlation is computed on a grid
+//      least `min_peak` of the pair's largest correlation and `min_peak_sigmas` standard
+//      deviations of chance: two independent series with the pair's weighted spectra S_i, S_j
+//      correlate at any lag with variance sum S_i S_j / (sum S_i sum S_j) (noise alone, or slow
+//      sines, would otherwise give peaks wherever the search looks, and a fit that agrees with
+//      its own search). The correlation is computed on a grid
 //      of at most 1 ms (4-16 points a sample: the spectrum zero-padded, band-limited
 //      interpolation), so the parabola's own error is far below a sample. The pair's delay is
 //      (tau+ - tau-)/2 where both sides have a peak (a timing offset between the two channels
@@ -58,6 +63,7 @@ struct TravelTimeOptions {
   double band_low_hz = 3.0;            // f_lo of the band weight
   double band_high_hz = 10.0;          // f_hi, at most 0.4 times the Nyquist frequency
   double min_peak = 0.2;               // a peak counts from this share of the pair's largest
+  double min_peak_sigmas = 5.0;        // and from this many sigma of r for unrelated series
   double window_begin_s = -1e300;      // only samples in [begin, end] (e.g. one choke move)
   double window_end_s = 1e300;
   Status Validate() const;
@@ -78,8 +84,9 @@ struct PairDelay {
   double delay_up_s = 0.0;        // tau+: fronts going up, from the piston; NaN if no peak
   double delay_down_s = 0.0;      // -tau-: fronts going down, from the choke; NaN if no peak
   double peak_correlation = 0.0;  // the larger of the two normalised peaks
-  bool used = false;              // in the fit
-  std::string note;               // why not, if not
+  double peak_sigmas = 0.0;  // that peak in standard deviations of r between independent series
+  bool used = false;         // in the fit
+  std::string note;          // why not, if not
 };
 
 struct TravelTimeResult {

@@ -131,6 +131,7 @@ std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args
         << ", \"delay_up_s\": " << JsonNumber(p.delay_up_s)
         << ", \"delay_down_s\": " << JsonNumber(p.delay_down_s)
         << ", \"peak_correlation\": " << JsonNumber(p.peak_correlation)
+        << ", \"peak_sigmas\": " << JsonNumber(p.peak_sigmas)
         << ", \"used\": " << (p.used ? "true" : "false");
     if (!p.note.empty()) out << ", \"note\": " << JsonString(p.note);
     out << "}";
@@ -211,8 +212,8 @@ void AddTravelTimeCommand(CLI::App* app, int* exit_code) {
       "  mpdrig traveltime lab.csv --window-s 30:40 --json tt.json\n"
       "JSON: wave_speed_mps, wave_speed_uncertainty_mps, stack_wave_speed_mps, residual_rms_s,\n"
       "front_width_s, pairs_used, sample_rate_hz, duration_s, band_hz, transmitters,\n"
-      "pairs[{from, to, distance_m, delay_s, delay_up_s, delay_down_s, peak_correlation, used,\n"
-      "note}] (docs/rig-measurements.md).\n"
+      "pairs[{from, to, distance_m, delay_s, delay_up_s, delay_down_s, peak_correlation,\n"
+      "peak_sigmas, used, note}] (docs/rig-measurements.md).\n"
       "Progress goes to stderr. The wave speed is what `--set wave_speed_mps=...` takes.");
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
       ->required()
