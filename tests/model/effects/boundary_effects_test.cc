@@ -371,6 +371,23 @@ TEST(TopsideCompliance, LowersTheClosedChokeResonanceAsTanThetaIsMinusRTheta) {
       analytic_base);
 }
 
+TEST(TopsideCompliance, LeavesTheOpenChokeResonanceAlone) {
+  // Wide-open choke, no pump flow: the outlet is held at p_0 (its linearised impedance is zero),
+  // the tubes beside it see no pressure change, and c/4L (9.3.2) stays where it was: the rig's
+  // 0.25 Hz open against 0.44 Hz closed (a ratio of 1.76, not 2) is what the tubes can explain.
+  // Tolerance 0.3 % of c/4L at the default C.
+  const RigParams base;
+  const RigParams topside = With("topside_compliance");
+  SineRun run;
+  run.choke_deg = 90.0;
+  run.pump_lpm = 0.0;
+  const double c4l = base.wave_speed_mps / (4.0 * base.pipe_length_m);
+  const double peak_base = PeakFactor(base, run, c4l, 0.9, 1.1);
+  const double peak_topside = PeakFactor(topside, run, c4l, 0.9, 1.1);
+  EXPECT_NEAR(peak_topside, peak_base, 0.003) << peak_base << " " << peak_topside;
+  std::printf("open choke: %.4f c/4L without, %.4f with the tubes\n", peak_base, peak_topside);
+}
+
 TEST(TopsideCompliance, ChokeInertiaAndTheTubesBothCloseTheOutlet) {
   // One closure per pipe end: the two are refused together, saying so.
   RigParams params = With("topside_compliance");
