@@ -435,4 +435,71 @@ Result<TravelTimeResult> EstimateTravelTime(const std::vector<double>& time_s,
   return result;
 }
 
+std::vector<double> FindChokeMoves(const std::vector<double>& time_s,
+                                   const std::vector<double>& opening_frac, double min_step_frac,
+                                   double min_gap_s) {
+  // Prefix sums over the measured samples, for window means in O(1).
+  const std::size_t n = time_s.size();
+  std::vector<double> sum(n + 1, 0.0), count(n + 1, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool measured = i < opening_frac.size() && !std::isnan(opening_frac[i]);
+    sum[i + 1] = sum[i] + (measured ? opening_frac[i] : 0.0);
+    count[i + 1] = count[i] + (measured ? 1.0 : 0.0);
+  }
+  const auto index_at = [&](double t) {
+    return static_cast<std::size_t>(std::lower_bound(time_s.begin(), time_s.end(), t) -
+                                    time_s.begin());
+  };
+  const auto mean = [&](double t0, double t1) {
+    const std::size_t a = index_at(t0), b = index_at(t1);
+    const double c = count[b] - count[a];
+    return c > 0.0 ? (sum[b] - sum[a]) / c : kNaN;
+  };
+  std::vector<double> step(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = time_s[i];
+    if (t - 0.6 < time_s.front() || t + 0.6 > time_s.back()) continue;
+    const double change = mean(t + 0.1, t + 0.6) - mean(t - 0.6, t - 0.1);
+    step[i] = std::isnan(change) ? 0.0 : std::fabs(change);
+  }
+  std::vector<double> moves;
+  std::size_t i = 0;
+  while (i < n) {
+    if (step[i] < min_step_frac) {
+      ++i;
+      continue;
+    }
+    // The largest step of this run of samples above the threshold.
+    std::size_t best = i;
+    for (; i < n && step[i] >= min_step_frac; ++i) {
+      if (step[i] > step[best]) best = i;
+    }
+    if (moves.empty() || time_s[best] - moves.back() >= min_gap_s) moves.push_back(time_s[best]);
+  }
+  return moves;
+}
+
+std::vector<MoveTravelTime> TravelTimePerMove(const std::vector<double>& time_s,
+                                              const std::vector<PressureTrace>& traces,
+                                              const std::vector<double>& move_times_s,
+                                              const TravelTimeOptions& options, double before_s,
+                                              double after_s) {
+  std::vector<MoveTravelTime> out;
+  for (double t : move_times_s) {
+    TravelTimeOptions window = options;
+    window.window_begin_s = t - before_s;
+    window.window_end_s = t + after_s;
+    MoveTravelTime move;
+    move.time_s = t;
+    auto result = EstimateTravelTime(time_s, traces, window);
+    if (result.ok()) {
+      move.result = std::move(result).value();
+    } else {
+      move.status = result.status();
+    }
+    out.push_back(std::move(move));
+  }
+  return out;
+}
+
 }  // namespace mpdrig

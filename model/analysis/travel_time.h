@@ -115,4 +115,28 @@ Result<TravelTimeResult> EstimateTravelTime(const std::vector<double>& time_s,
 // PipePositionM), those present.
 std::vector<PressureTrace> PipeTransmitterTraces(const riglog::RigLog& log);
 
+// --- One choke move at a time, as the thesis read them (Table 8.3.1) ----------------------------
+
+// The times of the choke's moves: where the mean opening over [t + 0.1, t + 0.6] s differs from
+// the mean over [t - 0.6, t - 0.1] s by at least `min_step_frac` (a local maximum of that step,
+// so a move is found once, at its middle; the position feedback's noise averages out over the
+// 0.5 s), at least `min_gap_s` after the previous one. NaN samples are skipped.
+std::vector<double> FindChokeMoves(const std::vector<double>& time_s,
+                                   const std::vector<double>& opening_frac,
+                                   double min_step_frac = 2.0 / 90.0, double min_gap_s = 3.0);
+
+struct MoveTravelTime {
+  double time_s = 0.0;           // the move
+  Status status = Status::Ok();  // the error where the window holds no clear front
+  TravelTimeResult result;       // where status is ok
+};
+
+// EstimateTravelTime over [t - before_s, t + after_s] around each move (the other options as
+// given): one wave speed per move, as the thesis's twelve.
+std::vector<MoveTravelTime> TravelTimePerMove(const std::vector<double>& time_s,
+                                              const std::vector<PressureTrace>& traces,
+                                              const std::vector<double>& move_times_s,
+                                              const TravelTimeOptions& options = {},
+                                              double before_s = 1.0, double after_s = 4.0);
+
 }  // namespace mpdrig

@@ -25,6 +25,8 @@ struct TravelTimeArgs {
   riglog::ReadOptions read;
   TravelTimeOptions options;
   bool quiet = false;
+  bool per_move = false;
+  double min_move_deg = 2.0;
 };
 
 std::string JsonNumber(double value) {
@@ -73,7 +75,7 @@ Status ParseWindow(const std::string& spec, TravelTimeOptions* options) {
 // Time and the pipe transmitters of the log, read one sample at a time (the other columns are
 // not kept).
 Status ReadTransmitters(const TravelTimeArgs& args, std::vector<double>* time_s,
-                        std::vector<PressureTrace>* traces) {
+                        std::vector<PressureTrace>* traces, std::vector<double>* choke_frac) {
   auto reader = riglog::RigLogReader::Open(args.log_path, args.read);
   if (!reader.ok()) return reader.status();
   std::vector<std::size_t> columns;
@@ -88,6 +90,10 @@ Status ReadTransmitters(const TravelTimeArgs& args, std::vector<double>* time_s,
     return Status::Error(args.log_path + ": needs at least three of PT1..PT10 (has " +
                          std::to_string(traces->size()) + ")");
   }
+  const auto choke_column = reader->FindColumn(riglog::ChannelName(Channel::kChokePosition));
+  if (args.per_move && !choke_column) {
+    return Status::Error(args.log_path + ": --per-move needs the choke_position column");
+  }
   std::vector<double> values;
   while (true) {
     auto more = reader->Next(&values);
@@ -97,6 +103,7 @@ Status ReadTransmitters(const TravelTimeArgs& args, std::vector<double>* time_s,
     for (std::size_t c = 0; c < columns.size(); ++c) {
       (*traces)[c].pressure_pa.push_back(values[columns[c]]);
     }
+    if (choke_column) choke_frac->push_back(values[*choke_column]);
     if (!args.quiet && reader->samples_read() % 100000 == 0) {
       std::fprintf(stderr, "mpdrig traveltime: read %lld samples\r",
                    static_cast<long long>(reader->samples_read()));
@@ -105,7 +112,36 @@ Status ReadTransmitters(const TravelTimeArgs& args, std::vector<double>* time_s,
   return Status::Ok();
 }
 
-std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args) {
+// The end-to-end pair's delay (the thesis's measurement), NaN if it was not resolved.
+double EndToEndDelay(const TravelTimeResult& r) {
+  for (const PairDelay& p : r.pairs) {
+    if (p.first == r.transmitters.front() && p.second == r.transmitters.back()) return p.delay_s;
+  }
+  return NAN;
+}
+
+std::string MovesJson(const std::vector<MoveTravelTime>& moves) {
+  std::ostringstream out;
+  out << ",\n  \"moves\": [";
+  for (std::size_t k = 0; k < moves.size(); ++k) {
+    const MoveTravelTime& m = moves[k];
+    out << (k ? "," : "") << "\n    {\"time_s\": " << JsonNumber(m.time_s);
+    if (m.status.ok()) {
+      out << ", \"wave_speed_mps\": " << JsonNumber(m.result.wave_speed_mps)
+          << ", \"wave_speed_uncertainty_mps\": " << JsonNumber(m.result.wave_speed_uncertainty_mps)
+          << ", \"pairs_used\": " << m.result.pairs_used
+          << ", \"end_to_end_delay_s\": " << JsonNumber(EndToEndDelay(m.result));
+    } else {
+      out << ", \"error\": " << JsonString(m.status.message());
+    }
+    out << "}";
+  }
+  out << "\n  ]";
+  return out.str();
+}
+
+std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args,
+                           const std::vector<MoveTravelTime>& moves) {
   std::ostringstream out;
   out << "{\n  \"log\": " << JsonString(args.log_path) << ",\n";
   out << "  \"wave_speed_mps\": " << JsonNumber(r.wave_speed_mps) << ",\n";
@@ -136,8 +172,39 @@ std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args
     if (!p.note.empty()) out << ", \"note\": " << JsonString(p.note);
     out << "}";
   }
-  out << "\n  ]\n}\n";
+  out << "\n  ]";
+  if (args.per_move) out << MovesJson(moves);
+  out << "\n}\n";
   return out.str();
+}
+
+// One line per move, then the mean and spread of their speeds, as the thesis's Table 8.3.1.
+void PrintMoves(const std::vector<MoveTravelTime>& moves) {
+  std::printf("%8s %9s %7s %6s %10s\n", "move s", "c m/s", "+- m/s", "pairs", "end-end s");
+  std::vector<double> speeds;
+  for (const MoveTravelTime& m : moves) {
+    if (!m.status.ok()) {
+      const std::string& why = m.status.message();
+      std::printf("%8.2f  not timed: %s\n", m.time_s, why.substr(0, why.find(':')).c_str());
+      continue;
+    }
+    std::printf("%8.2f %9.1f %7.1f %6d %10.4f\n", m.time_s, m.result.wave_speed_mps,
+                m.result.wave_speed_uncertainty_mps, m.result.pairs_used, EndToEndDelay(m.result));
+    speeds.push_back(m.result.wave_speed_mps);
+  }
+  if (speeds.empty()) {
+    std::printf("no move with a clear front (%zu moves found)\n", moves.size());
+    return;
+  }
+  double mean = 0.0, square = 0.0;
+  for (double c : speeds) mean += c / static_cast<double>(speeds.size());
+  for (double c : speeds) square += (c - mean) * (c - mean);
+  const double sd =
+      speeds.size() > 1 ? std::sqrt(square / static_cast<double>(speeds.size() - 1)) : NAN;
+  std::printf(
+      "%zu of %zu moves timed: mean %.1f m/s, standard deviation %.1f (the thesis, 12 moves "
+      "read by hand: 1173, 74.5)\n",
+      speeds.size(), moves.size(), mean, sd);
 }
 
 void PrintSummary(const TravelTimeResult& r) {
@@ -167,7 +234,8 @@ int RunTravelTime(const TravelTimeArgs& args) {
   if (!valid.ok()) return Fail(name, valid);
   std::vector<double> time_s;
   std::vector<PressureTrace> traces;
-  const Status read = ReadTransmitters(args, &time_s, &traces);
+  std::vector<double> choke_frac;
+  const Status read = ReadTransmitters(args, &time_s, &traces, &choke_frac);
   if (!read.ok()) return Fail(name, read);
   if (!args.quiet) {
     std::fprintf(stderr,
@@ -176,11 +244,27 @@ int RunTravelTime(const TravelTimeArgs& args) {
   }
   auto result = EstimateTravelTime(time_s, traces, options);
   if (!result.ok()) return Fail(name, result.status().Within(args.log_path));
+  std::vector<MoveTravelTime> moves;
+  if (args.per_move) {
+    const std::vector<double> times =
+        FindChokeMoves(time_s, choke_frac, args.min_move_deg / 90.0, /*min_gap_s=*/3.0);
+    if (!args.quiet) {
+      std::fprintf(stderr, "mpdrig traveltime: %zu choke moves of %g deg or more; timing each\n",
+                   times.size(), args.min_move_deg);
+    }
+    TravelTimeOptions per_move = options;
+    per_move.window_begin_s = -1e300;
+    per_move.window_end_s = 1e300;
+    moves = TravelTimePerMove(time_s, traces, times, per_move);
+  }
   if (!args.json_path.empty()) {
-    const Status written = WriteText(args.json_path, TravelTimeJson(*result, args));
+    const Status written = WriteText(args.json_path, TravelTimeJson(*result, args, moves));
     if (!written.ok()) return Fail(name, written);
   }
-  if (args.json_path != "-") PrintSummary(*result);
+  if (args.json_path != "-") {
+    PrintSummary(*result);
+    if (args.per_move) PrintMoves(moves);
+  }
   return 0;
 }
 
@@ -206,14 +290,18 @@ void AddTravelTimeCommand(CLI::App* app, int* exit_code) {
       "     pairs share transmitters, is the uncertainty.\n"
       "Any fast move of the choke or the piston, or any broadband excitation, will do; a log of\n"
       "slow sines alone has no front to time. Pairs closer than the fronts are wide (a slow choke\n"
-      "move) are left out and say so. --window-s picks one move, as the thesis read them.\n"
+      "move) are left out and say so. --window-s picks one move, as the thesis read them;\n"
+      "--per-move finds the choke's moves and times each on its own, then their mean and spread.\n"
       "Examples:\n"
       "  mpdrig synth --seed 1 --out lab.csv && mpdrig traveltime lab.csv\n"
       "  mpdrig traveltime lab.csv --window-s 30:40 --json tt.json\n"
+      "  mpdrig traveltime lab.csv --per-move\n"
       "JSON: wave_speed_mps, wave_speed_uncertainty_mps, stack_wave_speed_mps, residual_rms_s,\n"
       "front_width_s, pairs_used, sample_rate_hz, duration_s, band_hz, transmitters,\n"
       "pairs[{from, to, distance_m, delay_s, delay_up_s, delay_down_s, peak_correlation,\n"
-      "peak_sigmas, used, note}] (docs/rig-measurements.md).\n"
+      "peak_sigmas, used, note}], and with --per-move moves[{time_s, wave_speed_mps,\n"
+      "wave_speed_uncertainty_mps, pairs_used, end_to_end_delay_s} or {time_s, error}]\n"
+      "(docs/rig-measurements.md).\n"
       "Progress goes to stderr. The wave speed is what `--set wave_speed_mps=...` takes.");
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
       ->required()
@@ -240,6 +328,15 @@ void AddTravelTimeCommand(CLI::App* app, int* exit_code) {
                    "fastest wave speed searched")
       ->capture_default_str();
   AddLogReadOptions(command, &args->read);
+  command->add_flag("--per-move", args->per_move,
+                    "also time each choke move on its own, in [t - 1, t + 4] s (as the thesis's "
+                    "Table 8.3.1): needs the choke_position column");
+  command
+      ->add_option("--min-move-deg", args->min_move_deg,
+                   "smallest choke move --per-move counts (mean opening 0.5 s after against 0.5 "
+                   "s before)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   command->add_flag("--quiet", args->quiet, "no progress on stderr");
   command->callback([args, exit_code] { *exit_code = RunTravelTime(*args); });
 }

@@ -55,6 +55,25 @@ TEST(TravelTimeCommandTest, SynthLogGivesItsWaveSpeedAndTheJsonFields) {
   }
 }
 
+TEST(TravelTimeCommandTest, PerMoveTimesEachChokeMoveOrSaysWhyNot) {
+  // synth's choke steps are small and slow (a few degrees over 0.5 s): each is found, and each is
+  // timed or named as too weak on its own; the JSON lists them.
+  const fs::path dir = TempDir();
+  const fs::path log = dir / "lab.csv", json = dir / "tt.json";
+  std::string output;
+  ASSERT_EQ(RunShell(kExe + " synth --seed 1 --out " + log.string(), &output), 0) << output;
+  ASSERT_EQ(RunShell(kExe + " traveltime " + log.string() + " --per-move --json " + json.string(),
+                     &output),
+            0)
+      << output;
+  EXPECT_NE(output.find("choke moves of 2 deg or more"), std::string::npos) << output;
+  EXPECT_NE(output.find("moves timed"), std::string::npos) << output;
+  const std::string text = testing::ReadFile(json);
+  EXPECT_NE(text.find("\"moves\": ["), std::string::npos) << text;
+  EXPECT_NE(text.find("\"end_to_end_delay_s\""), std::string::npos) << text;
+  EXPECT_NE(text.find("\"error\": \"fewer than three pairs"), std::string::npos) << text;
+}
+
 TEST(TravelTimeCommandTest, RefusesBadInputNamingIt) {
   const fs::path dir = TempDir();
   std::string output;
