@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   mpdrig::cli::AddEffectsCommand(&app, &exit_code);
   mpdrig::cli::AddDiagnoseCommand(&app, &exit_code);
   mpdrig::cli::AddFitCommand(&app, &exit_code);
+  mpdrig::cli::AddTravelTimeCommand(&app, &exit_code);
   mpdrig::cli::AddRevealCommand(&app, &exit_code);
   mpdrig::cli::AddShadowCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);

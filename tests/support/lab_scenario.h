@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include "model/analysis/measured_log.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
@@ -54,8 +55,10 @@ inline SimulationOptions ScenarioReplayOptions() {
   return options;
 }
 
-// The truth (noise-free, every compared channel and the inputs) from t = 0, cut at cut_s.
-inline riglog::RigLog TruthLog(const Scenario& s, const RigParams& params = RigParams{}) {
+// The truth (noise-free, every compared channel and the inputs) from t = 0, cut at cut_s, at
+// `rate_hz` on a grid of `cells` (the scenario's 100 Hz and 50 cells unless told).
+inline riglog::RigLog TruthLog(const Scenario& s, const RigParams& params = RigParams{},
+                               double rate_hz = kScenarioRateHz, int cells = kScenarioCells) {
   InputSignals signals;
   signals.piston_position_m = s.piston_m;
   signals.rig = [&](double t) {
@@ -66,9 +69,10 @@ inline riglog::RigLog TruthLog(const Scenario& s, const RigParams& params = RigP
     return in;
   };
   std::vector<double> times;
-  for (long i = 0; i <= std::lround(s.duration_s * kScenarioRateHz); ++i)
-    times.push_back(i / kScenarioRateHz);
-  auto run = Simulate(params, ScenarioReplayOptions(), signals, times);
+  for (long i = 0; i <= std::lround(s.duration_s * rate_hz); ++i) times.push_back(i / rate_hz);
+  SimulationOptions options = ScenarioReplayOptions();
+  options.cells = cells;
+  auto run = Simulate(params, options, signals, times);
   EXPECT_TRUE(run.ok()) << run.status().message();
   riglog::RigLog log;
   std::vector<std::vector<double>> columns(4 + ComparedChannels().size());

@@ -14,9 +14,10 @@ void AddServeCommand(CLI::App* app, int* exit_code);
 void AddCompareCommand(CLI::App* app, int* exit_code);
 void AddObserveCommand(CLI::App* app, int* exit_code);
 void AddGainsCommand(CLI::App* app, int* exit_code);
-void AddEffectsCommand(CLI::App* app, int* exit_code);   // the effect catalogue
-void AddDiagnoseCommand(CLI::App* app, int* exit_code);  // which effect is missing (and synth)
-void AddFitCommand(CLI::App* app, int* exit_code);       // parameters fitted to a log
+void AddEffectsCommand(CLI::App* app, int* exit_code);     // the effect catalogue
+void AddDiagnoseCommand(CLI::App* app, int* exit_code);    // which effect is missing (and synth)
+void AddFitCommand(CLI::App* app, int* exit_code);         // parameters fitted to a log
+void AddTravelTimeCommand(CLI::App* app, int* exit_code);  // wave speed from the fronts
 void AddRevealCommand(CLI::App* app, int* exit_code);
 void AddShadowCommand(CLI::App* app, int* exit_code);
 

@@ -1,10 +1,11 @@
-// The boundary effects (pump_curve, hose_compliance, piston_compressibility) change the response
-// the way their physics says: closed-form fixed points, mass balances of the added volumes, and
-// the linearised transfer functions of the added states measured on the periodic response to a
-// piston sine.
+// The boundary effects (pump_curve, hose_compliance, topside_compliance, piston_compressibility)
+// change the response the way their physics says: closed-form fixed points, mass balances of the
+// added volumes, and the linearised transfer functions of the added states measured on the periodic
+// response to a piston sine.
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstdio>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -236,6 +237,167 @@ TEST(HoseCompliance, LeavesPressureBelowTheBhaAlgebraic) {
     worst = std::max(worst, std::fabs(s[Channel::kP1] - s[Channel::kP2] - rho_g_h));
   });
   EXPECT_LT(worst, 1e-6);
+}
+
+// --- topside_compliance -------------------------------------------------------------------------
+
+TEST(TopsideCompliance, MassBalanceOfTheTubesAndTheOrificeAtTheChoke) {
+  // C dp(L)/dt = A u(L) + q_b - q_c, summed over the steps (implicit Euler: exact up to the
+  // solver's tolerance): C (C2(T) - C2(0)) = sum dt (FT1 + FT2 - FT3). And the choke flow FT3 is
+  // the orifice's (5.3.2) for C2 - C1 at every step.
+  const double compliance = 2e-10;
+  const RigParams params = With("topside_compliance:compliance_m3_per_pa=2e-10");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.piston_position_m = [](double t) {
+    return 0.02 * std::sin(2.0 * std::numbers::pi * 0.3 * t);
+  };
+  drive.rig = [](double t) { return testing::Held(t < 3.0 ? 31.0 : 20.0, 5.0, 3.0); };
+  const double dt = TimeStep(params, options.cells);
+  const ChokeCharacteristic characteristic(params);
+  double p_start = 0.0, p_end = 0.0, net_inflow = 0.0, worst_orifice = 0.0, largest_lag = 0.0;
+  bool first = true;
+  testing::RunSteps(params, options, drive, 10.0, [&](const RigSimulator& sim) {
+    const RigSample s = sim.Sample();
+    const double g = characteristic.FlowCoefficientM2(s[Channel::kChokePosition]);
+    const double dp = s[Channel::kC2] - s[Channel::kC1];
+    const double orifice =
+        g * std::copysign(std::sqrt(std::fabs(dp) / params.choke_density_kgpm3), dp);
+    worst_orifice = std::max(worst_orifice, std::fabs(s[Channel::kFT3] - orifice));
+    largest_lag =
+        std::max(largest_lag, std::fabs(s[Channel::kFT1] + s[Channel::kFT2] - s[Channel::kFT3]));
+    if (first) {
+      p_start = s[Channel::kC2];
+      first = false;
+      return;
+    }
+    net_inflow += dt * (s[Channel::kFT1] + s[Channel::kFT2] - s[Channel::kFT3]);
+    p_end = s[Channel::kC2];
+  });
+  EXPECT_GT(std::fabs(p_end - p_start), 1e4);  // the choke step moved the tubes' pressure
+  EXPECT_NEAR(compliance * (p_end - p_start), net_inflow,
+              1e-9 * compliance * std::fabs(p_end - p_start) + 1e-16);
+  EXPECT_LT(worst_orifice, 1e-9 * units::LpmToM3ps(5.0));
+  EXPECT_GT(largest_lag, 0.01 * units::LpmToM3ps(5.0));  // FT3 is not FT1 + FT2
+}
+
+TEST(TopsideCompliance, ZeroComplianceIsTheThesisOutlet) {
+  // C = 0: q_c = q_b + A u(L) (5.3.1), every channel as without the effect.
+  const RigParams params = With("topside_compliance:compliance_m3_per_pa=0");
+  SimulationOptions options;
+  options.cells = 60;
+  testing::Drive drive;
+  drive.piston_position_m = [](double t) {
+    return 0.02 * std::sin(2.0 * std::numbers::pi * 0.3 * t);
+  };
+  drive.rig = [](double t) { return testing::Held(t < 3.0 ? 31.0 : 20.0, 5.0, 3.0); };
+  const RigSample with = testing::RunSteps(params, options, drive, 8.0).Sample();
+  const RigSample base = testing::RunSteps(RigParams(), options, drive, 8.0).Sample();
+  for (std::size_t c = 0; c < kChannelCount; ++c) {
+    EXPECT_NEAR(with.values[c], base.values[c], 1e-7 * (std::fabs(base.values[c]) + 1e-6)) << c;
+  }
+}
+
+// The first root in (pi/2, pi) of tan(theta) = -r theta (the closed pipe ending in a
+// capacitance, the effect's header); tan(theta) + r theta increases there.
+double ClosedTopsideTheta(double r) {
+  double lo = 0.5 * std::numbers::pi + 1e-12, hi = std::numbers::pi;
+  for (int i = 0; i < 100; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::tan(mid) + r * mid < 0.0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// (9.2.13) times s with friction f1 and the outlet impedance of a tight choke behind the tubes,
+// k = A / (i w C) (complex: AnalyticBhpPerPistonPosition takes a real k).
+double ClosedTopsideGain(const RigParams& params, double compliance, double freq_hz) {
+  const double c = params.wave_speed_mps, rho = params.density_kgpm3;
+  const double area = params.PipeAreaM2(), length = params.pipe_length_m;
+  const Complex s(0.0, 2.0 * std::numbers::pi * freq_hz);
+  const Complex kappa = std::sqrt(s * (s + params.friction_f1_per_s)) / c;
+  const Complex z = rho * c * c * kappa / s;
+  const Complex sh = std::sinh(kappa * length), ch = std::cosh(kappa * length);
+  const Complex k = area / (compliance * s);
+  const Complex ratio = compliance > 0.0 ? z * (z * sh + k * ch) / (z * ch + k * sh) : z * ch / sh;
+  return std::abs(ratio * s);
+}
+
+TEST(TopsideCompliance, LowersTheClosedChokeResonanceAsTanThetaIsMinusRTheta) {
+  // Tight choke (no leak), no pump flow: the pipe closed at the piston end resonates at c/2L
+  // (9.3.4); behind the tubes it ends in C: tan(theta) = -r theta, theta = w L / c,
+  // r = C / C_pipe, C_pipe = A L / (rho c^2). At the default C (r = 0.33 at c = 850 m/s) the
+  // peak falls to 0.784 c/2L. Friction moves both peaks a little; their ratio is the closed
+  // form's theta / pi (tolerance 0.003 c/2L; measured 0.7846 against 0.7842), and each peak lies
+  // within 0.2 % of the analytic response's with friction (the same (9.2.13) with
+  // k = A / (i w C); measured 0.7849 against 0.7847).
+  const double compliance = 8.2e-11;
+  RigParams base;
+  base.choke_leak_m2 = 0.0;
+  RigParams topside = With(base, "topside_compliance:compliance_m3_per_pa=8.2e-11");
+  const double c = base.wave_speed_mps, length = base.pipe_length_m;
+  const double c_pipe = base.PipeAreaM2() * length / (base.density_kgpm3 * c * c);
+  const double r = compliance / c_pipe;
+  const double predicted = ClosedTopsideTheta(r) / std::numbers::pi;    // in units of c/2L
+  EXPECT_NEAR(ClosedTopsideTheta(1e-9) / std::numbers::pi, 1.0, 1e-6);  // C -> 0: c/2L
+  SineRun run;
+  run.choke_deg = 0.0;
+  run.pump_lpm = 0.0;
+  const double c2l = c / (2.0 * length);
+  const double peak_base = PeakFactor(base, run, c2l, 0.9, 1.1);
+  const double peak_topside = PeakFactor(topside, run, c2l, 0.7, 0.87);
+  EXPECT_LT(predicted, 0.8);
+  EXPECT_NEAR(peak_topside / peak_base, predicted, 0.003) << peak_base << " " << peak_topside;
+  // The analytic responses' peaks, on a fine scan: with the tubes, and without (C -> 0: c/2L
+  // moved by friction alone).
+  const auto analytic_peak = [&](double c_m3_per_pa, double from, double to) {
+    double best_f = 0.0, best_gain = 0.0;
+    for (double f = from; f <= to; f += 1e-4) {
+      const double gain = ClosedTopsideGain(base, c_m3_per_pa, f * c2l);
+      if (gain > best_gain) best_gain = gain, best_f = f;
+    }
+    return best_f;
+  };
+  const double analytic_topside = analytic_peak(compliance, 0.7, 0.87);
+  const double analytic_base = analytic_peak(0.0, 0.9, 1.1);
+  EXPECT_NEAR(peak_topside, analytic_topside, 0.002 * analytic_topside);
+  EXPECT_NEAR(peak_base, analytic_base, 0.002 * analytic_base);
+  EXPECT_NEAR(analytic_base, 1.0, 0.002);
+  std::printf(
+      "closed choke: r %.3f, tan(theta) = -r theta gives %.4f c/2L; simulated %.4f / %.4f = %.4f; "
+      "analytic with friction %.4f / %.4f\n",
+      r, predicted, peak_topside, peak_base, peak_topside / peak_base, analytic_topside,
+      analytic_base);
+}
+
+TEST(TopsideCompliance, LeavesTheOpenChokeResonanceAlone) {
+  // Wide-open choke, no pump flow: the outlet is held at p_0 (its linearised impedance is zero),
+  // the tubes beside it see no pressure change, and c/4L (9.3.2) stays where it was: the rig's
+  // 0.25 Hz open against 0.44 Hz closed (a ratio of 1.76, not 2) is what the tubes can explain.
+  // Tolerance 0.3 % of c/4L at the default C.
+  const RigParams base;
+  const RigParams topside = With("topside_compliance");
+  SineRun run;
+  run.choke_deg = 90.0;
+  run.pump_lpm = 0.0;
+  const double c4l = base.wave_speed_mps / (4.0 * base.pipe_length_m);
+  const double peak_base = PeakFactor(base, run, c4l, 0.9, 1.1);
+  const double peak_topside = PeakFactor(topside, run, c4l, 0.9, 1.1);
+  EXPECT_NEAR(peak_topside, peak_base, 0.003) << peak_base << " " << peak_topside;
+  std::printf("open choke: %.4f c/4L without, %.4f with the tubes\n", peak_base, peak_topside);
+}
+
+TEST(TopsideCompliance, ChokeInertiaAndTheTubesBothCloseTheOutlet) {
+  // One closure per pipe end: the two are refused together, saying so.
+  RigParams params = With("topside_compliance");
+  params = With(params, "choke_inertia");
+  SimulationOptions options;
+  options.cells = 30;
+  auto created = RigSimulator::Create(params, options, testing::Held(31.0, 5.0, 2.0), 0.0);
+  ASSERT_FALSE(created.ok());
+  EXPECT_NE(created.status().message().find("outlet"), std::string::npos)
+      << created.status().message();
 }
 
 // --- piston_compressibility ----------------------------------------------------------------------
