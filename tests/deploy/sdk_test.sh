@@ -3,7 +3,7 @@
 # --dev assembles it for the build image, then the example controller (which is on the client
 # library, clients/client) compiled with mpdrig-build-controller, as a student's two-stage
 # Containerfile does (deploy/class/cpp-controller), on this host instead of in the image: the
-# same Debian 12 packages (cyclonedds-dev, libcli11-dev, g++, cmake, ninja). The result must run
+# same Debian 12 packages (cyclonedds-dev, libcli11-dev, libssl-dev, g++, cmake, ninja). The result must run
 # and be the example controller (its --help names --lockstep and --security). Exit 77 (skipped,
 # with the reason) without those tools.
 #   tests/deploy/sdk_test.sh SOURCE_DIR
