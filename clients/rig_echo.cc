@@ -160,7 +160,10 @@ int main(int argc, char** argv) {
   app.footer(
       "The rig is lost when its time or sample counter goes back (the service restarted), its\n"
       "sensor writer leaves (the service exited, or crashed and its lease ran out), or no sample\n"
-      "comes for --timeout s: rig_echo says why, keeps the rows recorded so far and exits 3.");
+      "comes for --timeout s: rig_echo says why, keeps the rows recorded so far and exits 3.\n"
+      "A service that ends its run as asked (a stop, --duration, a playback's last row) says so\n"
+      "before it goes: the recording is then complete (exit 0). Samples the rig sent that never\n"
+      "arrived (this reader fell behind) are marked '# lost: ...' in the log and counted.");
   app.add_option("--dds-config", dds_config, "Cyclone DDS XML (default: loopback only)");
   app.add_option("--security", security,
                  "DDS Security: an identity directory of a class (deploy/security/make-class OUT "
@@ -208,6 +211,12 @@ int main(int argc, char** argv) {
                  "or starved of CPU); the rows around a gap are not neighbours in time\n",
                  static_cast<unsigned long long>(recorded.lost), recorded.gaps,
                  recorded.longest_gap_s, recorded.longest_gap_at_s);
+  }
+  if ((*rig)->lost() && (*rig)->ended()) {
+    // The service ended its run as asked: the recording is complete, not cut short.
+    std::fprintf(stderr, "rig_echo: rig %s: %s; the recording is complete\n", rig_id.c_str(),
+                 (*rig)->lost()->c_str());
+    return recorded.written > 0 ? 0 : 1;
   }
   if (const auto& lost = (*rig)->lost()) {
     // A lost rig (clients/rig_watch.h) ends the recording: the file keeps what came before, on

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <cstdio>
 #include <map>
 #include <mutex>
@@ -328,8 +329,10 @@ Status Rig::TakeProfiles() {
 
 Status Rig::TakeStatus() {
   const std::string& id = options_.rig_id;
-  auto took = dds_->status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+  auto took = dds_->status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t& info) {
     if (id != s.rig_id) return;
+    // A disposal that finds the last status unread marks that sample instead of adding one.
+    if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) ended_ = true;
     RigStatus out;
     out.clock = s.clock == mpdrig_CLOCK_REALTIME ? "realtime"
                 : s.clock == mpdrig_CLOCK_FAST   ? "fast"
@@ -345,6 +348,9 @@ Status Rig::TakeStatus() {
     out.actuator_owners = FromSequence(s.actuator_owners);
     out.sensor_noise = s.sensor_noise;
     rig_status_ = std::move(out);
+  }, {}, std::numeric_limits<int>::max(), [&](const mpdrig_RigStatus& s) {
+    // The service disposes a rig's status when its run ends as asked (RigService::EndRigs).
+    if (id == s.rig_id) ended_ = true;
   });
   return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
 }
@@ -368,6 +374,10 @@ Status Rig::Drain() {
   if (!why) return Status::Ok();
   // What the departed writer sent before it went is in the reader by now: keep it.
   MPDRIG_RETURN_IF_ERROR(TakeSensors());
+  MPDRIG_RETURN_IF_ERROR(TakeStatus());
+  if (!lost_ && ended_) {
+    lost_ = "the rig's service ended its run (it stopped as asked, not a crash)";
+  }
   if (!lost_) lost_ = why;
   return Fail(Failure::kLost, "rig " + options_.rig_id + " lost: " + *lost_);
 }

@@ -197,6 +197,10 @@ class Rig {
 
   // Why the rig is lost, once it is (then every call fails with Failure::kLost).
   const std::optional<std::string>& lost() const { return lost_; }
+  // Whether the rig's service ended its run as asked (a stop, its duration, a playback's last
+  // row), not by a crash: it disposed the rig's status before it went. A lost rig that ended
+  // is a run that is over, e.g. a recording that is complete.
+  bool ended() const { return ended_; }
   // What kind of failure the last failed call had.
   Failure last_failure() const { return last_failure_; }
 
@@ -233,6 +237,7 @@ class Rig {
   clients::RigWatch watch_;
   double last_sample_wall_s_ = 0.0;
   std::optional<std::string> lost_;
+  bool ended_ = false;
   Failure last_failure_ = Failure::kNone;
 
   std::deque<Sensors> queue_;  // arrived, not yet returned by Next

@@ -627,6 +627,22 @@ struct RigService::Impl {
     return out.status->Write(wire);
   }
 
+  // A run that ended as asked (a stop, the duration, a playback's last row) disposes each rig's
+  // status: the clients read that as the rig's clean end, where a crash or a lease running out
+  // leaves the instance without writers (clients/rig_watch.h). A recorder then ends its recording
+  // as complete. Waits (up to 1 s) until the readers have the disposal, since the participant,
+  // and with it the sensor writer whose leaving the clients see, goes right after.
+  Status EndRigs() {
+    for (std::size_t i = 0; i < rigs.size(); ++i) {
+      mpdrig_RigStatus key{};
+      key.rig_id = const_cast<char*>(rigs[i].rig_id().c_str());
+      MPDRIG_RETURN_IF_ERROR(
+          dds::Check(dds_dispose(EndpointsOf(i).status->handle(), &key), "dds_dispose"));
+    }
+    for (auto& set : endpoints) (void)dds_wait_for_acks(set->status->handle(), DDS_SECS(1));
+    return Status::Ok();
+  }
+
   Status PublishAllStatus() {
     for (std::size_t i = 0; i < rigs.size(); ++i) MPDRIG_RETURN_IF_ERROR(PublishStatus(i));
     return Status::Ok();
@@ -962,8 +978,10 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
 
 Status RigService::Run(const std::atomic<bool>& stop) {
   impl_->started = Clock::now();
-  if (impl_->options.clock == ClockMode::kLockstep) return impl_->RunLockstep(stop);
-  return impl_->RunPaced(stop);
+  const Status ran = impl_->options.clock == ClockMode::kLockstep ? impl_->RunLockstep(stop)
+                                                                    : impl_->RunPaced(stop);
+  if (!ran.ok()) return ran;  // a failure: the clients find the rig lost, as after a crash
+  return impl_->EndRigs();
 }
 
 }  // namespace mpdrig::service

@@ -109,8 +109,10 @@ TEST_F(RigLost, RestartedServiceIsNoticedByTheRigTimeGoingBack) {
   ExpectReadableRecording();
 }
 
-// A service that stops cleanly (SIGTERM) takes its sensor writer with it: the clients notice at
-// once, long before their --timeout of 30 s.
+// A service that stops cleanly (SIGTERM) ends its rig's run: it disposes the rig's status and
+// takes its sensor writer with it. The clients notice at once, long before their --timeout of
+// 30 s: the controller's run did not end as asked (exit 3), the recording is complete (exit 0;
+// before, rig_echo exited 3 as if the rig had crashed).
 TEST_F(RigLost, StoppedServiceIsNoticedByItsWriterLeaving) {
   testing::ChildProcess serve(Serve(), Log("serve.txt"));
   ASSERT_TRUE(serve.started());
@@ -124,10 +126,10 @@ TEST_F(RigLost, StoppedServiceIsNoticedByItsWriterLeaving) {
   std::printf("bhp_controller noticed the stopped service after %.2f s\n", noticed_s);
   // Measured well under a second; 5 s leaves room for a loaded machine and is far from 30 s.
   EXPECT_LT(noticed_s, 5.0);
-  EXPECT_NE(Output("controller.txt").find("the rig's service left"), std::string::npos)
+  EXPECT_NE(Output("controller.txt").find("the rig's service ended its run"), std::string::npos)
       << Output("controller.txt");
-  EXPECT_EQ(echo.Wait(10.0), 3) << Output("echo.txt");
-  EXPECT_NE(Output("echo.txt").find("the rig's service left"), std::string::npos)
+  EXPECT_EQ(echo.Wait(10.0), 0) << Output("echo.txt");
+  EXPECT_NE(Output("echo.txt").find("the recording is complete"), std::string::npos)
       << Output("echo.txt");
   ExpectReadableRecording();
 }
@@ -171,9 +173,9 @@ TEST_F(RigLost, AStraySampleOfAnotherWriterIsNoEvidenceOfARestart) {
 
   serve.Signal(SIGTERM);  // the genuine end: both notice and say so
   EXPECT_EQ(controller.Wait(10.0), 3) << Output("controller.txt");
-  EXPECT_NE(Output("controller.txt").find("the rig's service left"), std::string::npos)
+  EXPECT_NE(Output("controller.txt").find("the rig's service ended its run"), std::string::npos)
       << Output("controller.txt");
-  EXPECT_EQ(echo.Wait(10.0), 3) << Output("echo.txt");
+  EXPECT_EQ(echo.Wait(10.0), 0) << Output("echo.txt");
   ExpectReadableRecording();
   auto read = riglog::ReadRigLog((dir_ / "echo.csv").string());
   ASSERT_TRUE(read.ok()) << read.status().message();
