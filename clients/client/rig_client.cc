@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <mutex>
 
@@ -329,29 +329,32 @@ Status Rig::TakeProfiles() {
 
 Status Rig::TakeStatus() {
   const std::string& id = options_.rig_id;
-  auto took = dds_->status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t& info) {
-    if (id != s.rig_id) return;
-    // A disposal that finds the last status unread marks that sample instead of adding one.
-    if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) ended_ = true;
-    RigStatus out;
-    out.clock = s.clock == mpdrig_CLOCK_REALTIME ? "realtime"
-                : s.clock == mpdrig_CLOCK_FAST   ? "fast"
-                                                 : "lockstep";
-    out.sim_time_s = s.sim_time_s;
-    out.real_time_factor = s.real_time_factor;
-    out.deadline_misses = s.deadline_misses;
-    out.rejected_commands = s.rejected_commands;
-    out.last_rejection = s.last_rejection;
-    out.last_completed_step_request = s.last_completed_step_request;
-    out.warnings = FromSequence(s.warnings);
-    out.active_effects = FromSequence(s.active_effects);
-    out.actuator_owners = FromSequence(s.actuator_owners);
-    out.sensor_noise = s.sensor_noise;
-    rig_status_ = std::move(out);
-  }, {}, std::numeric_limits<int>::max(), [&](const mpdrig_RigStatus& s) {
-    // The service disposes a rig's status when its run ends as asked (RigService::EndRigs).
-    if (id == s.rig_id) ended_ = true;
-  });
+  auto took = dds_->status->TakeEach(
+      [&](const mpdrig_RigStatus& s, const dds_sample_info_t& info) {
+        if (id != s.rig_id) return;
+        // A disposal that finds the last status unread marks that sample instead of adding one.
+        if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) ended_ = true;
+        RigStatus out;
+        out.clock = s.clock == mpdrig_CLOCK_REALTIME ? "realtime"
+                    : s.clock == mpdrig_CLOCK_FAST   ? "fast"
+                                                     : "lockstep";
+        out.sim_time_s = s.sim_time_s;
+        out.real_time_factor = s.real_time_factor;
+        out.deadline_misses = s.deadline_misses;
+        out.rejected_commands = s.rejected_commands;
+        out.last_rejection = s.last_rejection;
+        out.last_completed_step_request = s.last_completed_step_request;
+        out.warnings = FromSequence(s.warnings);
+        out.active_effects = FromSequence(s.active_effects);
+        out.actuator_owners = FromSequence(s.actuator_owners);
+        out.sensor_noise = s.sensor_noise;
+        rig_status_ = std::move(out);
+      },
+      {}, std::numeric_limits<int>::max(),
+      [&](const mpdrig_RigStatus& s) {
+        // The service disposes a rig's status when its run ends as asked (RigService::EndRigs).
+        if (id == s.rig_id) ended_ = true;
+      });
   return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
 }
 

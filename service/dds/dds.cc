@@ -69,7 +69,7 @@ Qos RequestQos() {
   return qos;
 }
 
-Result<bool> AwaitReader(dds_entity_t writer, dds_time_t deadline) {
+Result<bool> AwaitReader(dds_entity_t writer, dds_time_t deadline, std::int32_t readers) {
   MPDRIG_RETURN_IF_ERROR(
       Check(dds_set_status_mask(writer, DDS_PUBLICATION_MATCHED_STATUS), "dds_set_status_mask"));
   const dds_entity_t participant = dds_get_participant(writer);
@@ -82,7 +82,7 @@ Result<bool> AwaitReader(dds_entity_t writer, dds_time_t deadline) {
     dds_publication_matched_status_t matched{};
     MPDRIG_RETURN_IF_ERROR(Check(dds_get_publication_matched_status(writer, &matched),
                                  "dds_get_publication_matched_status"));
-    if (matched.current_count > 0) return true;
+    if (matched.current_count >= std::max(readers, 1)) return true;
     const dds_return_t woke = dds_waitset_wait_until(waitset.handle(), nullptr, 0, deadline);
     if (woke < 0) return Check(woke, "dds_waitset_wait_until");
     if (woke == 0) return false;

@@ -7,6 +7,7 @@
 #include <dds/dds.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <string>
@@ -144,10 +145,10 @@ class Writer {
   Entity entity_;
 };
 
-// Waits on a waitset until `writer` has matched at least one reader (true) or until `deadline`
-// (false); a DDS failure is an error. A sample written before the match reaches no one: a
-// volatile one is lost, and a process that exits takes a transient-local one with it.
-Result<bool> AwaitReader(dds_entity_t writer, dds_time_t deadline);
+// Waits on a waitset until `writer` has matched at least `readers` readers (true) or until
+// `deadline` (false); a DDS failure is an error. A sample written before the match reaches no one:
+// a volatile one is lost, and a process that exits takes a transient-local one with it.
+Result<bool> AwaitReader(dds_entity_t writer, dds_time_t deadline, std::int32_t readers = 1);
 // The DDS time `seconds` from now (at least now; DDS_NEVER for a wait as long as DDS can express),
 // for AwaitReader and the waitsets' deadlines.
 inline dds_time_t DeadlineAfter(double seconds) {

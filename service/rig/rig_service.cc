@@ -648,7 +648,32 @@ struct RigService::Impl {
     return Status::Ok();
   }
 
+  // ServeOptions::wait_for_readers: every set of endpoints (one per rig with security) waits for
+  // its readers, all within one deadline. Not reaching them is no error: the rig starts, and says
+  // on stderr how many it had.
+  Status AwaitSensorReaders() {
+    if (options.wait_for_readers <= 0) return Status::Ok();
+    const dds_time_t deadline = dds::DeadlineAfter(options.wait_for_readers_s);
+    for (auto& set : endpoints) {
+      auto matched = dds::AwaitReader(set->sensors->handle(), deadline, options.wait_for_readers);
+      if (!matched.ok()) return matched.status();
+      if (!*matched) {
+        std::fprintf(stderr,
+                     "mpdrig serve: fewer than %d sensor readers after %.1f s; starting anyway\n",
+                     options.wait_for_readers, options.wait_for_readers_s);
+        return Status::Ok();
+      }
+    }
+    // Discovery runs in each direction on its own: the writer has matched the readers, but a
+    // reader that has not yet matched the writer drops what arrives from it (volatile: nothing is
+    // resent). The other direction follows within milliseconds on one machine; half a second
+    // covers a loaded one (measured without it: the first row lost, as with no wait at all).
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    return Status::Ok();
+  }
+
   Status RunPaced(const std::atomic<bool>& stop) {
+    MPDRIG_RETURN_IF_ERROR(AwaitSensorReaders());
     const double period = rigs.front().sensor_period_s();
     const auto period_wall =
         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period));
@@ -700,6 +725,7 @@ struct RigService::Impl {
   // starves another rig nor delays a stop by more than one step. A request's commands are taken
   // when it starts; it completes (last_completed_step_request, status) after its last step.
   Status RunLockstep(const std::atomic<bool>& stop) {
+    MPDRIG_RETURN_IF_ERROR(AwaitSensorReaders());
     MPDRIG_RETURN_IF_ERROR(PublishAllStatus());  // clients see the rigs are up
     struct Pending {
       std::uint64_t id = 0;
@@ -979,7 +1005,7 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
 Status RigService::Run(const std::atomic<bool>& stop) {
   impl_->started = Clock::now();
   const Status ran = impl_->options.clock == ClockMode::kLockstep ? impl_->RunLockstep(stop)
-                                                                    : impl_->RunPaced(stop);
+                                                                  : impl_->RunPaced(stop);
   if (!ran.ok()) return ran;  // a failure: the clients find the rig lost, as after a crash
   return impl_->EndRigs();
 }

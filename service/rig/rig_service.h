@@ -30,6 +30,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -87,6 +88,11 @@ struct ServeOptions {
   // this way: an hour of log plays in an hour of wall time, whatever stalls the process met.
   // deadline_misses and the longest stall still count; no periods are lost.
   bool catch_up = false;
+  // Before the first sample, wait until each rig's sensors have this many readers (0: do not
+  // wait), up to wait_for_readers_s of wall time: a sample written before a reader has matched
+  // reaches no one, so a recorder that was already waiting would miss a playback's first rows.
+  std::int32_t wait_for_readers = 0;
+  double wait_for_readers_s = 30.0;
 
   Status Validate(double sensor_rate_hz) const;
 };

@@ -34,8 +34,10 @@ struct ServeArgs {
   double rate_hz = 100.0;
   std::string clock = "realtime";
   int domain = 0;
-  std::string dds_config;  // XML or a file; default: loopback only
-  std::string security;    // DDS Security identity directory (make-class's OUT/service)
+  int wait_for_readers = 0;          // before the first sample: this many sensor readers
+  double wait_for_readers_s = 30.0;  // ... for at most this long
+  std::string dds_config;            // XML or a file; default: loopback only
+  std::string security;              // DDS Security identity directory (make-class's OUT/service)
   std::uint32_t private_rigs = 0;
   std::size_t max_rigs = 0;  // 0: from the sensor rate (kRigSamplesPerSecond)
   double duration_s = 0.0;
@@ -193,6 +195,8 @@ Result<service::ServeOptions> MakeServeOptions(const ServeArgs& args, const RigT
   serve.safe_choke_deg = args.safe_choke_deg;
   serve.hide_effects = !args.hidden_effect.empty();
   serve.catch_up = !args.playback.empty();
+  serve.wait_for_readers = args.wait_for_readers;
+  serve.wait_for_readers_s = args.wait_for_readers_s;
   serve.profile_hz = args.profile_hz;
   SetObserverOptions(args, sensor_period_s, serve);
   if (!args.dds_config.empty()) serve.dds_config = ReadDdsConfig(args.dds_config);
@@ -356,6 +360,18 @@ void AddServeCommand(CLI::App* app, int* exit_code) {
   // with its file:line:column and a non-zero exit; --max-gap-s admits longer gaps.
   AddLogReadOptions(g_rigs, &args->read);
   CLI::Option_group* g_dds = command->add_option_group("DDS and a class");
+  g_dds
+      ->add_option("--wait-for-readers", args->wait_for_readers,
+                   "before the first sample, wait until each rig's sensors have this many "
+                   "readers (a recorder started first then gets every row of a playback: a "
+                   "sample written before a reader has matched reaches no one); 0: start at once")
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  g_dds
+      ->add_option("--wait-for-readers-s", args->wait_for_readers_s,
+                   "the longest wait for --wait-for-readers [s]; then the rig starts anyway")
+      ->check(CLI::Range(0.0, 86400.0))
+      ->capture_default_str();
   g_dds->add_option("--domain", args->domain, "DDS domain id")
       ->check(CLI::Range(0, 232))
       ->capture_default_str();
