@@ -943,6 +943,8 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
     return Status::Ok();
   }
   diagnosis->selected.push_back(diagnosis->candidates.front());
+  // The score of the model the last selected effect was added to (its improvement's reference).
+  Scored below = baseline.score;
   std::vector<CandidateResult> previous = diagnosis->candidates;
   double progress = 1.0 + static_cast<double>(previous.size() + diagnosis->failed.size());
   while (true) {
@@ -986,8 +988,7 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
       current.params = Named(*searched);
       current.fit_error = searched->error_after;
       current.fitted = searched->params;
-      current.error = reference->score.error;
-      current.channel_errors = reference->score.channel_errors;
+      Assess(reference->score, below, below.error, &current);
       for (CandidateResult& candidate : ranked) {
         Assess(ScoredOf(candidate), reference->score, reference->score.error, &candidate);
       }
@@ -1008,6 +1009,7 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
       return Status::Ok();
     }
     diagnosis->selected.push_back(ranked.front());
+    below = reference->score;
     previous = std::move(ranked);
   }
 }
