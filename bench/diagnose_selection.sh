@@ -55,7 +55,10 @@ for case in cases:
     equivalent = d.get("equivalent", []) or []
     # A hidden effect counts as named where it is selected, or named `equivalent` to the first.
     named = all(h in selected or h in equivalent for h in hidden)
-    false = [s for s in selected if s not in hidden]
+    # Not false: the verdict where a hidden effect is named `equivalent` to it (the two inlet
+    # compliances tie where the log does not excite the compartment's own mode).
+    false = [s for i, s in enumerate(selected)
+             if s not in hidden and not (i == 0 and any(h in equivalent for h in hidden))]
     steps = " -> ".join([f"{100*d['baseline']['error']:.2f}"] +
                         [f"{100*s['error']:.2f}" for s in d.get("selected", [])])
     nxt = d.get("next")
