@@ -21,7 +21,16 @@
 //    of the scoring data (blocks, because residuals are correlated in time and noise of one
 //    sample says little about the next). The leading kPolishedCandidates are then refitted
 //    with the baseline's iterations and the ranking redone. The verdict is the best significant
-//    candidate, or none; `equivalent` names the significant ones it does not clearly beat.
+//    candidate, or none; `equivalent` names the significant ones it does not clearly beat. A
+//    candidate whose fit fails is reported as failed, not ranked. No candidate fits its fitting
+//    data worse than the model it extends: where its search's fits end above that model's
+//    error, it is also fitted from that model's own point with the effect at zero strength.
+// 5. Forward selection: a real rig lacks more than one effect. With the verdict in the model
+//    (the reference), the leading kSelectionCandidates of the round before are fitted again (the
+//    reference's effect strengths refitted with the new one and the base parameters, from the
+//    same search) and scored against the reference by the same rule as in step 4; the best is
+//    added while it is significant, up to kMaxSelectedEffects. `selected` lists them in order,
+//    `next` is the best candidate that was not (with what the log could show of it).
 #pragma once
 
 #include <cstddef>
@@ -56,6 +65,15 @@ inline constexpr double kSignificanceZ = 2.0;
 // The leading candidates (by penalised error) whose fits are polished with the baseline's
 // iterations before the final ranking.
 inline constexpr std::size_t kPolishedCandidates = 3;
+// Forward selection: at most this many effects (a log of minutes rarely supports more: each adds
+// a parameter whose gain must stand 10 % above the noise), and each round after the first tries
+// only the leading candidates of the round before that are not selected yet. A
+// missing effect that shows beyond its partners removes error in the round before as well
+// (there, the partners' misfit only adds to every model's), so it ranks among the leaders; 4
+// leaves room for the effects that take up part of the same misfit (the frictions, the two
+// inlet compliances) and halves a round's cost against the whole catalogue of 9.
+inline constexpr std::size_t kMaxSelectedEffects = 3;
+inline constexpr std::size_t kSelectionCandidates = 4;
 // Detectability: an effect of strength s changes the fitted base model's channels by d(s) (mean
 // NRMSE of the change, relative to the baseline's own variation). If the base parameters cannot
 // absorb it, the baseline's error rises from e0 to sqrt(e0^2 + d^2) and the candidate removes
@@ -115,13 +133,21 @@ struct CandidateResult {
   std::string explains;            // EffectInfo::explains
   std::vector<NamedValue> params;  // every fitted parameter (base and effect)
   int extra_params = 0;
-  double fit_error = 0.0;              // on the fitting data
+  double fit_error = 0.0;  // on the fitting data
+  // On the fitting data, the reference (the model it extends) with this effect at its weakest
+  // within its bounds: fit_error never exceeds it. Equal to the reference's own error where that
+  // bound switches the effect off (all but piston_compressibility, whose 2.5 GPa bound is not
+  // the base model's rigid compartment).
+  double zero_fit_error = 0.0;
   double error = 0.0;                  // on the scoring data (the compare metric)
   double penalised_error = 0.0;        // ranking score
   double improvement = 0.0;            // (baseline error - error) / baseline error
   double improvement_std_error = 0.0;  // of the absolute improvement, from the blocks
   bool significant = false;
   std::string failure;  // non-empty when the candidate could not be fitted (e.g. range left)
+  // The selection round that fitted it: 1 against the base model, 2 against the model with the
+  // verdict, ... (its improvement and significance are against that round's reference).
+  int round = 1;
   // The smallest strength of the effect's first fitted parameter that this log could show
   // (kDetectabilityPoints); absent when none in its plausible range could, or not computed.
   std::string strength_key;  // "unsteady_friction.k"
@@ -131,6 +157,7 @@ struct CandidateResult {
   double strength_scan_limit = 0.0;    // the strongest value scanned
   // Per channel: error (NRMSE) on the scoring data, baseline and this candidate.
   std::vector<std::pair<Channel, double>> channel_errors;
+  std::vector<double> block_errors;  // over the kScoreBlocks blocks of the scoring data
   RigParams fitted;
 };
 
@@ -139,7 +166,8 @@ struct Diagnosis {
   double noise_floor = 0.0;  // estimated measurement noise as a mean NRMSE (second differences)
   CandidateResult baseline;  // effect ""
   Comparison baseline_comparison;           // fitted baseline over the whole log
-  std::vector<CandidateResult> candidates;  // ranked best first
+  std::vector<CandidateResult> candidates;  // ranked best first (round 1, against the baseline)
+  std::vector<CandidateResult> failed;      // candidates whose fit failed (any round): not ranked
   // The choke's and FT2's levels as estimated at the fitted base model (EstimateInputLevels;
   // none where the log came with levels applied or options.replay says not to). The fits run on
   // these; each candidate is scored with levels estimated at its own fit.
@@ -151,6 +179,16 @@ struct Diagnosis {
   // what tells them apart).
   std::vector<std::string> equivalent;
   std::optional<Comparison> winner_comparison;  // the verdict's model over the whole log
+  // Forward selection (step 5): the effects added in order; selected[0] is the verdict's
+  // candidate. Each entry's params are every parameter of the model at that step (base and
+  // effects), its error the scoring error after adding it, its improvement and significance
+  // against the model before it. (An entry's fit is replaced where the next round's search of
+  // the same model fits the fitting data better.)
+  std::vector<CandidateResult> selected;
+  // The best candidate of the round that ended the selection (not significant), with its
+  // detectability measured against the model selected so far; none where no round tried one.
+  std::optional<CandidateResult> next;
+  std::string selection_end;  // why the selection ended ("no candidate significant", ...)
   int replays = 0;
 };
 

@@ -100,17 +100,24 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
   return value;
 }
 
-// The hidden effect at a random strength (drawn from its own stream), written into `truth`; its
-// part of the description.
-std::string DrawHiddenEffect(const std::string& name, Random& random, RigParams& truth) {
-  const EffectInfo* info = FindEffectInfo(name);
+// A hidden effect (`setting`: its name and the values given) with its fitted parameters drawn
+// from their own stream where not given, written into `truth`; its part of the description.
+std::string DrawHiddenEffect(const EffectSetting& given, Random& random, RigParams& truth) {
+  const EffectInfo* info = FindEffectInfo(given.name);
   MPDRIG_CHECK(info != nullptr);  // SyntheticLogOptions::Validate refused an unknown name
   EffectSetting setting{std::string(info->name), {}};
   std::ostringstream description;
   description.precision(4);
   description << info->name;
   for (const EffectParamInfo& param : info->params) {
-    if (!param.fitted) continue;
+    const double* value_given = given.Find(param.key);
+    if (!param.fitted) {
+      if (value_given != nullptr) {
+        setting.values.emplace_back(std::string(param.key), *value_given);
+        description << " " << param.key << "=" << *value_given;
+      }
+      continue;
+    }
     double lo = param.default_value / 2.0, hi = param.default_value * 2.0;
     if (param.default_value == 0.0)
       lo = param.min_value, hi = param.min_value + 0.2 * (param.max_value - param.min_value);
@@ -122,11 +129,28 @@ std::string DrawHiddenEffect(const std::string& name, Random& random, RigParams&
       value = param.plausible_min *
               std::pow(param.plausible_max / param.plausible_min, random.Uniform(0.0, 1.0));
     }
+    // Drawn even where given: the next effect's draws stay those of the same seed.
+    if (value_given != nullptr) value = *value_given;
     setting.values.emplace_back(std::string(param.key), value);
     description << " " << param.key << "=" << value;
   }
   truth.effects.push_back(std::move(setting));
   return description.str();
+}
+
+// The setting a hidden effect's spec ("NAME" or "NAME:key=value,...") gives, checked.
+Result<EffectSetting> ParseHiddenEffect(const std::string& spec) {
+  RigParams scratch;
+  MPDRIG_RETURN_IF_ERROR(ApplyEffectSpec(&scratch, spec).Within("hidden effect '" + spec + "'"));
+  MPDRIG_CHECK(scratch.effects.size() == 1);
+  return scratch.effects.front();
+}
+
+bool HidesColumnSeparation(const SyntheticLogOptions& options) {
+  for (const std::string& spec : options.hidden_effects) {
+    if (spec.substr(0, spec.find(':')) == "column_separation") return true;
+  }
+  return false;
 }
 
 Excitation DrawExcitation(bool low_pressure, double duration_s, Random& random) {
@@ -233,8 +257,14 @@ Status SyntheticLogOptions::Validate() const {
     return Status::Error(out.str());
   }
   if (sensor_noise) MPDRIG_RETURN_IF_ERROR(sensor_noise->Validate().Within("synthetic log"));
-  if (hidden_effect && FindEffectInfo(*hidden_effect) == nullptr) {
-    return UnknownEffect(*hidden_effect);
+  std::vector<std::string> names;
+  for (const std::string& spec : hidden_effects) {
+    auto setting = ParseHiddenEffect(spec);
+    if (!setting.ok()) return setting.status();
+    if (std::find(names.begin(), names.end(), setting->name) != names.end()) {
+      return Status::Error("synthetic log: hidden effect '" + setting->name + "' given twice");
+    }
+    names.push_back(setting->name);
   }
   return Status::Ok();
 }
@@ -242,16 +272,19 @@ Status SyntheticLogOptions::Validate() const {
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   MPDRIG_RETURN_IF_ERROR(options.Validate());
   Random random(options.seed);
-  // The effect's strength comes from a stream of its own, so a seed gives the same base
-  // parameters, excitation and noise with and without the hidden effect.
+  // The effects' strengths come from a stream of their own, so a seed gives the same base
+  // parameters, excitation and noise with and without hidden effects.
   Random effect_random(options.seed ^ 0x9e3779b97f4a7c15ULL);
   SyntheticLog result;
   RigParams& truth = result.truth;
   std::ostringstream description;
   description.precision(4);
-  description << (options.hidden_effect
-                      ? DrawHiddenEffect(*options.hidden_effect, effect_random, truth)
-                      : "no hidden effect");
+  for (std::size_t i = 0; i < options.hidden_effects.size(); ++i) {
+    auto setting = ParseHiddenEffect(options.hidden_effects[i]);
+    MPDRIG_CHECK(setting.ok());  // Validate parsed it
+    description << (i > 0 ? " + " : "") << DrawHiddenEffect(*setting, effect_random, truth);
+  }
+  if (options.hidden_effects.empty()) description << "no hidden effect";
   if (options.perturb_base) {
     truth.wave_speed_mps *= random.Uniform(0.9, 1.1);
     truth.friction_f1_per_s *= random.Uniform(0.7, 1.3);
@@ -263,8 +296,7 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
 
   // Column separation needs low pressure to show: an open choke and little pump flow, as in the
   // runs where the thesis's model went below zero absolute pressure (11.5).
-  const bool low_pressure = options.low_pressure.value_or(
-      options.hidden_effect && *options.hidden_effect == "column_separation");
+  const bool low_pressure = options.low_pressure.value_or(HidesColumnSeparation(options));
   const Excitation excitation = DrawExcitation(low_pressure, options.duration_s, random);
 
   riglog::RigLog& log = result.log;

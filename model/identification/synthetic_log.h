@@ -1,6 +1,7 @@
-// Synthetic lab logs with a hidden effect (the test data of diagnose, and a way for a user to try
-// `diagnose` on data whose answer is known): the model with one catalogue effect switched on at
-// a random strength, perturbed base parameters, the lab's kind of excitation and sensor noise.
+// Synthetic lab logs with hidden effects (the test data of diagnose, and a way for a user to try
+// `diagnose` on data whose answer is known): the model with one or more catalogue effects
+// switched on at random (or given) strengths, perturbed base parameters, the lab's kind of
+// excitation and sensor noise.
 //
 // Excitation (what the lab runs): piston sines at two frequencies (each sines part at a full and
 // then a lower amplitude), a sweep, choke steps, pump flow steps between two levels. Every
@@ -15,6 +16,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "model/common/status.h"
 #include "model/params/rig_params.h"
@@ -37,11 +39,13 @@ struct SyntheticLogOptions {
   // not its k at 50, and the error left after adding the right effect would measure the grid,
   // not the diagnosis. (Noise on the inputs still keeps the replay from being the generator.)
   int cells = 50;
-  std::optional<std::string> hidden_effect;  // none: the base model only
-  bool perturb_base = true;                  // wave speed +-10%, f1 +-30%, choke leak +-30%
+  // The hidden effects, each "NAME" or "NAME:key=value,..." (the --effect syntax); none: the base
+  // model only. A fitted parameter given a value keeps it, the others are drawn (below).
+  std::vector<std::string> hidden_effects;
+  bool perturb_base = true;  // wave speed +-10%, f1 +-30%, choke leak +-30%
   // The low-pressure runs (open choke, little pump flow, larger heave) where column separation
-  // shows; unset: for a hidden column_separation only. Set it to compare a log with the same
-  // excitation without the effect.
+  // shows; unset: where column_separation is one of the hidden effects. Set it to compare a log
+  // with the same excitation without the effect.
   std::optional<bool> low_pressure;
   // Sensor noise. Unset (the default for callers in C++): the quiet sigmas below, drawn from the
   // excitation's random stream; the identification tests (fit_test, diagnose_test) were tuned on
@@ -55,8 +59,8 @@ struct SyntheticLogOptions {
   double choke_noise_deg = 0.01;  // position feedback; near 30 deg G changes 15%/deg, so
                                   // more would swamp C2 with the replay of the noise itself
 
-  // Duration and rate within the limits above, the sensor noise valid, the hidden effect one of
-  // the catalogue; else an error that says which.
+  // Duration and rate within the limits above, the sensor noise valid, every hidden effect one of
+  // the catalogue (once) with known keys and values within bounds; else an error that says which.
   [[nodiscard]] Status Validate() const;
 };
 
@@ -65,15 +69,17 @@ struct SyntheticLog {
   // The same run without sensor noise: same time stamps, columns and metadata as `log` (a
   // perfect model's output, to compare `log` with).
   riglog::RigLog truth_log;
-  RigParams truth;          // what generated it (with the hidden effect, if any)
-  std::string description;  // "unsteady_friction k=0.071; wave speed 912 m/s, ..."
+  RigParams truth;          // what generated it (with the hidden effects, if any)
+  std::string description;  // "unsteady_friction k=0.071 + sensor_lag ...; wave speed 912 m/s, ..."
 };
 
-// The hidden effect's fitted parameters are drawn uniformly in [default / 2, 2 default] (within
+// A hidden effect's fitted parameters are drawn uniformly in [default / 2, 2 default] (within
 // the effect's bounds), or log-uniformly in their plausible range where the catalogue gives one
 // (EffectParamInfo::plausible_min/max); an effect with default 0 draws in the lower fifth of its
-// range. The same
-// seed with and without a hidden effect gives the same base parameters, excitation and noise.
+// range. The draws come from a stream of their own, effect after effect, in the order given
+// (drawn also where a value is given): the same seed with and without hidden effects gives the
+// same base parameters, excitation and noise, and the first effect the same strength alone as
+// with a second one.
 Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options);
 
 }  // namespace mpdrig

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -17,6 +18,7 @@
 #include "model/analysis/measured_log.h"
 #include "model/identification/diagnose.h"
 #include "model/identification/synthetic_log.h"
+#include "model/riglog/channels.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/sensor_noise.h"
 #include "tools/cli/commands.h"
@@ -60,7 +62,33 @@ void RunOnEveryCore(const std::vector<std::function<void()>>& tasks, bool quiet)
   for (std::thread& thread : threads) thread.join();
 }
 
-// The base model's error, the candidates best first and the verdict.
+// The error step by step as the selected effects are added: the mean and per channel.
+void PrintSelection(const Diagnosis& d, FILE* summary) {
+  if (d.selected.empty()) return;
+  std::fprintf(summary, "effects added one after the other (error on the scoring data, %%):\n");
+  std::fprintf(summary, "  %-8s %10s", "channel", "base");
+  for (const CandidateResult& step : d.selected) {
+    std::fprintf(summary, " %20s", ("+ " + step.effect).c_str());
+  }
+  std::fprintf(summary, "\n  %-8s %10.3g", "mean", 100.0 * d.baseline.error);
+  for (const CandidateResult& step : d.selected)
+    std::fprintf(summary, " %20.3g", 100.0 * step.error);
+  std::fprintf(summary, "\n");
+  for (const auto& [channel, error] : d.baseline.channel_errors) {
+    std::fprintf(summary, "  %-8s %10.3g", std::string(riglog::ChannelName(channel)).c_str(),
+                 100.0 * error);
+    for (const CandidateResult& step : d.selected) {
+      double after = std::nan("");
+      for (const auto& [c, e] : step.channel_errors) {
+        if (c == channel) after = e;
+      }
+      std::fprintf(summary, " %20.3g", 100.0 * after);
+    }
+    std::fprintf(summary, "\n");
+  }
+}
+
+// The base model's error, the candidates best first, the selection and the verdict.
 void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
   std::fprintf(summary,
                "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
@@ -70,6 +98,27 @@ void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
     std::fprintf(summary, "%2zu. %s\n", i + 1,
                  DescribeCandidate(d.candidates[i], d.baseline).c_str());
   }
+  for (const CandidateResult& failed : d.failed) {
+    std::fprintf(summary, "  - %s%s\n", DescribeCandidate(failed, d.baseline).c_str(),
+                 failed.round > 1 ? (" (round " + std::to_string(failed.round) + ")").c_str() : "");
+  }
+  PrintSelection(d, summary);
+  for (std::size_t i = 1; i < d.selected.size(); ++i) {
+    std::fprintf(summary, "with %s: + %s\n", d.selected[i - 1].effect.c_str(),
+                 DescribeCandidate(d.selected[i], d.selected[i - 1]).c_str());
+  }
+  if (d.next) {
+    std::fprintf(
+        summary, "next%s: %s\n",
+        d.selected.empty() ? "" : (" (with " + d.selected.back().effect + ")").c_str(),
+        DescribeCandidate(*d.next, d.selected.empty() ? d.baseline : d.selected.back()).c_str());
+  }
+  std::string selected;
+  for (const CandidateResult& step : d.selected) {
+    selected += (selected.empty() ? "" : " + ") + step.effect;
+  }
+  std::fprintf(summary, "selected: %s (%s)\n", selected.empty() ? "none" : selected.c_str(),
+               d.selection_end.c_str());
   std::string equivalent;
   for (const std::string& name : d.equivalent) {
     equivalent += (equivalent.empty() ? "" : ", ") + name;
@@ -135,7 +184,7 @@ int RunDiagnose(DiagnoseArgs args) {
 
 struct SynthArgs {
   SyntheticLogOptions options;
-  std::string effect;
+  std::vector<std::string> effects;  // NAME[:key=value,...] each, or none
   std::string sensor_noise = "lab";
   // Overrides of one part of --sensor-noise (the former per-kind flags).
   std::optional<double> pressure_noise_pa, flow_noise_m3ps, piston_noise_m, choke_noise_deg;
@@ -145,7 +194,9 @@ struct SynthArgs {
 
 int RunSynth(const SynthArgs& args) {
   SyntheticLogOptions options = args.options;
-  if (!args.effect.empty() && args.effect != "none") options.hidden_effect = args.effect;
+  for (const std::string& effect : args.effects) {
+    if (effect != "none") options.hidden_effects.push_back(effect);
+  }
   auto noise = ParseSensorNoise(args.sensor_noise);
   if (!noise.ok()) return Fail("synth", noise.status().Within("--sensor-noise"));
   if (args.pressure_noise_pa) noise->pressure_pa = *args.pressure_noise_pa;
@@ -212,6 +263,10 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "4. ranks them and says what each explains. `significant`: better than the base model by\n"
       "   more than 10% and two standard errors (over 8 blocks of the scoring data); `as good`\n"
       "   names significant candidates the verdict does not beat by that 10%.\n"
+      "5. then adds the verdict to the model and ranks the leading candidates again against it,\n"
+      "   adding the next while it is significant by the same rule (at most 3 effects): the\n"
+      "   summary shows the error falling step by step, per channel, and what the log could\n"
+      "   show of the next effect.\n"
       "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
       "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
       "Progress on stderr; a summary on stdout.");
@@ -245,13 +300,17 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
   CLI::App* synth_command = app->add_subcommand(
       "synth", "Write a synthetic lab log with a hidden effect (to try diagnose on)");
   synth_command->footer(
-      "The model with one effect switched on at a random strength, perturbed base parameters,\n"
+      "The model with the effects switched on at random strengths (or those given), perturbed\n"
+      "base parameters,\n"
       "piston sines and a sweep, choke and pump steps, and the lab's sensor noise "
       "(--sensor-noise).\n"
       "The truth is written into the log's metadata (# hidden: ...). Same seed, same log.\n"
-      "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv --truth-out lag_truth.csv");
-  synth_command->add_option("--effect", synth->effect, "hidden effect, or none")
-      ->capture_default_str();
+      "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv --truth-out lag_truth.csv\n"
+      "  mpdrig synth --effect sensor_lag:time_constant_s=0.1 --effect unsteady_friction --out "
+      "two.csv");
+  synth_command->add_option("--effect", synth->effects,
+                            "hidden effect NAME[:KEY=VALUE,...] (strengths not given are drawn), "
+                            "repeatable for several at once; none: the base model");
   synth_command->add_option("--seed", synth->options.seed, "random seed")->capture_default_str();
   synth_command->add_option("--duration", synth->options.duration_s, "length [s]")
       ->capture_default_str();

@@ -59,6 +59,31 @@ double ErrorOf(const CandidateResult& result, Channel channel) {
   return std::nan("");
 }
 
+// One candidate's object; `reference` is the model it was measured against (the baseline, or
+// the model with the effects selected before it).
+std::string CandidateJson(const CandidateResult& c, const CandidateResult& reference) {
+  std::ostringstream out;
+  out << "{\"effect\":" << Quote(c.effect) << ",\"round\":" << c.round
+      << ",\"params\":" << ParamsJson(c.params) << ",\"error\":" << Num(c.error)
+      << ",\"penalised_error\":" << Num(c.penalised_error) << ",\"fit_error\":" << Num(c.fit_error)
+      << ",\"improvement\":" << Num(c.improvement)
+      << ",\"improvement_std_error\":" << Num(c.improvement_std_error)
+      << ",\"extra_params\":" << c.extra_params
+      << ",\"significant\":" << (c.significant ? "true" : "false")
+      << ",\"explains\":" << Quote(c.explains)
+      << ",\"description\":" << Quote(DescribeCandidate(c, reference))
+      << ",\"channels\":" << ChannelsJson(c.channel_errors);
+  if (!c.failure.empty()) out << ",\"failure\":" << Quote(c.failure);
+  if (!c.strength_key.empty()) {
+    out << ",\"strength_key\":" << Quote(c.strength_key) << ",\"detectable_from\":"
+        << (c.detectable_from ? Num(*c.detectable_from) : std::string("null"))
+        << ",\"strength_inverse\":" << (c.strength_inverse ? "true" : "false")
+        << ",\"strength_scan_limit\":" << Num(c.strength_scan_limit);
+  }
+  out << "}";
+  return out.str();
+}
+
 }  // namespace
 
 std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
@@ -78,30 +103,27 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
       << ",\"params\":" << ParamsJson(b.params)
       << ",\"channels\":" << ChannelsJson(b.channel_errors) << "},\"candidates\":[";
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
-    const CandidateResult& c = d.candidates[i];
-    if (i) out << ",";
-    out << "{\"effect\":" << Quote(c.effect) << ",\"params\":" << ParamsJson(c.params)
-        << ",\"error\":" << Num(c.error) << ",\"penalised_error\":" << Num(c.penalised_error)
-        << ",\"fit_error\":" << Num(c.fit_error) << ",\"improvement\":" << Num(c.improvement)
-        << ",\"improvement_std_error\":" << Num(c.improvement_std_error)
-        << ",\"extra_params\":" << c.extra_params
-        << ",\"significant\":" << (c.significant ? "true" : "false")
-        << ",\"explains\":" << Quote(c.explains)
-        << ",\"description\":" << Quote(DescribeCandidate(c, b))
-        << ",\"channels\":" << ChannelsJson(c.channel_errors);
-    if (!c.failure.empty()) out << ",\"failure\":" << Quote(c.failure);
-    if (!c.strength_key.empty()) {
-      out << ",\"strength_key\":" << Quote(c.strength_key) << ",\"detectable_from\":"
-          << (c.detectable_from ? Num(*c.detectable_from) : std::string("null"))
-          << ",\"strength_inverse\":" << (c.strength_inverse ? "true" : "false")
-          << ",\"strength_scan_limit\":" << Num(c.strength_scan_limit);
-    }
-    out << "}";
+    out << (i ? "," : "") << CandidateJson(d.candidates[i], b);
   }
   out << "],\"verdict\":" << (d.verdict ? Quote(*d.verdict) : std::string("null"));
   out << ",\"equivalent\":[";
   for (std::size_t i = 0; i < d.equivalent.size(); ++i)
     out << (i ? "," : "") << Quote(d.equivalent[i]);
+  out << "]";
+  // Forward selection: the effects added in order, each against the model before it.
+  out << ",\"selected\":[";
+  for (std::size_t i = 0; i < d.selected.size(); ++i) {
+    out << (i ? "," : "") << CandidateJson(d.selected[i], i ? d.selected[i - 1] : b);
+  }
+  out << "],\"next\":"
+      << (d.next ? CandidateJson(*d.next, d.selected.empty() ? b : d.selected.back())
+                 : std::string("null"))
+      << ",\"selection_end\":" << Quote(d.selection_end) << ",\"failed\":[";
+  for (std::size_t i = 0; i < d.failed.size(); ++i) {
+    out << (i ? "," : "") << "{\"effect\":" << Quote(d.failed[i].effect)
+        << ",\"round\":" << d.failed[i].round << ",\"failure\":" << Quote(d.failed[i].failure)
+        << "}";
+  }
   out << "]";
   // Where the fitted base model fails: worst channels, worst bands, lags.
   const Comparison& cmp = d.baseline_comparison;
@@ -154,6 +176,11 @@ void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::
   if (winner != nullptr) {
     html << "<p class=\"verdict\">Missing effect: <b>" << EscapeHtml(winner->effect) << "</b>. "
          << EscapeHtml(DescribeCandidate(*winner, b)) << ".</p>\n";
+    for (std::size_t i = 1; i < d.selected.size(); ++i) {
+      html << "<p class=\"verdict\">And with it, missing too: <b>"
+           << EscapeHtml(d.selected[i].effect) << "</b>. "
+           << EscapeHtml(DescribeCandidate(d.selected[i], d.selected[i - 1])) << ".</p>\n";
+    }
     if (!d.equivalent.empty()) {
       std::string names;
       for (const std::string& name : d.equivalent) names += (names.empty() ? "" : ", ") + name;
@@ -208,6 +235,71 @@ void WriteChannelErrors(const Diagnosis& d, const CandidateResult* winner,
   html << "</table>\n";
 }
 
+// Forward selection: the error falling step by step as the selected effects are added, overall
+// and per channel, and what stopped it (the next candidate, with what the log could show of it).
+void WriteSelection(const Diagnosis& d, std::ostringstream& html) {
+  const CandidateResult& b = d.baseline;
+  html << "<h2>Effects added one after the other</h2>\n";
+  if (!d.selected.empty()) {
+    html << "<p>Each effect is added to the model with the ones before it (their strengths "
+            "refitted with it and the base parameters) while it beats that model significantly "
+            "(at most "
+         << kMaxSelectedEffects << "). Error on the scoring data: base model "
+         << FormatValue(100.0 * b.error) << " %";
+    for (const CandidateResult& step : d.selected) {
+      html << " &rarr; <b>+ " << EscapeHtml(step.effect) << "</b> "
+           << FormatValue(100.0 * step.error) << " %";
+    }
+    html << ".</p>\n";
+    static const char* kColors[] = {"#080", "#06c", "#a0a", "#c80"};
+    std::vector<double> x;
+    for (std::size_t i = 0; i < b.channel_errors.size(); ++i) x.push_back(static_cast<double>(i));
+    SvgPlot plot(1000, 260, "channel (table below)", "NRMSE on scoring data [%]");
+    std::vector<double> before;
+    for (const auto& [channel, error] : b.channel_errors) before.push_back(100.0 * error);
+    plot.Stems(x, before, "#c33");
+    plot.Legend("fitted base model", "#c33");
+    for (std::size_t s = 0; s < d.selected.size(); ++s) {
+      std::vector<double> shifted, after;
+      for (std::size_t i = 0; i < b.channel_errors.size(); ++i) {
+        shifted.push_back(x[i] + 0.2 * static_cast<double>(s + 1));
+        after.push_back(100.0 * ErrorOf(d.selected[s], b.channel_errors[i].first));
+      }
+      const char* color = kColors[s % 4];
+      plot.Stems(shifted, after, color);
+      plot.Legend("+ " + d.selected[s].effect, color);
+    }
+    plot.HorizontalLine(100.0 * d.noise_floor, "#888");
+    html << plot.Render() << "\n<table><tr><th class=\"l\">channel</th><th>base model [%]</th>";
+    for (const CandidateResult& step : d.selected) {
+      html << "<th>+ " << EscapeHtml(step.effect) << " [%]</th>";
+    }
+    html << "</tr>\n<tr><td class=\"l\"><b>mean</b></td><td><b>" << FormatValue(100.0 * b.error)
+         << "</b></td>";
+    for (const CandidateResult& step : d.selected) {
+      html << "<td><b>" << FormatValue(100.0 * step.error) << "</b> ("
+           << FormatValue(-100.0 * step.improvement, 3) << " %)</td>";
+    }
+    html << "</tr>\n";
+    for (const auto& [channel, error] : b.channel_errors) {
+      html << "<tr><td class=\"l\">" << riglog::ChannelName(channel) << "</td><td>"
+           << FormatValue(100.0 * error) << "</td>";
+      for (const CandidateResult& step : d.selected) {
+        html << "<td>" << FormatValue(100.0 * ErrorOf(step, channel)) << "</td>";
+      }
+      html << "</tr>\n";
+    }
+    html << "</table>\n";
+  }
+  html << "<p>Selection ended: " << EscapeHtml(d.selection_end) << ".";
+  if (d.next) {
+    html << " Next best: "
+         << EscapeHtml(DescribeCandidate(*d.next, d.selected.empty() ? b : d.selected.back()))
+         << ".";
+  }
+  html << "</p>\n";
+}
+
 // Every candidate, best first, with what it explains.
 void WriteCandidates(const Diagnosis& d, std::ostringstream& html) {
   const CandidateResult& b = d.baseline;
@@ -237,6 +329,15 @@ void WriteCandidates(const Diagnosis& d, std::ostringstream& html) {
          << "</td></tr>\n";
   }
   html << "</table>\n";
+  if (!d.failed.empty()) {
+    html << "<p>Could not be fitted (not ranked):";
+    for (const CandidateResult& c : d.failed) {
+      html << " <b>" << EscapeHtml(c.effect) << "</b>"
+           << (c.round > 1 ? " (round " + std::to_string(c.round) + ")" : std::string()) << ": "
+           << EscapeHtml(c.failure) << ";";
+    }
+    html << "</p>\n";
+  }
 }
 
 // Where the fitted base model fails: along the pipe and per channel.
@@ -279,13 +380,17 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
     }
   }
   WriteVerdict(d, winner, log_path, html);
+  WriteSelection(d, html);
   WriteChannelErrors(d, winner, html);
   WriteCandidates(d, html);
   WriteBaseModelFailures(d, html);
   html << "<p>Made by <code>mpdrig diagnose</code>. Ranking: compare's error on the "
-          "scoring data times (1 + 1% per extra parameter); significant: better than the base "
-          "model by more than 5% and more than three standard errors over 8 blocks of the "
-          "scoring data.</p>\n</body></html>\n";
+          "scoring data times (1 + "
+       << FormatValue(100.0 * kParameterPrice) << " % per extra parameter); significant: "
+       << "better than the model it extends by more than "
+       << FormatValue(100.0 * kMinRelativeImprovement) << " % and more than "
+       << FormatValue(kSignificanceZ) << " standard errors over " << kScoreBlocks
+       << " blocks of the scoring data.</p>\n</body></html>\n";
   return html.str();
 }
 

@@ -66,7 +66,7 @@ Case RunCase(std::optional<std::string> effect, std::uint64_t seed, bool baselin
   options.low_pressure = low_pressure;
   options.duration_s = kDurationS;
   options.rate_hz = kRateHz;
-  options.hidden_effect = effect;
+  if (effect) options.hidden_effects = {*effect};
   if (noise == Noise::kLab) options.sensor_noise = SensorNoise::Lab();
   auto synthetic = MakeSyntheticLog(options);
   EXPECT_TRUE(synthetic.ok()) << synthetic.status().message();
@@ -202,7 +202,7 @@ namespace {
 Diagnosis DiagnoseAtLabNoise(std::optional<std::string> effect, std::uint64_t seed) {
   SyntheticLogOptions options;
   options.seed = seed;
-  options.hidden_effect = effect;
+  if (effect) options.hidden_effects = {*effect};
   options.sensor_noise = SensorNoise::Lab();
   auto synthetic = MakeSyntheticLog(options);
   EXPECT_TRUE(synthetic.ok()) << synthetic.status().message();

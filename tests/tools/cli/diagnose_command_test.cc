@@ -45,12 +45,17 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
             0)
       << output;
   EXPECT_NE(output.find("verdict: sensor_lag"), std::string::npos) << output;
+  EXPECT_NE(output.find("selected: sensor_lag ("), std::string::npos) << output;
+  EXPECT_NE(output.find("effects added one after the other"), std::string::npos) << output;
   EXPECT_NE(output.find("diagnose: 100% done"), std::string::npos) << "progress on stderr";
   const std::string text = ReadFile(json);
   for (const char* field :
        {"\"baseline\":{\"error\":", "\"params\":{\"wave_speed_mps\"",
         "\"candidates\":[{\"effect\":", "\"significant\":true", "\"verdict\":\"sensor_lag\"",
-        "\"equivalent\":[", "\"held\":", "\"noise_floor\":"}) {
+        "\"equivalent\":[", "\"held\":", "\"noise_floor\":",
+        // Forward selection: the verdict first, then what ended it.
+        "\"selected\":[{\"effect\":\"sensor_lag\"",
+        "\"selection_end\":", "\"next\":", "\"failed\":[", "\"round\":1"}) {
     EXPECT_NE(text.find(field), std::string::npos) << field << " in " << text.substr(0, 400);
   }
   // Ranked best first: the first candidate is the verdict.
@@ -62,6 +67,8 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   EXPECT_EQ(page.find("<script"), std::string::npos);
   EXPECT_NE(page.find("Missing effect: <b>sensor_lag</b>"), std::string::npos);
   EXPECT_NE(page.find("before and after adding sensor_lag"), std::string::npos);
+  EXPECT_NE(page.find("Effects added one after the other"), std::string::npos);
+  EXPECT_NE(page.find("Selection ended: "), std::string::npos);
 
   std::string found;
   if (RunShell("command -v chromium", &found) != 0) {

@@ -44,6 +44,35 @@ using teststats::StdDevTolerance;
 // 30 s at 50 Hz: 1501 samples a channel.
 const char kRun[] = " synth --seed 5 --duration 30 --rate-hz 50";
 
+// Several hidden effects at once (the logs diagnose's forward selection is tried on): --effect
+// repeated, each NAME[:KEY=VALUE,...]; a strength given is kept, the others drawn; the first
+// effect's draw is the same as alone on the same seed. A name twice or an unknown key is refused.
+TEST(SynthCommandTest, HidesSeveralEffectsAtGivenOrDrawnStrengths) {
+  const fs::path dir = TempDir();
+  const std::string two = (dir / "two.csv").string(), one = (dir / "one.csv").string();
+  std::string output;
+  ASSERT_EQ(RunShell(kExe + kRun +
+                         " --effect unsteady_friction --effect sensor_lag:time_constant_s=0.1 "
+                         "--out " +
+                         two,
+                     &output),
+            0)
+      << output;
+  ASSERT_EQ(RunShell(kExe + kRun + " --effect unsteady_friction --out " + one, &output), 0)
+      << output;
+  const std::string hidden = Metadata(ReadLog(two), "hidden");
+  const std::string alone = Metadata(ReadLog(one), "hidden");
+  EXPECT_NE(hidden.find(" + sensor_lag time_constant_s=0.1;"), std::string::npos) << hidden;
+  // "unsteady_friction k=...": the same draw as alone.
+  const std::string first = alone.substr(0, alone.find(';'));
+  EXPECT_EQ(hidden.rfind(first + " + ", 0), 0u) << hidden << " against " << alone;
+  EXPECT_NE(
+      RunShell(kExe + kRun + " --effect sensor_lag --effect sensor_lag --out " + two, &output), 0);
+  EXPECT_NE(output.find("'sensor_lag' given twice"), std::string::npos) << output;
+  EXPECT_NE(RunShell(kExe + kRun + " --effect sensor_lag:tau_s=1 --out " + two, &output), 0);
+  EXPECT_NE(output.find("tau_s"), std::string::npos) << output;
+}
+
 // Absurd lengths and rates, found by a bad-input probe: before, --duration 1e9 allocated until
 // std::bad_alloc aborted the process. Now they are refused at once, naming the flag and the limit.
 TEST(SynthCommandTest, RefusesAbsurdDurationsAndRatesNamingTheFlagAndTheLimit) {
