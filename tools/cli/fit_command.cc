@@ -16,6 +16,7 @@
 #include "model/effects/param_by_key.h"
 #include "model/identification/fit.h"
 #include "tools/cli/commands.h"
+#include "tools/cli/fit_resonances.h"
 #include "tools/cli/model_options.h"
 
 namespace mpdrig::cli {
@@ -295,18 +296,22 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
       "An effect's parameter (the effect must be on):\n"
       "  mpdrig fit lab.csv --effect sensor_lag --params sensor_lag.time_constant_s \\\n"
       "      --bounds sensor_lag.time_constant_s=0:0.5 --window-s 0:60 --json -\n"
+      "To the rig's measured first resonances (frequency domain; no log):\n"
+      "  mpdrig fit --resonances docs/examples/thesis-resonances.csv --set wave_speed_mps=1173 \\\n"
+      "      --hold wave_speed_mps --effect topside_compliance --effect gas_entrainment --json -\n"
+      "  JSON: params, configurations[].{configuration, measured_hz, base_model_hz, model_hz,\n"
+      "  response (analytic or simulated)}, chi2_before, chi2_after, max_error_hz.\n"
       "JSON: params.<key>.{initial, estimate, std_error, held, lower, upper}, correlation.{keys,\n"
       "matrix}, error_before, error_after, iterations, replays, converged, window_s, cells,\n"
       "solver_report (docs/fitting.md, 'Output'). Progress goes to stderr.");
   args->model.AddAll(command);
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
-      ->required()
       ->check(CLI::ExistingFile);
   command
       ->add_option("--params", args->params,
-                   "parameters to fit, comma separated: keys of `mpdrig params` or EFFECT.KEY")
+                   "parameters to fit, comma separated: keys of `mpdrig params` or EFFECT.KEY "
+                   "(--resonances: default wave_speed_mps and the effects' fitted parameters)")
       ->delimiter(',')
-      ->required()
       ->type_name("KEY,KEY,...");
   command
       ->add_option("--bounds", args->bounds,
@@ -318,7 +323,27 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
                    "fit only the samples in [T0, T1] s (the replay still starts at the log's "
                    "start), e.g. 0:60 or 30:")
       ->type_name("T0:T1");
-  command->add_option("--json", args->json_path, "result as JSON ('-' for stdout)")->required();
+  command->add_option("--json", args->json_path, "result as JSON ('-' for stdout)");
+  auto resonance_args = std::make_shared<ResonanceFitArgs>();
+  command
+      ->add_option("--resonances", resonance_args->resonances_path,
+                   "fit to measured first resonances instead of a log: CSV "
+                   "configuration,frequency_hz,uncertainty_hz (docs/rig-measurements.md)")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--hold", resonance_args->hold,
+                   "--resonances: keep this parameter at its start value (repeatable)")
+      ->type_name("KEY");
+  command
+      ->add_option("--response", resonance_args->method,
+                   "--resonances: auto (analytic where it holds the effects, else simulated), "
+                   "analytic or simulated")
+      ->check(CLI::IsMember({"auto", "analytic", "simulated"}))
+      ->capture_default_str();
+  command
+      ->add_option("--outlet-barg", resonance_args->outlet_barg,
+                   "--resonances: outlet pressure of the terminations [bar gauge]")
+      ->capture_default_str();
   command->add_option("--out-config", args->out_config_path,
                       "write the fitted configuration (Protobuf text) for simulate/compare "
                       "--config");
@@ -339,7 +364,27 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
   AddInputReplayOptions(command, &args->replay);
   AddLogReadOptions(command, &args->read);
   command->add_flag("--quiet", args->quiet, "no progress on stderr");
-  command->callback([args, exit_code]() { *exit_code = RunFit(*args); });
+  command->callback([args, resonance_args, exit_code]() {
+    if (!resonance_args->resonances_path.empty()) {
+      if (!args->log_path.empty()) {
+        *exit_code = Fail("fit", Status::Error("give a log or --resonances, not both"));
+        return;
+      }
+      resonance_args->params = args->params;
+      resonance_args->bounds = args->bounds;
+      resonance_args->json_path = args->json_path;
+      resonance_args->quiet = args->quiet;
+      resonance_args->max_iterations = std::max(args->max_iterations, 1);
+      *exit_code = RunFitResonances(args->model, *resonance_args);
+      return;
+    }
+    if (args->log_path.empty() || args->params.empty() || args->json_path.empty()) {
+      *exit_code = Fail("fit", Status::Error("fitting a log needs the log, --params and --json "
+                                             "(or fit --resonances FILE)"));
+      return;
+    }
+    *exit_code = RunFit(*args);
+  });
 }
 
 }  // namespace mpdrig::cli

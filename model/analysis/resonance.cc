@@ -1,0 +1,257 @@
+#include "model/analysis/resonance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "model/effects/effect.h"
+
+namespace mpdrig {
+namespace {
+
+using Complex = std::complex<double>;
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// An effect's resolved parameter value (its default where the setting gives none).
+double EffectValue(const EffectSetting& setting, std::string_view key) {
+  const EffectInfo* info = FindEffectInfo(setting.name);
+  MPDRIG_CHECK(info != nullptr);
+  auto values = ResolveEffectValues(*info, setting);
+  MPDRIG_CHECK(values.ok());
+  for (std::size_t i = 0; i < info->params.size(); ++i) {
+    if (info->params[i].key == key) return (*values)[i];
+  }
+  MPDRIG_CHECK(false);
+  return 0.0;
+}
+
+// gas_entrainment's wave speed at p (its header, (8.3.5)-(8.3.6)).
+double GasWaveSpeed(const RigParams& params, const EffectSetting& gas, double pressure_pa) {
+  const double c = params.wave_speed_mps, rho = params.density_kgpm3;
+  const double bulk = rho * c * c;
+  const double eps0 = EffectValue(gas, "void_fraction");
+  const double p_ref = EffectValue(gas, "reference_pressure_pa");
+  const double n = EffectValue(gas, "polytropic_index");
+  const double p = std::max(pressure_pa, 1e-300);
+  const double eps = eps0 * std::pow(p_ref / p, 1.0 / n);
+  const double extra = std::max(0.0, eps / (n * p) - eps / bulk);
+  return 1.0 / std::sqrt(rho * (1.0 / bulk + extra));
+}
+
+double Magnitude(const RigParams& params, const ChokeSetting& choke, double pump, double p_m,
+                 double f) {
+  return std::abs(AnalyticBhpWithEffects(params, choke, pump, p_m, f));
+}
+
+}  // namespace
+
+bool AnalyticRepresents(std::string_view name) {
+  return name == "topside_compliance" || name == "hose_compliance" || name == "gas_entrainment" ||
+         name == "pump_curve";
+}
+
+std::string_view ResponseMethodName(ResponseMethod method) {
+  switch (method) {
+    case ResponseMethod::kAuto:
+      return "auto";
+    case ResponseMethod::kAnalytic:
+      return "analytic";
+    case ResponseMethod::kSimulated:
+      return "simulated";
+  }
+  return "?";
+}
+
+std::string EffectsOutsideAnalytic(const RigParams& params) {
+  std::string names;
+  for (const EffectSetting& effect : params.effects) {
+    if (AnalyticRepresents(effect.name)) continue;
+    if (!names.empty()) names += ", ";
+    names += effect.name;
+  }
+  return names;
+}
+
+double MeanLinePressurePa(const RigParams& params, double outlet_pressure_pa) {
+  return outlet_pressure_pa +
+         0.5 * params.density_kgpm3 * params.gravity_mps2 * params.pipe_elevation_gain_m;
+}
+
+Complex AnalyticBhpWithEffects(const RigParams& params, const ChokeSetting& choke,
+                               double pump_flow_m3ps, double mean_pressure_pa, double freq_hz) {
+  double outlet_compliance = 0.0, inlet_compliance = 0.0;
+  double c = params.wave_speed_mps;
+  for (const EffectSetting& effect : params.effects) {
+    if (effect.name == "topside_compliance") {
+      outlet_compliance += EffectValue(effect, "compliance_m3_per_pa");
+    } else if (effect.name == "hose_compliance") {
+      inlet_compliance += EffectValue(effect, "compliance_m3_per_pa");
+    } else if (effect.name == "gas_entrainment") {
+      c = GasWaveSpeed(params, effect, mean_pressure_pa);
+    }
+  }
+  const double rho = params.density_kgpm3, length = params.pipe_length_m;
+  const double area = params.PipeAreaM2();
+  const double a2 = params.PistonDisplacementAreaM2() / area;
+  const Complex s(0.0, kTwoPi * freq_hz);
+  const Complex kappa = std::sqrt(s * (s + params.friction_f1_per_s)) / c;  // (9.2.11)
+  const Complex z = rho * c * c * kappa / s;
+  const Complex sh = std::sinh(kappa * length), ch = std::cosh(kappa * length);
+  // Outlet admittance U(L)/P(L) = 1/k_c + s C / A: the choke and the tubes side by side.
+  const double k_choke = LinearizedOutletImpedance(params, choke, pump_flow_m3ps);
+  const Complex admittance =
+      (std::isinf(k_choke) ? Complex(0.0) : Complex(1.0 / k_choke)) + s * outlet_compliance / area;
+  Complex z_in;  // P(0) / U(0)
+  if (k_choke == 0.0) {
+    z_in = z * sh / ch;  // P(L) = 0: the open choke holds the outlet, the tubes see nothing
+  } else {
+    // (9.2.13) with k = 1/admittance, written so that a closed end (admittance 0) is exact.
+    z_in = z * (z * admittance * sh + ch) / (z * admittance * ch + sh);
+  }
+  // Inlet: A U(0) = Q_0 - s C_h P(0), Q_0/A = -A_2 V_d (9.2.5), V_d = s X.
+  const Complex p0_per_vd = -a2 * z_in / (1.0 + s * inlet_compliance * z_in / area);
+  return p0_per_vd * s;
+}
+
+std::vector<FrequencyPoint> AnalyticFrequencyResponseWithEffects(
+    const RigParams& params, const ChokeSetting& choke, double pump_flow_m3ps,
+    double mean_pressure_pa, const std::vector<double>& freqs_hz) {
+  std::vector<FrequencyPoint> points;
+  for (double f : freqs_hz) {
+    const Complex h = AnalyticBhpWithEffects(params, choke, pump_flow_m3ps, mean_pressure_pa, f);
+    points.push_back({f, std::abs(h), std::arg(h) * 180.0 / std::numbers::pi});
+  }
+  UnwrapPhase(&points);
+  return points;
+}
+
+Result<Resonance> FirstAnalyticResonance(const RigParams& params, const ChokeSetting& choke,
+                                         double pump_flow_m3ps, double mean_pressure_pa,
+                                         const ResonanceOptions& options) {
+  const double step = options.scan_step_hz;
+  double f_prev = options.fmin_hz;
+  double m_prev = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, f_prev);
+  double f = f_prev + step;
+  double m = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, f);
+  for (; f + step <= options.fmax_hz; f += step) {
+    const double m_next = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, f + step);
+    if (m > m_prev && m >= m_next) {
+      // Golden section on [f - step, f + step], where |H| is unimodal.
+      double a = f - step, b = f + step;
+      const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+      double x1 = b - g * (b - a), x2 = a + g * (b - a);
+      double m1 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x1);
+      double m2 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x2);
+      while (b - a > 1e-9) {
+        if (m1 < m2) {
+          a = x1, x1 = x2, m1 = m2;
+          x2 = a + g * (b - a);
+          m2 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x2);
+        } else {
+          b = x2, x2 = x1, m2 = m1;
+          x1 = b - g * (b - a);
+          m1 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x1);
+        }
+      }
+      const double peak = 0.5 * (a + b);
+      return Resonance{peak, Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, peak),
+                       ResponseMethod::kAnalytic, 0};
+    }
+    m_prev = m, m = m_next;
+  }
+  return Status::Error("the analytic response has no resonance between " +
+                       std::to_string(options.fmin_hz) + " and " + std::to_string(options.fmax_hz) +
+                       " Hz");
+}
+
+double PeakOfSampledResponse(const std::vector<FrequencyPoint>& points) {
+  MPDRIG_CHECK(!points.empty());
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < points.size(); ++i) {
+    if (points[i].magnitude_pa_per_m > points[best].magnitude_pa_per_m) best = i;
+  }
+  if (best == 0 || best + 1 == points.size()) return points[best].freq_hz;
+  // Parabola through (f, log |H|) at the three points (they need not be evenly spaced).
+  const double x0 = points[best - 1].freq_hz, x1 = points[best].freq_hz,
+               x2 = points[best + 1].freq_hz;
+  const double y0 = std::log(points[best - 1].magnitude_pa_per_m),
+               y1 = std::log(points[best].magnitude_pa_per_m),
+               y2 = std::log(points[best + 1].magnitude_pa_per_m);
+  const double d01 = (y1 - y0) / (x1 - x0), d12 = (y2 - y1) / (x2 - x1);
+  const double curvature = (d12 - d01) / (x2 - x0);  // y'' / 2
+  if (!(curvature < 0.0)) return x1;
+  // y = y1 + d (x - x1) + curvature (x - x1)^2 around x1, d the slope there.
+  const double slope = d01 + curvature * (x1 - x0);
+  return std::clamp(x1 - slope / (2.0 * curvature), x0, x2);
+}
+
+Result<Resonance> FirstResonance(const RigParams& params, Termination termination,
+                                 const ResonanceOptions& options) {
+  const TerminatedRig rig = ApplyTermination(params, termination);
+  const double p_m = MeanLinePressurePa(rig.params, options.simulated.outlet_pressure_pa);
+  const std::string outside = EffectsOutsideAnalytic(rig.params);
+  ResponseMethod method = options.method;
+  if (method == ResponseMethod::kAuto) {
+    method = outside.empty() ? ResponseMethod::kAnalytic : ResponseMethod::kSimulated;
+  }
+  if (method == ResponseMethod::kAnalytic) {
+    if (!outside.empty()) {
+      return Status::Error("the analytic response (9.2.13) does not represent " + outside +
+                           ": use the simulated one");
+    }
+    return FirstAnalyticResonance(rig.params, rig.choke, rig.pump_flow_m3ps, p_m, options);
+  }
+
+  // The guess: the analytic resonance of the rig without the effects it cannot hold.
+  RigParams covered = rig.params;
+  std::erase_if(covered.effects,
+                [](const EffectSetting& e) { return !AnalyticRepresents(e.name); });
+  auto guess = FirstAnalyticResonance(covered, rig.choke, rig.pump_flow_m3ps, p_m, options);
+  if (!guess.ok()) return guess.status().Within("the simulated resonance's first guess");
+  Resonance result;
+  result.method = ResponseMethod::kSimulated;
+  const int n = std::max(3, options.simulated_points);
+  double centre = guess->freq_hz;
+  double step = 2.0 * options.simulated_span * centre / (n - 1);
+  auto scan = [&](double middle, double spacing) -> Result<std::vector<FrequencyPoint>> {
+    std::vector<double> freqs;
+    for (int i = 0; i < n; ++i) {
+      const double f = middle + (i - (n - 1) / 2.0) * spacing;
+      if (f > 0.0) freqs.push_back(f);
+    }
+    result.simulations += static_cast<int>(freqs.size());
+    return SimulatedFrequencyResponse(rig.params, options.simulation, rig.choke, rig.pump_flow_m3ps,
+                                      freqs, options.simulated);
+  };
+  std::vector<FrequencyPoint> points;
+  for (int shift = 0;; ++shift) {
+    auto scanned = scan(centre, step);
+    if (!scanned.ok()) return scanned.status();
+    points = *scanned;
+    const auto largest = std::max_element(points.begin(), points.end(), [](auto& a, auto& b) {
+      return a.magnitude_pa_per_m < b.magnitude_pa_per_m;
+    });
+    const bool inside = largest != points.begin() && largest + 1 != points.end();
+    if (inside) {
+      centre = largest->freq_hz;
+      break;
+    }
+    if (shift == 4) {
+      return Status::Error("no simulated resonance within " +
+                           std::to_string(points.front().freq_hz) + ".." +
+                           std::to_string(points.back().freq_hz) + " Hz");
+    }
+    centre = largest->freq_hz + (largest == points.begin() ? -1.0 : 1.0) * 0.5 * (n - 1) * step;
+  }
+  // A finer scan across the largest point's neighbours, then the parabola.
+  auto fine = scan(centre, step / 4.0);
+  if (!fine.ok()) return fine.status();
+  result.freq_hz = PeakOfSampledResponse(*fine);
+  result.magnitude_pa_per_m = 0.0;
+  for (const FrequencyPoint& p : *fine) {
+    result.magnitude_pa_per_m = std::max(result.magnitude_pa_per_m, p.magnitude_pa_per_m);
+  }
+  return result;
+}
+
+}  // namespace mpdrig

@@ -1,0 +1,184 @@
+#include "tools/cli/fit_resonances.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <sstream>
+
+#include "model/analysis/resonance_list.h"
+#include "model/common/units.h"
+#include "model/effects/effect.h"
+#include "model/effects/param_by_key.h"
+#include "model/identification/resonance_fit.h"
+#include "tools/cli/json_text.h"
+
+namespace mpdrig::cli {
+namespace {
+
+Result<double> ParseNumber(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (text.empty() || used != text.size() || !std::isfinite(value)) {
+    return Status::Error(what + ": '" + text + "' is not a finite number");
+  }
+  return value;
+}
+
+// The keys fitted: --params, or the wave speed and every fitted parameter of the effects on;
+// without the --hold keys.
+Result<std::vector<FitParameter>> Parameters(const RigParams& start, const ResonanceFitArgs& args) {
+  std::vector<std::string> keys = args.params;
+  if (keys.empty()) {
+    keys.push_back("wave_speed_mps");
+    for (const EffectSetting& effect : start.effects) {
+      const EffectInfo* info = FindEffectInfo(effect.name);
+      if (info == nullptr) return UnknownEffect(effect.name);
+      for (const EffectParamInfo& p : info->params) {
+        if (p.fitted) keys.push_back(effect.name + "." + std::string(p.key));
+      }
+    }
+  }
+  for (const std::string& held : args.hold) {
+    auto value = GetParamValue(start, held);
+    if (!value.ok()) return value.status().Within("--hold");
+  }
+  std::vector<FitParameter> parameters;
+  for (const std::string& key : keys) {
+    if (std::find(args.hold.begin(), args.hold.end(), key) != args.hold.end()) continue;
+    auto parameter = DefaultFitParameter(key);
+    if (!parameter.ok()) return parameter.status().Within("--params");
+    auto value = GetParamValue(start, key);
+    if (!value.ok()) return value.status().Within("--params");
+    parameters.push_back(*parameter);
+  }
+  for (const std::string& spec : args.bounds) {
+    const std::size_t equals = spec.find('='), colon = spec.rfind(':');
+    if (equals == std::string::npos || colon == std::string::npos || colon < equals) {
+      return Status::Error("--bounds expects KEY=LOWER:UPPER, got '" + spec + "'");
+    }
+    const std::string key = spec.substr(0, equals);
+    auto lower = ParseNumber(spec.substr(equals + 1, colon - equals - 1), "--bounds " + spec);
+    if (!lower.ok()) return lower.status();
+    auto upper = ParseNumber(spec.substr(colon + 1), "--bounds " + spec);
+    if (!upper.ok()) return upper.status();
+    auto it = std::find_if(parameters.begin(), parameters.end(),
+                           [&](const FitParameter& p) { return p.key == key; });
+    if (it == parameters.end()) {
+      return Status::Error("--bounds " + spec + ": '" + key + "' is not fitted");
+    }
+    if (!(*lower < *upper))
+      return Status::Error("--bounds " + spec + ": LOWER must be below UPPER");
+    it->lower = *lower, it->upper = *upper;
+  }
+  return parameters;
+}
+
+std::string FitJson(const ResonanceFitResult& fit, const ResonanceFitArgs& args,
+                    const std::vector<std::string>& effects) {
+  std::ostringstream out;
+  out << "{\n  \"resonances\": " << JsonString(args.resonances_path) << ",\n";
+  out << "  \"effects\": [";
+  for (std::size_t i = 0; i < effects.size(); ++i) out << (i ? ", " : "") << JsonString(effects[i]);
+  out << "],\n  \"held\": [";
+  for (std::size_t i = 0; i < args.hold.size(); ++i)
+    out << (i ? ", " : "") << JsonString(args.hold[i]);
+  out << "],\n  \"params\": {";
+  for (std::size_t j = 0; j < fit.keys.size(); ++j) {
+    out << (j ? "," : "") << "\n    " << JsonString(fit.keys[j])
+        << ": {\"initial\": " << JsonNumber(fit.initial[j])
+        << ", \"estimate\": " << JsonNumber(fit.estimates[j])
+        << ", \"std_error\": " << JsonNumber(fit.standard_errors[j])
+        << ", \"lower\": " << JsonNumber(fit.lower[j])
+        << ", \"upper\": " << JsonNumber(fit.upper[j]) << "}";
+  }
+  out << "\n  },\n  \"configurations\": [";
+  for (std::size_t i = 0; i < fit.configurations.size(); ++i) {
+    const ResonanceFitConfiguration& c = fit.configurations[i];
+    out << (i ? "," : "")
+        << "\n    {\"configuration\": " << JsonString(std::string(TerminationName(c.configuration)))
+        << ", \"measured_hz\": " << JsonNumber(c.measured_hz)
+        << ", \"uncertainty_hz\": " << JsonNumber(c.uncertainty_hz)
+        << ", \"base_model_hz\": " << JsonNumber(c.base_model_hz)
+        << ", \"model_hz\": " << JsonNumber(c.model_hz)
+        << ", \"response\": " << JsonString(std::string(ResponseMethodName(c.method))) << "}";
+  }
+  out << "\n  ],\n";
+  out << "  \"chi2_before\": " << JsonNumber(fit.chi2_before) << ",\n";
+  out << "  \"chi2_after\": " << JsonNumber(fit.chi2_after) << ",\n";
+  out << "  \"max_error_hz\": " << JsonNumber(fit.max_error_hz) << ",\n";
+  out << "  \"iterations\": " << fit.iterations << ",\n";
+  out << "  \"resonances_computed\": " << fit.evaluations << ",\n";
+  out << "  \"converged\": " << (fit.converged ? "true" : "false") << ",\n";
+  out << "  \"solver_report\": " << JsonString(fit.solver_report) << "\n}\n";
+  return out.str();
+}
+
+}  // namespace
+
+int RunFitResonances(const ModelOptions& model, const ResonanceFitArgs& args) {
+  const std::string name = "fit";
+  auto start = model.LoadParams();
+  if (!start.ok()) return Fail(name, start.status());
+  auto simulation = model.LoadSimulationOptions();
+  if (!simulation.ok()) return Fail(name, simulation.status());
+  auto measured = ReadResonanceList(args.resonances_path);
+  if (!measured.ok()) return Fail(name, measured.status());
+  auto parameters = Parameters(*start, args);
+  if (!parameters.ok()) return Fail(name, parameters.status());
+
+  ResonanceFitOptions options;
+  options.max_iterations = args.max_iterations;
+  options.resonance.simulation = *simulation;
+  options.resonance.simulated.outlet_pressure_pa =
+      units::BargToPaAbs(args.outlet_barg, start->atmospheric_pressure_pa);
+  options.resonance.method = args.method == "analytic"    ? ResponseMethod::kAnalytic
+                             : args.method == "simulated" ? ResponseMethod::kSimulated
+                                                          : ResponseMethod::kAuto;
+  if (!args.quiet) {
+    std::string keys;
+    for (const FitParameter& p : *parameters) keys += (keys.empty() ? "" : ", ") + p.key;
+    const std::string outside = EffectsOutsideAnalytic(*start);
+    std::fprintf(stderr, "mpdrig fit: %zu resonances; fitting %s; response %s\n", measured->size(),
+                 keys.empty() ? "nothing (evaluating)" : keys.c_str(),
+                 args.method != "auto" ? args.method.c_str()
+                 : outside.empty()     ? "analytic (9.2.13)"
+                                       : ("simulated where " + outside + " is on").c_str());
+  }
+  auto fit = FitResonances(*measured, *start, *parameters, options);
+  if (!fit.ok()) return Fail(name, fit.status().Within(args.resonances_path));
+
+  std::vector<std::string> effects;
+  for (const EffectSetting& e : start->effects) effects.push_back(e.name);
+  if (!args.json_path.empty()) {
+    Status written = WriteText(args.json_path, FitJson(*fit, args, effects));
+    if (!written.ok()) return Fail(name, written);
+    if (args.json_path == "-") return 0;
+  }
+  std::printf("%-20s %9s %9s %9s %9s  %s\n", "configuration", "measured", "+-", "base", "model",
+              "response");
+  for (const ResonanceFitConfiguration& c : fit->configurations) {
+    std::printf("%-20s %9.4f %9.4f %9.4f %9.4f  %s\n",
+                std::string(TerminationName(c.configuration)).c_str(), c.measured_hz,
+                c.uncertainty_hz, c.base_model_hz, c.model_hz,
+                std::string(ResponseMethodName(c.method)).c_str());
+  }
+  for (std::size_t j = 0; j < fit->keys.size(); ++j) {
+    const bool at_bound = fit->estimates[j] <= fit->lower[j] || fit->estimates[j] >= fit->upper[j];
+    std::printf("%s = %.6g +- %.3g (from %.6g, bounds %g..%g)%s\n", fit->keys[j].c_str(),
+                fit->estimates[j], fit->standard_errors[j], fit->initial[j], fit->lower[j],
+                fit->upper[j], at_bound ? "  at a bound" : "");
+  }
+  for (const std::string& held : args.hold) {
+    std::printf("%s held at %.6g\n", held.c_str(), *GetParamValue(*start, held));
+  }
+  std::printf("chi2 %.4g -> %.4g, largest error %.4f Hz; %d iterations, %d resonances, %s\n",
+              fit->chi2_before, fit->chi2_after, fit->max_error_hz, fit->iterations,
+              fit->evaluations, fit->converged ? "converged" : "NOT converged");
+  return 0;
+}
+
+}  // namespace mpdrig::cli
