@@ -25,10 +25,10 @@ export MPDRIG_DIAGNOSE_CASES="${MPDRIG_DIAGNOSE_CASES:-1}"
 # at lab noise) repeat the same code paths over more effects, seeds and excitations: that is what
 # the Release suite checks, and it is most of this suite's time under the sanitizers (3-5x slower
 # each). Here one case of each runs, so the sanitizers still see every path: diagnose with and
-# without a hidden effect, the SUNDIALS scheme, the shadow. MPDRIG_SANITIZE_ALL=1 runs them all.
-repeats='DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|DiagnoseTwoEffects|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise'
+# without a hidden effect, its forward selection of two, the SUNDIALS scheme, the shadow. MPDRIG_SANITIZE_ALL=1 runs them all.
+repeats='DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|SelectionOf|SelectionWithout|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise'
 # (ctest's names of parameterised tests go on with "  # GetParam() = ...": no $ anchors)
-one_each='DiagnoseHiddenEffect.*/sensor_lag_lab |DiagnoseWithoutHiddenEffect.*/lab |SimulatedVsAnalytic.*MethodOfLinesOpen |ShadowAtLabNoise.*/fast_0p8Hz '
+one_each='DiagnoseHiddenEffect.*/sensor_lag_lab |DiagnoseWithoutHiddenEffect.*/lab |SelectionOfTwoHiddenEffects.*/sensor_lag_gas_entrainment_seed1 |SimulatedVsAnalytic.*MethodOfLinesOpen |ShadowAtLabNoise.*/fast_0p8Hz '
 if [[ "${MPDRIG_SANITIZE_ALL:-0}" == 1 ]]; then repeats='^$'; fi
 ctest --test-dir "$build" -j"$(nproc)" --output-on-failure --timeout 1800 \
   -LE 'container|netns|interop' -E "$repeats" "$@"
