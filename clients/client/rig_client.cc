@@ -642,16 +642,24 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
   if (!written.ok()) return Fail(Failure::kError, written.message());
   // Done when the status names the request; its sim_time_s is the last step's sample time, and
   // the sensors of the steps were published before it (another writer: wait for them too).
+  // Or the service refused it (more than an hour of rig time): its status names the request.
   double done_time_s = 0.0;
+  const std::string refusal =
+      std::to_string(id) + " of " + std::to_string(steps) + " steps refused";
+  bool refused = false;
   MPDRIG_RETURN_IF_ERROR(WaitFor(
       [&] {
-        if (!rig_status_ || rig_status_->last_completed_step_request != id) return false;
+        if (!rig_status_) return false;
+        refused = rig_status_->last_rejection.find(refusal) != std::string::npos;
+        if (refused) return true;
+        if (rig_status_->last_completed_step_request != id) return false;
         done_time_s = rig_status_->sim_time_s;
         return true;
       },
       "step request of " + std::to_string(steps) + " steps not completed by rig " +
           options_.rig_id + " within " + Seconds(options_.timeout_s),
       interrupt));
+  if (refused) return Fail(Failure::kError, rig_status_->last_rejection);
   MPDRIG_RETURN_IF_ERROR(
       WaitFor([&] { return newest_.has_value() && newest_->time_s >= done_time_s - 1e-9; },
               "the samples of a completed step did not arrive", interrupt));

@@ -642,7 +642,11 @@ Result<Comparison> ComparisonAccumulator::Finish(
     ChannelMetrics metrics = SampleMetrics(s);
     if (std::isfinite(metrics.nrmse)) error_sum += metrics.nrmse, ++error_count;
     // A constant measurement (NaN NRMSE) has no lag to find: its correlation would be rounding.
-    if (std::isfinite(metrics.nrmse)) CalcLag(s, &metrics);
+    if (std::isfinite(metrics.nrmse)) {
+      CalcLag(s, &metrics);
+    } else {
+      metrics.lag_s = metrics.lag_correlation = std::numeric_limits<double>::quiet_NaN();
+    }
     metrics.bands = CalcBands(s);
     if (s.transfer) result.transfer_functions.push_back(CalcTransferFunction(s));
     metrics.residual = CalcResidualAnalysis(s, metrics);

@@ -58,6 +58,10 @@ Qos StatusQos() {
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_LAST, 1);
   dds_qset_durability(qos.get(), DDS_DURABILITY_TRANSIENT_LOCAL);
+  // A status writer that goes (a crash, its lease running out, an error exit) unregisters its
+  // instances and does not dispose them: a disposal is the service's word that a rig's run ended
+  // as asked (RigService::EndRigs), which the clients read as a clean end.
+  dds_qset_writer_data_lifecycle(qos.get(), false);
   return qos;
 }
 

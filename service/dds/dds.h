@@ -87,6 +87,7 @@ class Qos {
 //              writers use the same QoS, so every client must offer a lease of at most 1 s).
 //              Writers unregister (not dispose) their instances when they go.
 //   status   - reliable, keep last 1, transient-local: a late joiner sees the current status.
+//              Writers do not dispose when they go: a disposal is a rig's clean end.
 //   requests - step requests, private-rig requests, the shadow's commands: reliable, keep all,
 //              volatile. A request is an event, not state: every one counts, a late joiner must
 //              not act on an old one.

@@ -35,7 +35,12 @@ Status CheckKeyMatchesCertificate(const std::string& certificate_path,
       &X509_free);
   if (!certificate) return Status::Error(certificate_path + " is not a readable PEM certificate");
   std::unique_ptr<EVP_PKEY, void (*)(EVP_PKEY*)> key(
-      read(key_path, [](FILE* f) { return PEM_read_PrivateKey(f, nullptr, nullptr, nullptr); }),
+      read(key_path,
+           [](FILE* f) {
+             // Without a passphrase callback OpenSSL would prompt on the terminal: refuse instead.
+             pem_password_cb* no_passphrase = [](char*, int, int, void*) { return 0; };
+             return PEM_read_PrivateKey(f, nullptr, no_passphrase, nullptr);
+           }),
       &EVP_PKEY_free);
   if (!key) {
     return Status::Error(key_path + " is not a readable PEM private key (or it has a passphrase)");

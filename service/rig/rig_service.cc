@@ -14,6 +14,7 @@
 #include <thread>
 #include <utility>
 
+#include "service/rig/log_playback.h"
 #include "service/rig/wire.h"
 
 namespace mpdrig::service {
@@ -169,20 +170,28 @@ struct RigService::Impl {
     // Since when a reader of these sensors has left something unacknowledged (ProbeReaders);
     // unset while every reader has acknowledged everything.
     std::optional<Clock::time_point> unacknowledged_since;
-    bool stopped_reader_published = false;  // the last status of these rigs named one
+    bool stopped_reader_published = false;        // the last status of these rigs named one
+    Clock::time_point last_write = Clock::now();  // of a sensor sample (ProbeReaders)
   };
   std::vector<std::unique_ptr<Endpoints>> endpoints;
   dds::Entity step_waitset;  // every set's step requests (lockstep)
 
   Status CreateEndpoints(dds_entity_t pub, dds_entity_t sub, bool lockstep, Endpoints* set);
 
-  // A reader that stops acknowledging (its client SIGSTOPped, held in a debugger, or killed and
-  // its participant's lease not yet over) is not waited for (dds::SensorWriterQos) but reported:
-  // each probe asks whether every reader has acknowledged every sample written so far; a live
-  // reader does so within a heartbeat period (100 ms), so one that has not for
-  // kStoppedReaderAfterS is stopped. The status says so until it acknowledges again or is gone.
+  // Lockstep: a reader that stops acknowledging (its client SIGSTOPped, held in a debugger, or
+  // killed and its participant's lease not yet over) is not waited for (dds::SensorWriterQos)
+  // but reported. A probe asks whether every reader has acknowledged every sample written so
+  // far; it is asked only while the rig has written nothing for kProbeAfterIdleS, since a live
+  // reader acknowledges within a heartbeat period (100 ms) but never the sample just written.
+  // A reader that has not, over kStoppedReaderAfterS of such probes, is stopped; the status says
+  // so until it acknowledges again or is gone. (Real time and fast keep the last 8 samples and
+  // are not probed: a live reader always has the newest unacknowledged there.)
   static constexpr double kStoppedReaderAfterS = 2.0;
-  static void ProbeReaders(Endpoints& set) {
+  static constexpr double kProbeAfterIdleS = 0.3;
+  void ProbeReaders(Endpoints& set) {
+    if (options.clock != ClockMode::kLockstep) return;
+    if (std::chrono::duration<double>(Clock::now() - set.last_write).count() < kProbeAfterIdleS)
+      return;
     const dds_return_t acked = dds_wait_for_acks(set.sensors->handle(), 0);
     if (acked == DDS_RETCODE_OK) {
       set.unacknowledged_since.reset();
@@ -489,7 +498,7 @@ struct RigService::Impl {
 
   Status TickAndPublish(RigHost& rig) {
     auto sample = rig.Tick();
-    if (!sample.ok() && rig.playback() != nullptr) {
+    if (!sample.ok() && rig.playback() != nullptr && !rig.playback()->failed().ok()) {
       // A recording with a bad row further on (its file, line and column): the playback has
       // nothing more it can truthfully publish, so the service ends with the error (mpdrig serve
       // prints it and exits non-zero) instead of ticking on without a word.
@@ -507,6 +516,7 @@ struct RigService::Impl {
     const std::size_t index = static_cast<std::size_t>(&rig - rigs.data());
     Endpoints& out = EndpointsOf(index);
     MPDRIG_RETURN_IF_ERROR(out.sensors->Write(ToWire(rig.rig_id(), counter, *sample, atmosphere)));
+    out.last_write = Clock::now();
 
     RigObserver* observer = Observe(index, *sample);
     if (observer != nullptr && counter % estimate_every == 0) {
@@ -579,7 +589,6 @@ struct RigService::Impl {
     std::string stall_warning = StallWarning();
     std::string event = rig.counters().last_event;
     Endpoints& out = EndpointsOf(index);
-    ProbeReaders(out);
     std::string reader_warning = StoppedReaderWarning(out);
     out.stopped_reader_published = !reader_warning.empty();
     char* warnings[4];
@@ -630,8 +639,8 @@ struct RigService::Impl {
   // A run that ended as asked (a stop, the duration, a playback's last row) disposes each rig's
   // status: the clients read that as the rig's clean end, where a crash or a lease running out
   // leaves the instance without writers (clients/rig_watch.h). A recorder then ends its recording
-  // as complete. Waits (up to 1 s) until the readers have the disposal, since the participant,
-  // and with it the sensor writer whose leaving the clients see, goes right after.
+  // as complete. Waits (up to 1 s in all) until the readers have the disposal, since the
+  // participant, and with it the sensor writer whose leaving the clients see, goes right after.
   Status EndRigs() {
     for (std::size_t i = 0; i < rigs.size(); ++i) {
       mpdrig_RigStatus key{};
@@ -639,7 +648,11 @@ struct RigService::Impl {
       MPDRIG_RETURN_IF_ERROR(
           dds::Check(dds_dispose(EndpointsOf(i).status->handle(), &key), "dds_dispose"));
     }
-    for (auto& set : endpoints) (void)dds_wait_for_acks(set->status->handle(), DDS_SECS(1));
+    const dds_time_t deadline = dds::DeadlineAfter(1.0);
+    for (auto& set : endpoints) {
+      (void)dds_wait_for_acks(set->status->handle(),
+                              std::max<dds_duration_t>(0, deadline - dds_time()));
+    }
     return Status::Ok();
   }
 
@@ -653,6 +666,8 @@ struct RigService::Impl {
   // on stderr how many it had.
   Status AwaitSensorReaders() {
     if (options.wait_for_readers <= 0) return Status::Ok();
+    // A client makes its sensor reader once it has seen its rig's status: that goes out first.
+    MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
     const dds_time_t deadline = dds::DeadlineAfter(options.wait_for_readers_s);
     for (auto& set : endpoints) {
       auto matched = dds::AwaitReader(set->sensors->handle(), deadline, options.wait_for_readers);
@@ -669,6 +684,7 @@ struct RigService::Impl {
     // resent). The other direction follows within milliseconds on one machine; half a second
     // covers a loaded one (measured without it: the first row lost, as with no wait at all).
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    started = Clock::now();  // the real-time factor counts from the first sample
     return Status::Ok();
   }
 
@@ -721,7 +737,7 @@ struct RigService::Impl {
   }
 
   // Lockstep: each rig has a queue of step requests; the rigs with work are served in turn, at
-  // most kLockstepSliceSteps steps each, so one huge request (steps up to 2^32 - 1) neither
+  // most kLockstepSliceSteps steps each, so one long request (up to an hour of rig time) neither
   // starves another rig nor delays a stop by more than one step. A request's commands are taken
   // when it starts; it completes (last_completed_step_request, status) after its last step.
   Status RunLockstep(const std::atomic<bool>& stop) {

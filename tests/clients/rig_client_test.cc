@@ -76,6 +76,15 @@ TEST(RigClient, StepsReadsCommandsAndReportsRefusalsOfALockstepRig) {
 
   // Bad input is a value, never a crash.
   EXPECT_FALSE(r.Step(0).ok());
+  // More than an hour of rig time in one request: refused by the service, and the call says so
+  // at once instead of waiting out its timeout for a completion that never comes.
+  const auto asked = std::chrono::steady_clock::now();
+  auto too_long = r.Step(4000000000u);
+  ASSERT_FALSE(too_long.ok());
+  EXPECT_NE(too_long.status().message().find("more than 3600 s of rig time"), std::string::npos)
+      << too_long.status().message();
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 10.0);
+  EXPECT_TRUE(r.Step(1).ok()) << "the rig steps on after the refusal";
   client::RigOptions missing = options;
   missing.rig_id = "nope";
   missing.timeout_s = 0.5;

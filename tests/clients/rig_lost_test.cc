@@ -87,6 +87,23 @@ TEST_F(RigLost, KilledServiceMakesTheClientsExitWithRigLost) {
   ExpectReadableRecording();
 }
 
+// A killed service never disposes its rig's status: a recorder that waits for ever (--timeout 0)
+// learns of the loss only when the service's lease ends (10 s), and then it is a loss (exit 3),
+// not the clean end of a run (a status writer that disposed on going made it exit 0 "complete").
+TEST_F(RigLost, AKilledServiceIsNotACleanEndEvenAfterItsLease) {
+  testing::ChildProcess serve(Serve(), Log("serve.txt"));
+  ASSERT_TRUE(serve.started());
+  testing::ChildProcess echo(Echo("0"), Log("echo.txt"));
+  std::this_thread::sleep_for(std::chrono::seconds(3));
+  serve.Signal(SIGKILL);
+  EXPECT_EQ(echo.Wait(20.0), 3) << Output("echo.txt");
+  EXPECT_EQ(Output("echo.txt").find("the recording is complete"), std::string::npos)
+      << Output("echo.txt");
+  EXPECT_NE(Output("echo.txt").find("the rig's service left"), std::string::npos)
+      << Output("echo.txt");
+  ExpectReadableRecording();
+}
+
 // The service restarts within the clients' timeout: the rig's time goes back to 0. Both clients
 // say so and exit 3 instead of going on with the old run's state. Before: the controller went on
 // without noticing.

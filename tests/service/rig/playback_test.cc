@@ -347,6 +347,12 @@ TEST_F(PlaybackServiceTest, ReRecordedLogEqualsTheLogRowByRow) {
         << "row " << i << ": a channel the log lacks must arrive as not measured";
   }
   EXPECT_TRUE(std::isnan(received[10].PT_barg[4]));  // the empty field
+
+  // Steps asked past the end of a lockstep playback are refused on the status; the service runs
+  // on (its run ends without error when stopped: TearDown checks Run's status).
+  ASSERT_TRUE(Step("lab-1", 5));
+  EXPECT_EQ(rejected_, 6u) << "the command, then each of the 5 steps past the end";
+  EXPECT_NE(last_rejection_.find("has ended"), std::string::npos) << last_rejection_;
 }
 
 TEST_F(PlaybackServiceTest, HiddenEffectIsNotNamedOnStatus) {
