@@ -17,6 +17,7 @@
 #include "model/identification/fit.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/fit_resonances.h"
+#include "tools/cli/json_text.h"
 #include "tools/cli/model_options.h"
 
 namespace mpdrig::cli {
@@ -97,30 +98,6 @@ Status ParseWindow(const std::string& spec, FitOptions* options) {
     return Status::Error("--window-s " + spec + ": T0 must be before T1");
   }
   return Status::Ok();
-}
-
-std::string JsonNumber(double value) {
-  if (!std::isfinite(value)) return "null";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
-}
-
-std::string JsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buffer[8];
-      std::snprintf(buffer, sizeof buffer, "\\u%04x", c);
-      out += buffer;
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
 }
 
 std::string FitJson(const FitResult& fit, const std::vector<FitParameter>& parameters,
