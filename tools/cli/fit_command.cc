@@ -41,38 +41,14 @@ struct FitArgs {
   bool quiet = false;
 };
 
-Result<double> ParseDouble(const std::string& text, const std::string& what) {
-  std::size_t used = 0;
-  double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty() || used != text.size() || !std::isfinite(value)) {
-    return Status::Error(what + ": '" + text + "' is not a finite number");
-  }
-  return value;
-}
-
 // "key=lo:hi" -> key, lo, hi.
 Result<FitParameter> ParseBounds(const std::string& spec) {
-  const std::size_t equals = spec.find('=');
-  const std::size_t colon = spec.find(':', equals == std::string::npos ? 0 : equals);
-  if (equals == std::string::npos || colon == std::string::npos) {
-    return Status::Error("--bounds expects KEY=LOWER:UPPER, got '" + spec + "'");
-  }
+  auto bounds = ParseBoundsSpec(spec);
+  if (!bounds.ok()) return bounds.status();
   FitParameter parameter;
-  parameter.key = spec.substr(0, equals);
-  auto lower = ParseDouble(spec.substr(equals + 1, colon - equals - 1), "--bounds " + spec);
-  if (!lower.ok()) return lower.status();
-  auto upper = ParseDouble(spec.substr(colon + 1), "--bounds " + spec);
-  if (!upper.ok()) return upper.status();
-  if (!(*lower < *upper)) {
-    return Status::Error("--bounds " + spec + ": LOWER must be below UPPER");
-  }
-  parameter.lower = *lower;
-  parameter.upper = *upper;
+  parameter.key = bounds->key;
+  parameter.lower = bounds->lower;
+  parameter.upper = bounds->upper;
   return parameter;
 }
 
@@ -85,12 +61,12 @@ Status ParseWindow(const std::string& spec, FitOptions* options) {
   }
   const std::string begin = spec.substr(0, colon), end = spec.substr(colon + 1);
   if (!begin.empty()) {
-    auto value = ParseDouble(begin, "--window-s");
+    auto value = ParseFiniteNumber(begin, "--window-s");
     if (!value.ok()) return value.status();
     options->window_begin_s = *value;
   }
   if (!end.empty()) {
-    auto value = ParseDouble(end, "--window-s");
+    auto value = ParseFiniteNumber(end, "--window-s");
     if (!value.ok()) return value.status();
     options->window_end_s = *value;
   }

@@ -14,20 +14,6 @@
 namespace mpdrig::cli {
 namespace {
 
-Result<double> ParseNumber(const std::string& text, const std::string& what) {
-  std::size_t used = 0;
-  double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty() || used != text.size() || !std::isfinite(value)) {
-    return Status::Error(what + ": '" + text + "' is not a finite number");
-  }
-  return value;
-}
-
 // The keys fitted: --params, or the wave speed and every fitted parameter of the effects on;
 // without the --hold keys.
 Result<std::vector<FitParameter>> Parameters(const RigParams& start, const ResonanceFitArgs& args) {
@@ -56,23 +42,14 @@ Result<std::vector<FitParameter>> Parameters(const RigParams& start, const Reson
     parameters.push_back(*parameter);
   }
   for (const std::string& spec : args.bounds) {
-    const std::size_t equals = spec.find('='), colon = spec.rfind(':');
-    if (equals == std::string::npos || colon == std::string::npos || colon < equals) {
-      return Status::Error("--bounds expects KEY=LOWER:UPPER, got '" + spec + "'");
-    }
-    const std::string key = spec.substr(0, equals);
-    auto lower = ParseNumber(spec.substr(equals + 1, colon - equals - 1), "--bounds " + spec);
-    if (!lower.ok()) return lower.status();
-    auto upper = ParseNumber(spec.substr(colon + 1), "--bounds " + spec);
-    if (!upper.ok()) return upper.status();
+    auto bounds = ParseBoundsSpec(spec);
+    if (!bounds.ok()) return bounds.status();
     auto it = std::find_if(parameters.begin(), parameters.end(),
-                           [&](const FitParameter& p) { return p.key == key; });
+                           [&](const FitParameter& p) { return p.key == bounds->key; });
     if (it == parameters.end()) {
-      return Status::Error("--bounds " + spec + ": '" + key + "' is not fitted");
+      return Status::Error("--bounds " + spec + ": '" + bounds->key + "' is not fitted");
     }
-    if (!(*lower < *upper))
-      return Status::Error("--bounds " + spec + ": LOWER must be below UPPER");
-    it->lower = *lower, it->upper = *upper;
+    it->lower = bounds->lower, it->upper = bounds->upper;
   }
   return parameters;
 }

@@ -1,7 +1,9 @@
 #include "tools/cli/model_options.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -111,6 +113,40 @@ int Fail(const std::string& command, const Status& status) {
   const std::string message = CommandLineWording(status.message());
   std::fprintf(stderr, "mpdrig %s: %s\n", command.c_str(), message.c_str());
   return 1;
+}
+
+Result<double> ParseFiniteNumber(const std::string& text, const std::string& what) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (text.empty() || used != text.size() || !std::isfinite(value)) {
+    return Status::Error(what + ": '" + text + "' is not a finite number");
+  }
+  return value;
+}
+
+Result<BoundsSpec> ParseBoundsSpec(const std::string& spec) {
+  const std::size_t equals = spec.find('=');
+  const std::size_t colon = spec.find(':', equals == std::string::npos ? 0 : equals);
+  if (equals == std::string::npos || colon == std::string::npos) {
+    return Status::Error("--bounds expects KEY=LOWER:UPPER, got '" + spec + "'");
+  }
+  BoundsSpec bounds;
+  bounds.key = spec.substr(0, equals);
+  auto lower = ParseFiniteNumber(spec.substr(equals + 1, colon - equals - 1), "--bounds " + spec);
+  if (!lower.ok()) return lower.status();
+  auto upper = ParseFiniteNumber(spec.substr(colon + 1), "--bounds " + spec);
+  if (!upper.ok()) return upper.status();
+  if (!(*lower < *upper)) {
+    return Status::Error("--bounds " + spec + ": LOWER must be below UPPER");
+  }
+  bounds.lower = *lower;
+  bounds.upper = *upper;
+  return bounds;
 }
 
 void AddLogReadOptions(CLI::App* command, riglog::ReadOptions* options) {

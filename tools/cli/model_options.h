@@ -53,6 +53,15 @@ Status PrepareReplay(MeasuredLog* log, const RigParams& params, const Simulation
                      InputReplayOptions* options, bool quiet,
                      InputLevels levels = InputLevels::kWithTheseParams);
 
+// A command-line number: finite, the whole text. The error names `what` and the text.
+Result<double> ParseFiniteNumber(const std::string& text, const std::string& what);
+// --bounds KEY=LOWER:UPPER (fit, fit --resonances): the key and a range with LOWER < UPPER.
+struct BoundsSpec {
+  std::string key;
+  double lower = 0.0, upper = 0.0;
+};
+Result<BoundsSpec> ParseBoundsSpec(const std::string& spec);
+
 // Registers --max-gap-s: the longest gap in time a command accepts in a log it reads
 // (riglog::ReadOptions, rig_log_reader.h).
 void AddLogReadOptions(CLI::App* command, riglog::ReadOptions* options);
