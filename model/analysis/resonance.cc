@@ -38,6 +38,40 @@ double GasWaveSpeed(const RigParams& params, const EffectSetting& gas, double pr
   return 1.0 / std::sqrt(rho * (1.0 / bulk + extra));
 }
 
+double CircleArea(double diameter_m) { return 0.25 * std::numbers::pi * diameter_m * diameter_m; }
+
+// piston_compressibility's (5.4.3)-(5.4.5) linearised about rest (q_d = 0, where the quadratic
+// clearance friction has no slope; rho g h is constant and drops out), with X = 1, V_d = s:
+//   s C_p P_p = Q_d + V_d (A_b - A_d) - A U(0) - s C_h P_p      C_p = V_p / K (+ a hose beside it)
+//   s C_b P_b = -Q_d - V_d (A_b - A_d2)                          C_b = V_b / K
+//   (s M + r_1) Q_d = P_b - P_p                                  r_1 = |f_d1| / (A_b - A_d2)
+// and the pipe P_p = Z_in U(0). Multiplying the first by Z_in keeps it finite where Z_in is.
+// Rigid (K -> inf) it is (9.2.5): A U(0) = -V_d (A_d - A_d2). Without clearance resistance and
+// inertance the two volumes are one capacitance (V_p + V_b)/K at the inlet, like hose_compliance.
+Complex CompartmentInletPressure(const RigParams& params, const EffectSetting& compartment,
+                                 double hose_compliance, double area, Complex s, Complex z_in) {
+  const double bulk = EffectValue(compartment, "bulk_modulus_pa");
+  const double c_above = EffectValue(compartment, "volume_above_m3") / bulk;
+  const double c_below = EffectValue(compartment, "volume_below_m3") / bulk;
+  const double inertance = EffectValue(compartment, "inertance_kg_per_m4");
+  const double bha = CircleArea(EffectValue(compartment, "bha_diameter_m"));
+  const double face_above = bha - CircleArea(params.upper_rod_diameter_m);
+  // The effect's floor for a BHA no wider than its lower rod (piston_compressibility.cc).
+  const double face_below = std::max(bha - CircleArea(params.lower_rod_diameter_m), 1e-3 * bha);
+  const double r1 = std::fabs(params.piston_friction_fd1_pa_s_per_m) / face_below;
+  const Complex v_d = s;
+  const Complex zq = s * inertance + r1;
+  if (std::abs(zq) == 0.0) {
+    const double total = c_above + c_below + hose_compliance;
+    return z_in * v_d * (face_above - face_below) / (area + s * total * z_in);
+  }
+  const Complex g = 1.0 / zq;
+  const Complex a11 = z_in * (s * (c_above + hose_compliance) + g) + area, a12 = -z_in * g;
+  const Complex a21 = -g, a22 = s * c_below + g;
+  const Complex b1 = z_in * v_d * face_above, b2 = -v_d * face_below;
+  return (b1 * a22 - a12 * b2) / (a11 * a22 - a12 * a21);
+}
+
 double Magnitude(const RigParams& params, const ChokeSetting& choke, double pump, double p_m,
                  double f) {
   return std::abs(AnalyticBhpWithEffects(params, choke, pump, p_m, f));
@@ -47,7 +81,7 @@ double Magnitude(const RigParams& params, const ChokeSetting& choke, double pump
 
 bool AnalyticRepresents(std::string_view name) {
   return name == "topside_compliance" || name == "hose_compliance" || name == "gas_entrainment" ||
-         name == "pump_curve";
+         name == "piston_compressibility" || name == "pump_curve";
 }
 
 std::string_view ResponseMethodName(ResponseMethod method) {
@@ -81,8 +115,11 @@ Complex AnalyticBhpWithEffects(const RigParams& params, const ChokeSetting& chok
                                double pump_flow_m3ps, double mean_pressure_pa, double freq_hz) {
   double outlet_compliance = 0.0, inlet_compliance = 0.0;
   double c = params.wave_speed_mps;
+  const EffectSetting* compartment = nullptr;
   for (const EffectSetting& effect : params.effects) {
-    if (effect.name == "topside_compliance") {
+    if (effect.name == "piston_compressibility") {
+      compartment = &effect;
+    } else if (effect.name == "topside_compliance") {
       outlet_compliance += EffectValue(effect, "compliance_m3_per_pa");
     } else if (effect.name == "hose_compliance") {
       inlet_compliance += EffectValue(effect, "compliance_m3_per_pa");
@@ -107,6 +144,9 @@ Complex AnalyticBhpWithEffects(const RigParams& params, const ChokeSetting& chok
   } else {
     // (9.2.13) with k = 1/admittance, written so that a closed end (admittance 0) is exact.
     z_in = z * (z * admittance * sh + ch) / (z * admittance * ch + sh);
+  }
+  if (compartment != nullptr) {
+    return CompartmentInletPressure(params, *compartment, inlet_compliance, area, s, z_in);
   }
   // Inlet: A U(0) = Q_0 - s C_h P(0), Q_0/A = -A_2 V_d (9.2.5), V_d = s X.
   const Complex p0_per_vd = -a2 * z_in / (1.0 + s * inlet_compliance * z_in / area);

@@ -18,9 +18,14 @@
 //                       pressure plus half the coil's rise), 1/(rho c_m^2) = 1/(rho c^2) +
 //                       C_x(p_m), C_x = eps/(n p) - eps/K, eps = eps0 (p_ref/p)^(1/n)
 //                       (8.3.5, 8.3.6).
+//   piston_compressibility  the compartment's two volumes V_p/K and V_b/K and the clearance flow
+//                       between them (5.4.3)-(5.4.5), linearised about rest: P(0) from a 2x2
+//                       complex system (resonance.cc, CompartmentInletPressure). Without the
+//                       clearance's inertance and resistance it is a capacitance (V_p + V_b)/K
+//                       at the inlet, as hose_compliance.
 //   pump_curve          nothing: the pump is off in every termination.
-// Any other effect (unsteady or helical friction, the compartment's compressibility, the choke's
-// inertia, a sensor lag, column separation) needs the simulated response.
+// Any other effect (unsteady or helical friction, the choke's inertia, a sensor lag, column
+// separation) needs the simulated response.
 #pragma once
 
 #include <complex>

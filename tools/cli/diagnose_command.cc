@@ -1,7 +1,6 @@
 // mpdrig diagnose: which physical effect is the model missing?
 // mpdrig synth: a synthetic lab log with a hidden effect, to try diagnose on a known answer.
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,7 +10,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "model/analysis/log_replay.h"
@@ -23,6 +21,8 @@
 #include "model/sim/sensor_noise.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/model_options.h"
+#include "tools/cli/diagnose_resonances.h"
+#include "tools/cli/parallel_tasks.h"
 #include "tools/report/diagnosis_report.h"
 
 namespace mpdrig::cli {
@@ -41,26 +41,6 @@ struct DiagnoseArgs {
   bool quiet = false;
   riglog::ReadOptions read;
 };
-
-// Runs the tasks on one thread per core (at most one per task), saying when each is done.
-void RunOnEveryCore(const std::vector<std::function<void()>>& tasks, bool quiet) {
-  std::atomic<std::size_t> next{0}, done{0};
-  const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(),
-                                                           static_cast<unsigned>(tasks.size())));
-  std::vector<std::thread> threads;
-  for (unsigned w = 0; w < workers; ++w) {
-    threads.emplace_back([&] {
-      for (std::size_t i = next++; i < tasks.size(); i = next++) {
-        tasks[i]();
-        const std::size_t finished = ++done;
-        if (!quiet) {
-          std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished, tasks.size());
-        }
-      }
-    });
-  }
-  for (std::thread& thread : threads) thread.join();
-}
 
 // The error step by step as the selected effects are added: the mean and per channel.
 void PrintSelection(const Diagnosis& d, FILE* summary) {
@@ -269,10 +249,14 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "   show of the next effect.\n"
       "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
       "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
+      "The rig's measured first resonances instead of a log (frequency domain): each effect is\n"
+      "fitted to the peaks with the wave speed (unless held) and ranked by chi2; the next is\n"
+      "added while its drop in chi2 passes a chi-square test (--significance):\n"
+      "  mpdrig diagnose --resonances docs/examples/thesis-resonances.csv \\\n"
+      "      --set wave_speed_mps=1173 --hold wave_speed_mps --json diag.json\n"
       "Progress on stderr; a summary on stdout.");
   args->model.AddAll(command);
   command->add_option("log", args->log_path, "measured rig log (rig-log-format.md)")
-      ->required()
       ->check(CLI::ExistingFile);
   command->add_option("--json", args->json_path, "diagnosis as JSON ('-' for stdout)");
   command->add_option("--report", args->report_path, "self-contained HTML report");
@@ -294,7 +278,60 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->capture_default_str();
   AddInputReplayOptions(command, &args->replay);
   command->add_flag("--quiet", args->quiet, "no progress on stderr");
-  command->callback([args, exit_code]() { *exit_code = RunDiagnose(*args); });
+  auto resonance_args = std::make_shared<ResonanceDiagnoseArgs>();
+  command
+      ->add_option("--resonances", resonance_args->resonances_path,
+                   "diagnose measured first resonances instead of a log: CSV "
+                   "configuration,frequency_hz,uncertainty_hz (docs/rig-measurements.md)")
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--hold", resonance_args->hold,
+                   "--resonances: keep this parameter at its start value (repeatable)")
+      ->type_name("KEY");
+  command
+      ->add_option("--response", resonance_args->method,
+                   "--resonances: auto (analytic where it holds the effects, else simulated), "
+                   "analytic or simulated")
+      ->check(CLI::IsMember({"auto", "analytic", "simulated"}))
+      ->capture_default_str();
+  command
+      ->add_option("--outlet-barg", resonance_args->outlet_barg,
+                   "--resonances: outlet pressure of the terminations [bar gauge]")
+      ->capture_default_str();
+  command
+      ->add_option("--amplitude-m", resonance_args->amplitude_m,
+                   "--resonances: piston amplitude of the simulated response [m]")
+      ->check(CLI::Range(1.0e-6, 0.05))
+      ->capture_default_str();
+  command
+      ->add_option("--max-effects", resonance_args->max_effects,
+                   "--resonances: effects selected at most")
+      ->check(CLI::Range(1, 5))
+      ->capture_default_str();
+  command
+      ->add_option("--significance", resonance_args->significance,
+                   "--resonances: level of the chi2 test an added effect must pass")
+      ->check(CLI::Range(1.0e-6, 0.2))
+      ->capture_default_str();
+  command->callback([args, resonance_args, exit_code]() {
+    if (!resonance_args->resonances_path.empty()) {
+      if (!args->log_path.empty()) {
+        *exit_code = Fail("diagnose", Status::Error("give a log or --resonances, not both"));
+        return;
+      }
+      resonance_args->candidates = args->candidates;
+      resonance_args->json_path = args->json_path;
+      resonance_args->quiet = args->quiet;
+      resonance_args->max_iterations = args->max_iterations;
+      *exit_code = RunDiagnoseResonances(args->model, *resonance_args);
+      return;
+    }
+    if (args->log_path.empty()) {
+      *exit_code = Fail("diagnose", Status::Error("give a log to diagnose (or --resonances FILE)"));
+      return;
+    }
+    *exit_code = RunDiagnose(*args);
+  });
 
   auto synth = std::make_shared<SynthArgs>();
   CLI::App* synth_command = app->add_subcommand(

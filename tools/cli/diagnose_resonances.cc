@@ -1,0 +1,289 @@
+#include "tools/cli/diagnose_resonances.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <mutex>
+#include <optional>
+#include <sstream>
+
+#include "model/analysis/resonance_list.h"
+#include "model/common/units.h"
+#include "model/effects/param_by_key.h"
+#include "model/identification/resonance_diagnose.h"
+#include "tools/cli/json_text.h"
+#include "tools/cli/parallel_tasks.h"
+
+namespace mpdrig::cli {
+namespace {
+
+std::string Name(Termination t) { return std::string(TerminationName(t)); }
+
+// The measured value of a termination, if the list has it.
+std::optional<double> Measured(const ResonanceDiagnosis& d, Termination t) {
+  for (const MeasuredResonance& m : d.measured) {
+    if (m.configuration == t) return m.frequency_hz;
+  }
+  return std::nullopt;
+}
+std::optional<double> Modelled(const ResonanceFitResult& fit, Termination t) {
+  for (const ResonanceFitConfiguration& c : fit.configurations) {
+    if (c.configuration == t) return c.model_hz;
+  }
+  return std::nullopt;
+}
+
+std::string JsonFitParams(const ResonanceFitResult& fit) {
+  std::ostringstream out;
+  out << "{";
+  for (std::size_t j = 0; j < fit.keys.size(); ++j) {
+    out << (j ? ", " : "") << JsonString(fit.keys[j]) << ": " << JsonNumber(fit.estimates[j]);
+  }
+  return out.str() + "}";
+}
+
+std::string JsonModelHz(const ResonanceFitResult& fit) {
+  std::ostringstream out;
+  out << "[";
+  for (std::size_t i = 0; i < fit.configurations.size(); ++i) {
+    out << (i ? ", " : "") << JsonNumber(fit.configurations[i].model_hz);
+  }
+  return out.str() + "]";
+}
+
+std::string JsonCandidate(const ResonanceCandidate& c) {
+  std::ostringstream out;
+  out << "{\"effect\": " << JsonString(c.effect) << ", \"round\": " << c.round
+      << ", \"outcome\": " << JsonString(std::string(OutcomeName(c.outcome)))
+      << ", \"screen_shift_hz\": " << JsonNumber(c.screen_shift_hz);
+  if (c.outcome != ResonanceCandidate::Outcome::kFitted) {
+    return out.str() + ", \"note\": " + JsonString(c.note) + "}";
+  }
+  out << ", \"chi2\": " << JsonNumber(c.chi2) << ", \"delta_chi2\": " << JsonNumber(c.delta_chi2)
+      << ", \"threshold\": " << JsonNumber(c.threshold)
+      << ", \"significant\": " << (c.significant ? "true" : "false")
+      << ", \"max_error_hz\": " << JsonNumber(c.fit.max_error_hz)
+      << ", \"model_hz\": " << JsonModelHz(c.fit) << ", \"fitted\": " << JsonFitParams(c.fit)
+      << ", \"params\": [";
+  for (std::size_t j = 0; j < c.params.size(); ++j) {
+    const ResonanceParamEstimate& p = c.params[j];
+    out << (j ? ", " : "") << "{\"key\": " << JsonString(p.key)
+        << ", \"estimate\": " << JsonNumber(p.estimate)
+        << ", \"std_error\": " << JsonNumber(p.standard_error)
+        << ", \"lower\": " << JsonNumber(p.bound_lower)
+        << ", \"upper\": " << JsonNumber(p.bound_upper)
+        << ", \"plausible_lower\": " << JsonNumber(p.plausible_lower)
+        << ", \"plausible_upper\": " << JsonNumber(p.plausible_upper)
+        << ", \"at_bound\": " << (p.at_bound ? "true" : "false")
+        << ", \"within_plausible\": " << (p.within_plausible ? "true" : "false") << "}";
+  }
+  return out.str() + "]}";
+}
+
+// closed/open and valve/closed ratios of a set of resonances (NaN where one is missing).
+struct Ratios {
+  double closed_open = std::nan("");
+  double valve_closed = std::nan("");
+};
+template <typename Get>
+Ratios RatiosOf(Get get) {
+  Ratios r;
+  const auto closed = get(Termination::kChokeClosed), open = get(Termination::kChokeOpen),
+             valve = get(Termination::kClosedAtPipeEnd);
+  if (closed && open) r.closed_open = *closed / *open;
+  if (closed && valve) r.valve_closed = *valve / *closed;
+  return r;
+}
+
+std::string DiagnosisJson(const ResonanceDiagnosis& d, const ResonanceDiagnoseArgs& args) {
+  std::ostringstream out;
+  out << "{\n  \"resonance_list\": " << JsonString(args.resonances_path) << ",\n  \"held\": [";
+  for (std::size_t i = 0; i < d.held.size(); ++i) out << (i ? ", " : "") << JsonString(d.held[i]);
+  out << "],\n  \"resonances\": [";
+  for (std::size_t i = 0; i < d.measured.size(); ++i) {
+    const MeasuredResonance& m = d.measured[i];
+    out << (i ? "," : "") << "\n    {\"configuration\": " << JsonString(Name(m.configuration))
+        << ", \"measured_hz\": " << JsonNumber(m.frequency_hz)
+        << ", \"uncertainty_hz\": " << JsonNumber(m.uncertainty_hz)
+        << ", \"base_model_hz\": " << JsonNumber(d.base.configurations[i].model_hz)
+        << ", \"model_hz\": " << JsonNumber(d.Final().configurations[i].model_hz)
+        << ", \"after_each\": [";
+    for (std::size_t s = 0; s < d.selected.size(); ++s) {
+      out << (s ? ", " : "") << JsonNumber(d.selected[s].fit.configurations[i].model_hz);
+    }
+    out << "], \"response\": "
+        << JsonString(std::string(ResponseMethodName(d.Final().configurations[i].method))) << "}";
+  }
+  out << "\n  ],\n";
+  out << "  \"base\": {\"fitted\": " << JsonFitParams(d.base)
+      << ", \"chi2\": " << JsonNumber(d.base.chi2_after)
+      << ", \"max_error_hz\": " << JsonNumber(d.base.max_error_hz) << "},\n";
+  const Ratios measured = RatiosOf([&](Termination t) { return Measured(d, t); });
+  const Ratios uniform = RatiosOf([&](Termination t) { return Modelled(d.uniform, t); });
+  out << "  \"uniform_wave_speed\": {\"wave_speed_mps\": "
+      << JsonNumber(d.uniform.estimates.empty() ? std::nan("") : d.uniform.estimates[0])
+      << ", \"chi2\": " << JsonNumber(d.uniform.chi2_after)
+      << ", \"max_error_hz\": " << JsonNumber(d.uniform.max_error_hz)
+      << ", \"model_hz\": " << JsonModelHz(d.uniform)
+      << ", \"closed_open_ratio\": " << JsonNumber(uniform.closed_open)
+      << ", \"measured_closed_open_ratio\": " << JsonNumber(measured.closed_open)
+      << ", \"valve_closed_ratio\": " << JsonNumber(uniform.valve_closed)
+      << ", \"measured_valve_closed_ratio\": " << JsonNumber(measured.valve_closed) << "},\n";
+  out << "  \"candidates\": [";
+  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
+    out << (i ? "," : "") << "\n    " << JsonCandidate(d.candidates[i]);
+  }
+  out << "\n  ],\n  \"selected\": [";
+  for (std::size_t i = 0; i < d.selected.size(); ++i) {
+    out << (i ? "," : "") << "\n    " << JsonCandidate(d.selected[i]);
+  }
+  out << "\n  ],\n  \"next\": " << (d.next ? JsonCandidate(*d.next) : "null") << ",\n";
+  out << "  \"not_fitted\": [";
+  for (std::size_t i = 0; i < d.not_fitted.size(); ++i) {
+    out << (i ? "," : "") << "\n    " << JsonCandidate(d.not_fitted[i]);
+  }
+  out << "\n  ],\n  \"selection_end\": " << JsonString(d.selection_end) << ",\n";
+  out << "  \"verdict\": " << (d.selected.empty() ? "null" : JsonString(d.selected[0].effect))
+      << ",\n";
+  out << "  \"max_error_hz\": " << JsonNumber(d.Final().max_error_hz) << ",\n";
+  out << "  \"resonances_computed\": " << d.resonances_computed << "\n}\n";
+  return out.str();
+}
+
+void PrintParams(const ResonanceCandidate& c, FILE* out) {
+  for (const ResonanceParamEstimate& p : c.params) {
+    std::fprintf(out, "      %s = %.4g +- %.2g (plausible %.3g..%.3g%s%s)\n", p.key.c_str(),
+                 p.estimate, p.standard_error, p.plausible_lower, p.plausible_upper,
+                 p.within_plausible ? "" : "; OUTSIDE it", p.at_bound ? "; at a bound" : "");
+  }
+}
+
+void PrintSummary(const ResonanceDiagnosis& d, FILE* out) {
+  std::fprintf(out, "%-20s %8s %7s %9s", "configuration", "measured", "+-", "base");
+  for (const ResonanceCandidate& s : d.selected) {
+    std::fprintf(out, " %22s", ("+ " + s.effect).c_str());
+  }
+  std::fprintf(out, "\n");
+  for (std::size_t i = 0; i < d.measured.size(); ++i) {
+    std::fprintf(out, "%-20s %8.4f %7.4f %9.4f", Name(d.measured[i].configuration).c_str(),
+                 d.measured[i].frequency_hz, d.measured[i].uncertainty_hz,
+                 d.base.configurations[i].model_hz);
+    for (const ResonanceCandidate& s : d.selected) {
+      std::fprintf(out, " %22.4f", s.fit.configurations[i].model_hz);
+    }
+    std::fprintf(out, "\n");
+  }
+  std::fprintf(out, "%-20s %8s %7s %9.4f", "largest error [Hz]", "", "", d.base.max_error_hz);
+  for (const ResonanceCandidate& s : d.selected) std::fprintf(out, " %22.4f", s.fit.max_error_hz);
+  std::fprintf(out, "\n%-20s %8s %7s %9.3g", "chi2", "", "", d.base.chi2_after);
+  for (const ResonanceCandidate& s : d.selected) std::fprintf(out, " %22.3g", s.chi2);
+  std::fprintf(out, "\n");
+  for (std::size_t j = 0; j < d.base.keys.size(); ++j) {
+    std::fprintf(out, "base: %s = %.5g\n", d.base.keys[j].c_str(), d.base.estimates[j]);
+  }
+  for (const std::string& held : d.held) {
+    std::fprintf(out, "held: %s = %.6g\n", held.c_str(), *GetParamValue(d.base.params, held));
+  }
+
+  std::fprintf(out, "candidates of round 1 (chi2 after adding each; base %.3g):\n",
+               d.base.chi2_after);
+  for (const ResonanceCandidate& c : d.candidates) {
+    std::fprintf(out, "  %-24s chi2 %9.3g  largest error %.4f Hz  %s\n", c.effect.c_str(), c.chi2,
+                 c.fit.max_error_hz, c.significant ? "significant" : "not significant");
+  }
+  for (const ResonanceCandidate& c : d.not_fitted) {
+    std::fprintf(out, "  %-24s %s%s: %s\n", c.effect.c_str(),
+                 std::string(OutcomeName(c.outcome)).c_str(),
+                 c.round > 1 ? (" (round " + std::to_string(c.round) + ")").c_str() : "",
+                 c.note.c_str());
+  }
+  for (std::size_t i = 0; i < d.selected.size(); ++i) {
+    const ResonanceCandidate& s = d.selected[i];
+    std::fprintf(out, "selected %zu: %s (chi2 %.3g -> %.3g, needed a drop of %.3g)\n", i + 1,
+                 s.effect.c_str(), s.chi2 + s.delta_chi2, s.chi2, s.threshold);
+    PrintParams(s, out);
+  }
+  if (d.next) {
+    std::fprintf(out, "next: %s would lower chi2 by %.3g only (needs %.3g)\n",
+                 d.next->effect.c_str(), d.next->delta_chi2, d.next->threshold);
+  }
+  std::string selected;
+  for (const ResonanceCandidate& s : d.selected) {
+    selected += (selected.empty() ? "" : " + ") + s.effect;
+  }
+  std::fprintf(out, "selected: %s (%s); largest error %.4f Hz\n",
+               selected.empty() ? "none" : selected.c_str(), d.selection_end.c_str(),
+               d.Final().max_error_hz);
+
+  // Why a uniformly slower line cannot do it.
+  const Ratios measured = RatiosOf([&](Termination t) { return Measured(d, t); });
+  const Ratios uniform = RatiosOf([&](Termination t) { return Modelled(d.uniform, t); });
+  std::fprintf(out, "a uniform wave speed alone (fitted, not held): c = %.4g m/s, largest error "
+               "%.4f Hz",
+               d.uniform.estimates.empty() ? std::nan("") : d.uniform.estimates[0],
+               d.uniform.max_error_hz);
+  if (std::isfinite(measured.closed_open)) {
+    std::fprintf(out, "; closed/open %.3f (measured %.3f)", uniform.closed_open,
+                 measured.closed_open);
+  }
+  if (std::isfinite(measured.valve_closed)) {
+    std::fprintf(out, "; valve/closed choke %.3f (measured %.3f)", uniform.valve_closed,
+                 measured.valve_closed);
+  }
+  std::fprintf(out, "\n");
+  if (std::isfinite(measured.closed_open) &&
+      std::fabs(uniform.closed_open - measured.closed_open) > 0.05) {
+    std::fprintf(out,
+                 "  a uniform speed scales every resonance alike (closed c/2L, open c/4L): its "
+                 "ratio stays %.2f whatever c\n",
+                 uniform.closed_open);
+  }
+}
+
+}  // namespace
+
+int RunDiagnoseResonances(const ModelOptions& model, const ResonanceDiagnoseArgs& args) {
+  const std::string name = "diagnose";
+  auto start = model.LoadParams();
+  if (!start.ok()) return Fail(name, start.status());
+  auto simulation = model.LoadSimulationOptions();
+  if (!simulation.ok()) return Fail(name, simulation.status());
+  auto measured = ReadResonanceList(args.resonances_path);
+  if (!measured.ok()) return Fail(name, measured.status());
+
+  ResonanceDiagnoseOptions options;
+  options.hold = args.hold;
+  options.candidates = args.candidates;
+  options.max_effects = args.max_effects;
+  options.significance_level = args.significance;
+  options.fit.max_iterations = args.max_iterations;
+  options.fit.resonance.simulation = *simulation;
+  options.fit.resonance.simulated.amplitude_m = args.amplitude_m;
+  options.fit.resonance.simulated.outlet_pressure_pa =
+      units::BargToPaAbs(args.outlet_barg, start->atmospheric_pressure_pa);
+  options.fit.resonance.method = args.method == "analytic"    ? ResponseMethod::kAnalytic
+                                 : args.method == "simulated" ? ResponseMethod::kSimulated
+                                                              : ResponseMethod::kAuto;
+  std::mutex progress_lock;
+  if (!args.quiet) {
+    std::fprintf(stderr, "mpdrig diagnose: %zu measured resonances from %s\n", measured->size(),
+                 args.resonances_path.c_str());
+    options.progress = [&progress_lock](const std::string& line) {
+      std::lock_guard<std::mutex> lock(progress_lock);
+      std::fprintf(stderr, "diagnose: %s\n", line.c_str());
+    };
+  }
+  options.run_tasks = [](const std::vector<std::function<void()>>& tasks) {
+    RunOnEveryCore(tasks, /*quiet=*/true);  // options.progress says what each found
+  };
+  auto diagnosis = DiagnoseResonances(*measured, *start, options);
+  if (!diagnosis.ok()) return Fail(name, diagnosis.status().Within(args.resonances_path));
+  if (!args.json_path.empty()) {
+    const Status written = WriteText(args.json_path, DiagnosisJson(*diagnosis, args));
+    if (!written.ok()) return Fail(name, written);
+  }
+  PrintSummary(*diagnosis, args.json_path == "-" ? stderr : stdout);
+  return 0;
+}
+
+}  // namespace mpdrig::cli
