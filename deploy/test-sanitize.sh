@@ -30,9 +30,9 @@ export MPDRIG_DIAGNOSE_CASES="${MPDRIG_DIAGNOSE_CASES:-1}"
 # characteristics scheme's frequency responses run in the Release suite only (their paths are
 # those of the cases that do run here, and of the fit and characteristics tests that are not
 # excluded). MPDRIG_SANITIZE_ALL=1 runs them all.
-repeats='DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|SelectionOf|SelectionWithout|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise'
+repeats='HiddenResonanceEffects|DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|SelectionOf|SelectionWithout|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise'
 # (ctest's names of parameterised tests go on with "  # GetParam() = ...": no $ anchors)
-one_each='DiagnoseHiddenEffect.*/sensor_lag_lab |DiagnoseWithoutHiddenEffect.*/lab |SelectionOfTwoHiddenEffects.*/sensor_lag_gas_entrainment_seed1 |SimulatedVsAnalytic.*MethodOfLinesOpen |ShadowAtLabNoise.*/fast_0p8Hz '
+one_each='HiddenResonanceEffects.*/tubes_and_gas_sweep |DiagnoseHiddenEffect.*/sensor_lag_lab |DiagnoseWithoutHiddenEffect.*/lab |SelectionOfTwoHiddenEffects.*/sensor_lag_gas_entrainment_seed1 |SimulatedVsAnalytic.*MethodOfLinesOpen |ShadowAtLabNoise.*/fast_0p8Hz '
 if [[ "${MPDRIG_SANITIZE_ALL:-0}" == 1 ]]; then repeats='^$'; fi
 ctest --test-dir "$build" -j"$(nproc)" --output-on-failure --timeout 1800 \
   -LE 'container|netns|interop' -E "$repeats" "$@"

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "model/effects/effect.h"
 
@@ -48,34 +49,91 @@ double CircleArea(double diameter_m) { return 0.25 * std::numbers::pi * diameter
 // and the pipe P_p = Z_in U(0). Multiplying the first by Z_in keeps it finite where Z_in is.
 // Rigid (K -> inf) it is (9.2.5): A U(0) = -V_d (A_d - A_d2). Without clearance resistance and
 // inertance the two volumes are one capacitance (V_p + V_b)/K at the inlet, like hose_compliance.
-Complex CompartmentInletPressure(const RigParams& params, const EffectSetting& compartment,
-                                 double hose_compliance, double area, Complex s, Complex z_in) {
-  const double bulk = EffectValue(compartment, "bulk_modulus_pa");
-  const double c_above = EffectValue(compartment, "volume_above_m3") / bulk;
-  const double c_below = EffectValue(compartment, "volume_below_m3") / bulk;
-  const double inertance = EffectValue(compartment, "inertance_kg_per_m4");
-  const double bha = CircleArea(EffectValue(compartment, "bha_diameter_m"));
-  const double face_above = bha - CircleArea(params.upper_rod_diameter_m);
-  // The effect's floor for a BHA no wider than its lower rod (piston_compressibility.cc).
-  const double face_below = std::max(bha - CircleArea(params.lower_rod_diameter_m), 1e-3 * bha);
-  const double r1 = std::fabs(params.piston_friction_fd1_pa_s_per_m) / face_below;
-  const Complex v_d = s;
-  const Complex zq = s * inertance + r1;
-  if (std::abs(zq) == 0.0) {
-    const double total = c_above + c_below + hose_compliance;
-    return z_in * v_d * (face_above - face_below) / (area + s * total * z_in);
+struct Compartment {
+  Compartment(const RigParams& params, const EffectSetting& effect) {
+    const double bulk = EffectValue(effect, "bulk_modulus_pa");
+    c_above = EffectValue(effect, "volume_above_m3") / bulk;
+    c_below = EffectValue(effect, "volume_below_m3") / bulk;
+    inertance = EffectValue(effect, "inertance_kg_per_m4");
+    const double bha = CircleArea(EffectValue(effect, "bha_diameter_m"));
+    face_above = bha - CircleArea(params.upper_rod_diameter_m);
+    // The effect's floor for a BHA no wider than its lower rod (piston_compressibility.cc).
+    face_below = std::max(bha - CircleArea(params.lower_rod_diameter_m), 1e-3 * bha);
+    r1 = std::fabs(params.piston_friction_fd1_pa_s_per_m) / face_below;
   }
-  const Complex g = 1.0 / zq;
-  const Complex a11 = z_in * (s * (c_above + hose_compliance) + g) + area, a12 = -z_in * g;
-  const Complex a21 = -g, a22 = s * c_below + g;
-  const Complex b1 = z_in * v_d * face_above, b2 = -v_d * face_below;
-  return (b1 * a22 - a12 * b2) / (a11 * a22 - a12 * a21);
-}
 
-double Magnitude(const RigParams& params, const ChokeSetting& choke, double pump, double p_m,
-                 double f) {
-  return std::abs(AnalyticBhpWithEffects(params, choke, pump, p_m, f));
-}
+  // P(0) per piston position.
+  Complex InletPressure(double hose_compliance, double area, Complex s, Complex z_in) const {
+    const Complex v_d = s;
+    const Complex zq = s * inertance + r1;
+    if (std::abs(zq) == 0.0) {
+      const double total = c_above + c_below + hose_compliance;
+      return z_in * v_d * (face_above - face_below) / (area + s * total * z_in);
+    }
+    const Complex g = 1.0 / zq;
+    const Complex a11 = z_in * (s * (c_above + hose_compliance) + g) + area, a12 = -z_in * g;
+    const Complex a21 = -g, a22 = s * c_below + g;
+    const Complex b1 = z_in * v_d * face_above, b2 = -v_d * face_below;
+    return (b1 * a22 - a12 * b2) / (a11 * a22 - a12 * a21);
+  }
+
+  double c_above, c_below, inertance, face_above, face_below, r1;
+};
+
+// The line as the analytic response sees it, every effect's values resolved once: a frequency
+// then costs only the complex arithmetic of (9.2.13) (a resonance takes a few hundred).
+class AnalyticLine {
+ public:
+  AnalyticLine(const RigParams& params, const ChokeSetting& choke, double pump_flow_m3ps,
+               double mean_pressure_pa)
+      : c_(params.wave_speed_mps),
+        rho_(params.density_kgpm3),
+        length_(params.pipe_length_m),
+        area_(params.PipeAreaM2()),
+        a2_(params.PistonDisplacementAreaM2() / params.PipeAreaM2()),
+        f1_(params.friction_f1_per_s),
+        k_choke_(LinearizedOutletImpedance(params, choke, pump_flow_m3ps)) {
+    for (const EffectSetting& effect : params.effects) {
+      if (effect.name == "piston_compressibility") {
+        compartment_.emplace(params, effect);
+      } else if (effect.name == "topside_compliance") {
+        outlet_compliance_ += EffectValue(effect, "compliance_m3_per_pa");
+      } else if (effect.name == "hose_compliance") {
+        inlet_compliance_ += EffectValue(effect, "compliance_m3_per_pa");
+      } else if (effect.name == "gas_entrainment") {
+        c_ = GasWaveSpeed(params, effect, mean_pressure_pa);
+      }
+    }
+  }
+
+  // (9.2.13) times s with the effects: p(0) per piston position [Pa/m].
+  Complex At(double freq_hz) const {
+    const Complex s(0.0, kTwoPi * freq_hz);
+    const Complex kappa = std::sqrt(s * (s + f1_)) / c_;  // (9.2.11)
+    const Complex z = rho_ * c_ * c_ * kappa / s;
+    const Complex sh = std::sinh(kappa * length_), ch = std::cosh(kappa * length_);
+    // Outlet admittance U(L)/P(L) = 1/k_c + s C / A: the choke and the tubes side by side.
+    const Complex admittance = (std::isinf(k_choke_) ? Complex(0.0) : Complex(1.0 / k_choke_)) +
+                               s * outlet_compliance_ / area_;
+    Complex z_in;  // P(0) / U(0)
+    if (k_choke_ == 0.0) {
+      z_in = z * sh / ch;  // P(L) = 0: the open choke holds the outlet, the tubes see nothing
+    } else {
+      // (9.2.13) with k = 1/admittance, written so that a closed end (admittance 0) is exact.
+      z_in = z * (z * admittance * sh + ch) / (z * admittance * ch + sh);
+    }
+    if (compartment_) return compartment_->InletPressure(inlet_compliance_, area_, s, z_in);
+    // Inlet: A U(0) = Q_0 - s C_h P(0), Q_0/A = -A_2 V_d (9.2.5), V_d = s X.
+    const Complex p0_per_vd = -a2_ * z_in / (1.0 + s * inlet_compliance_ * z_in / area_);
+    return p0_per_vd * s;
+  }
+  double Magnitude(double freq_hz) const { return std::abs(At(freq_hz)); }
+
+ private:
+  double c_, rho_, length_, area_, a2_, f1_, k_choke_;
+  double outlet_compliance_ = 0.0, inlet_compliance_ = 0.0;
+  std::optional<Compartment> compartment_;
+};
 
 }  // namespace
 
@@ -113,52 +171,16 @@ double MeanLinePressurePa(const RigParams& params, double outlet_pressure_pa) {
 
 Complex AnalyticBhpWithEffects(const RigParams& params, const ChokeSetting& choke,
                                double pump_flow_m3ps, double mean_pressure_pa, double freq_hz) {
-  double outlet_compliance = 0.0, inlet_compliance = 0.0;
-  double c = params.wave_speed_mps;
-  const EffectSetting* compartment = nullptr;
-  for (const EffectSetting& effect : params.effects) {
-    if (effect.name == "piston_compressibility") {
-      compartment = &effect;
-    } else if (effect.name == "topside_compliance") {
-      outlet_compliance += EffectValue(effect, "compliance_m3_per_pa");
-    } else if (effect.name == "hose_compliance") {
-      inlet_compliance += EffectValue(effect, "compliance_m3_per_pa");
-    } else if (effect.name == "gas_entrainment") {
-      c = GasWaveSpeed(params, effect, mean_pressure_pa);
-    }
-  }
-  const double rho = params.density_kgpm3, length = params.pipe_length_m;
-  const double area = params.PipeAreaM2();
-  const double a2 = params.PistonDisplacementAreaM2() / area;
-  const Complex s(0.0, kTwoPi * freq_hz);
-  const Complex kappa = std::sqrt(s * (s + params.friction_f1_per_s)) / c;  // (9.2.11)
-  const Complex z = rho * c * c * kappa / s;
-  const Complex sh = std::sinh(kappa * length), ch = std::cosh(kappa * length);
-  // Outlet admittance U(L)/P(L) = 1/k_c + s C / A: the choke and the tubes side by side.
-  const double k_choke = LinearizedOutletImpedance(params, choke, pump_flow_m3ps);
-  const Complex admittance =
-      (std::isinf(k_choke) ? Complex(0.0) : Complex(1.0 / k_choke)) + s * outlet_compliance / area;
-  Complex z_in;  // P(0) / U(0)
-  if (k_choke == 0.0) {
-    z_in = z * sh / ch;  // P(L) = 0: the open choke holds the outlet, the tubes see nothing
-  } else {
-    // (9.2.13) with k = 1/admittance, written so that a closed end (admittance 0) is exact.
-    z_in = z * (z * admittance * sh + ch) / (z * admittance * ch + sh);
-  }
-  if (compartment != nullptr) {
-    return CompartmentInletPressure(params, *compartment, inlet_compliance, area, s, z_in);
-  }
-  // Inlet: A U(0) = Q_0 - s C_h P(0), Q_0/A = -A_2 V_d (9.2.5), V_d = s X.
-  const Complex p0_per_vd = -a2 * z_in / (1.0 + s * inlet_compliance * z_in / area);
-  return p0_per_vd * s;
+  return AnalyticLine(params, choke, pump_flow_m3ps, mean_pressure_pa).At(freq_hz);
 }
 
 std::vector<FrequencyPoint> AnalyticFrequencyResponseWithEffects(
     const RigParams& params, const ChokeSetting& choke, double pump_flow_m3ps,
     double mean_pressure_pa, const std::vector<double>& freqs_hz) {
+  const AnalyticLine line(params, choke, pump_flow_m3ps, mean_pressure_pa);
   std::vector<FrequencyPoint> points;
   for (double f : freqs_hz) {
-    const Complex h = AnalyticBhpWithEffects(params, choke, pump_flow_m3ps, mean_pressure_pa, f);
+    const Complex h = line.At(f);
     points.push_back({f, std::abs(h), std::arg(h) * 180.0 / std::numbers::pi});
   }
   UnwrapPhase(&points);
@@ -168,33 +190,34 @@ std::vector<FrequencyPoint> AnalyticFrequencyResponseWithEffects(
 Result<Resonance> FirstAnalyticResonance(const RigParams& params, const ChokeSetting& choke,
                                          double pump_flow_m3ps, double mean_pressure_pa,
                                          const ResonanceOptions& options) {
+  const AnalyticLine line(params, choke, pump_flow_m3ps, mean_pressure_pa);
   const double step = options.scan_step_hz;
   double f_prev = options.fmin_hz;
-  double m_prev = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, f_prev);
+  double m_prev = line.Magnitude(f_prev);
   double f = f_prev + step;
-  double m = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, f);
+  double m = line.Magnitude(f);
   for (; f + step <= options.fmax_hz; f += step) {
-    const double m_next = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, f + step);
+    const double m_next = line.Magnitude(f + step);
     if (m > m_prev && m >= m_next) {
       // Golden section on [f - step, f + step], where |H| is unimodal.
       double a = f - step, b = f + step;
       const double g = 0.5 * (std::sqrt(5.0) - 1.0);
       double x1 = b - g * (b - a), x2 = a + g * (b - a);
-      double m1 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x1);
-      double m2 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x2);
+      double m1 = line.Magnitude(x1);
+      double m2 = line.Magnitude(x2);
       while (b - a > 1e-9) {
         if (m1 < m2) {
           a = x1, x1 = x2, m1 = m2;
           x2 = a + g * (b - a);
-          m2 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x2);
+          m2 = line.Magnitude(x2);
         } else {
           b = x2, x2 = x1, m2 = m1;
           x1 = b - g * (b - a);
-          m1 = Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, x1);
+          m1 = line.Magnitude(x1);
         }
       }
       const double peak = 0.5 * (a + b);
-      return Resonance{peak, Magnitude(params, choke, pump_flow_m3ps, mean_pressure_pa, peak),
+      return Resonance{peak, line.Magnitude(peak),
                        ResponseMethod::kAnalytic, 0};
     }
     m_prev = m, m = m_next;

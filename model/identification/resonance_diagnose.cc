@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 
 #include "model/effects/effect.h"
@@ -178,7 +179,12 @@ class RoundRunner {
       MPDRIG_CHECK(parameter.ok());
       all.push_back(*parameter);
     }
-    auto fit = FitResonances(measured_, with, all, options_.fit);
+    ResonanceFitOptions fit_options = options_.fit;
+    if (!AnalyticRepresents(effect)) {
+      fit_options.max_iterations =
+          std::min(fit_options.max_iterations, options_.simulated_max_iterations);
+    }
+    auto fit = FitResonances(measured_, with, all, fit_options);
     // From the effect's default the fit may end in a valley worse than the model without it;
     // from the weak end of its plausible range it starts next to that model.
     if (!fit.ok() || fit->chi2_after > model.chi2_after) {
@@ -188,7 +194,7 @@ class RoundRunner {
             SetParamValue(&weak, effect + "." + std::string(p->key), PlausibleRange(*p).first);
         MPDRIG_CHECK(set.ok());
       }
-      auto again = FitResonances(measured_, weak, all, options_.fit);
+      auto again = FitResonances(measured_, weak, all, fit_options);
       if (again.ok() && (!fit.ok() || again->chi2_after < fit->chi2_after)) fit = std::move(again);
     }
     if (!fit.ok()) return Failed(std::move(candidate), fit.status().message());
@@ -223,6 +229,128 @@ class RoundRunner {
   // Per candidate task; summed by the caller after the round (tasks may run on threads).
   mutable int computed_ = 0;
 };
+
+// `model` without the effect `name` (its setting and its keys), refitted from the others'
+// estimates.
+Result<ResonanceFitResult> FitWithout(const std::vector<MeasuredResonance>& measured,
+                                      const ResonanceFitOptions& options,
+                                      const ResonanceFitResult& model, const std::string& name) {
+  RigParams params = model.params;
+  std::erase_if(params.effects, [&](const EffectSetting& e) { return e.name == name; });
+  std::vector<FitParameter> keys;
+  for (std::size_t j = 0; j < model.keys.size(); ++j) {
+    if (model.keys[j].rfind(name + ".", 0) == 0) continue;
+    keys.push_back({model.keys[j], model.lower[j], model.upper[j]});
+  }
+  return FitResonances(measured, params, keys, options);
+}
+
+ResonanceFitOptions CappedFor(const RigParams& params, const ResonanceDiagnoseOptions& options) {
+  ResonanceFitOptions fit = options.fit;
+  if (!EffectsOutsideAnalytic(params).empty()) {
+    fit.max_iterations = std::min(fit.max_iterations, options.simulated_max_iterations);
+  }
+  return fit;
+}
+
+// The backward step after an addition (the header): takes out the earlier effect whose removal
+// costs least, if that is below its threshold, and refits the selection's steps without it.
+Result<bool> BackwardStep(const std::vector<MeasuredResonance>& measured,
+                          const ResonanceDiagnoseOptions& options,
+                          const std::vector<std::string>& base_keys, int round,
+                          ResonanceDiagnosis* d, ResonanceFitResult* model) {
+  if (d->selected.size() < 2) return false;
+  std::optional<std::size_t> weakest;
+  RemovedEffect removal;
+  ResonanceFitResult without_weakest;
+  const ResonanceFitOptions fit_options = CappedFor(model->params, options);
+  for (std::size_t i = 0; i + 1 < d->selected.size(); ++i) {
+    const ResonanceCandidate& earlier = d->selected[i];
+    auto without = FitWithout(measured, fit_options, *model, earlier.effect);
+    if (!without.ok()) continue;  // it cannot be taken out: keep it
+    d->resonances_computed += without->evaluations;
+    const double delta = without->chi2_after - model->chi2_after;
+    const double threshold =
+        ChiSquareQuantile(std::max(1, earlier.new_parameters), options.significance_level);
+    if (delta < threshold && (!weakest || delta < removal.delta_chi2)) {
+      weakest = i;
+      removal = {earlier.effect, round, delta, threshold};
+      without_weakest = std::move(*without);
+    }
+  }
+  if (!weakest) return false;
+  d->removed.push_back(removal);
+  d->selected.erase(d->selected.begin() + static_cast<std::ptrdiff_t>(*weakest));
+  // The steps again without it: each the base keys and the effects up to it, started from the
+  // final model's estimates.
+  RigParams params = without_weakest.params;
+  params.effects.clear();
+  std::vector<std::string> keys = base_keys;
+  double chi2_before = d->base.chi2_after;
+  for (ResonanceCandidate& step : d->selected) {
+    for (const EffectSetting& e : without_weakest.params.effects) {
+      if (e.name == step.effect) params.effects.push_back(e);
+    }
+    for (const std::string& key : without_weakest.keys) {
+      if (key.rfind(step.effect + ".", 0) == 0) keys.push_back(key);
+    }
+    std::vector<FitParameter> parameters;
+    for (const std::string& key : keys) {
+      const auto at = std::find(without_weakest.keys.begin(), without_weakest.keys.end(), key);
+      MPDRIG_CHECK(at != without_weakest.keys.end());
+      const std::size_t j = static_cast<std::size_t>(at - without_weakest.keys.begin());
+      parameters.push_back({key, without_weakest.lower[j], without_weakest.upper[j]});
+    }
+    auto fit = FitResonances(measured, params, parameters, CappedFor(params, options));
+    if (!fit.ok()) return fit.status().Within("refitting " + step.effect);
+    d->resonances_computed += fit->evaluations;
+    step.fit = std::move(*fit);
+    step.chi2 = step.fit.chi2_after;
+    step.delta_chi2 = chi2_before - step.chi2;
+    step.significant = step.delta_chi2 > step.threshold;
+    step.params = EffectEstimates(step.fit);
+    chi2_before = step.chi2;
+  }
+  *model = d->selected.back().fit;
+  return true;
+}
+
+// For each selected effect, the round-1 candidates that could take its place (the header).
+void AddAlternatives(const std::vector<MeasuredResonance>& measured,
+                     const ResonanceDiagnoseOptions& options, ResonanceDiagnosis* d) {
+  if (d->selected.empty()) return;
+  const ResonanceFitResult& final_model = d->Final();
+  for (ResonanceCandidate& chosen : d->selected) {
+    for (const ResonanceCandidate& other : d->candidates) {
+      const bool in_model = std::any_of(
+          d->selected.begin(), d->selected.end(),
+          [&](const ResonanceCandidate& s) { return s.effect == other.effect; });
+      if (in_model || other.effect == chosen.effect) continue;
+      auto without = FitWithout(measured, options.fit, final_model, chosen.effect);
+      if (!without.ok()) continue;
+      RigParams params = without->params;
+      if (!ApplyEffectSpec(&params, other.effect).ok() || !ValidateEffects(params).ok()) continue;
+      std::vector<FitParameter> keys;
+      for (std::size_t j = 0; j < without->keys.size(); ++j) {
+        keys.push_back({without->keys[j], without->lower[j], without->upper[j]});
+      }
+      for (const EffectParamInfo* p : FittedParams(*FindEffectInfo(other.effect))) {
+        auto parameter = DefaultFitParameter(other.effect + "." + std::string(p->key));
+        MPDRIG_CHECK(parameter.ok());
+        keys.push_back(*parameter);
+      }
+      auto swapped = FitResonances(measured, params, keys, CappedFor(params, options));
+      if (!swapped.ok()) continue;
+      d->resonances_computed += without->evaluations + swapped->evaluations;
+      const double threshold =
+          ChiSquareQuantile(std::max(1, other.new_parameters), options.significance_level);
+      if (swapped->chi2_after - final_model.chi2_after < threshold) {
+        chosen.not_excluded.push_back(
+            {other.effect, swapped->chi2_after, swapped->max_error_hz});
+      }
+    }
+  }
+}
 
 }  // namespace
 
@@ -368,16 +496,23 @@ Result<ResonanceDiagnosis> DiagnoseResonances(const std::vector<MeasuredResonanc
                         std::to_string(options.significance_level).substr(0, 4) + ")";
       break;
     }
+    for (std::size_t i = 1; i < fitted.size(); ++i) {
+      if (fitted[i].chi2 - fitted.front().chi2 <= kEquivalentChi2) {
+        fitted.front().equivalent.push_back(fitted[i].effect);
+      }
+    }
     d.selected.push_back(std::move(fitted.front()));
-    const ResonanceCandidate& added = d.selected.back();
-    std::erase(pool, added.effect);
+    std::erase(pool, d.selected.back().effect);
+    model = d.selected.back().fit;
+    auto removed = BackwardStep(measured, options, base_keys, round, &d, &model);
+    if (!removed.ok()) return removed.status();
     // The next round refits every key of this model, the new effect's from their estimates.
     model_keys.clear();
-    for (std::size_t j = 0; j < added.fit.keys.size(); ++j) {
-      model_keys.push_back({added.fit.keys[j], added.fit.lower[j], added.fit.upper[j]});
+    for (std::size_t j = 0; j < model.keys.size(); ++j) {
+      model_keys.push_back({model.keys[j], model.lower[j], model.upper[j]});
     }
-    model = added.fit;
   }
+  AddAlternatives(measured, options, &d);
   return d;
 }
 

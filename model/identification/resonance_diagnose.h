@@ -11,7 +11,11 @@
 // Delta chi2 = chi2_before - chi2_after, is chi-square distributed with k degrees of freedom
 // (k = the candidate's new parameters) when the candidate explains nothing (Wilks 1938; e.g.
 // Press et al., Numerical Recipes, 3rd ed., 15.6), so it is significant when Delta chi2 exceeds
-// the chi-square quantile at 1 - significance_level. Selection stops when no candidate is
+// the chi-square quantile at 1 - significance_level. After each addition the effects selected
+// before it are tested the other way (stepwise selection, Efroymson 1960): one whose removal
+// raises chi2 by less than its threshold is taken out and not tried again (forward selection
+// alone takes a uniform effect such as free gas first, and a pair of local ones may then explain
+// everything without it). Selection stops when no candidate is
 // significant, when the model already agrees with the measurements (chi2 no larger than its
 // degrees of freedom' quantile at the same level), when a further effect would leave more
 // parameters than measured resonances, or at max_effects.
@@ -48,6 +52,9 @@ struct ResonanceDiagnoseOptions {
   std::vector<std::string> candidates;  // effect names; empty: the whole catalogue
   double significance_level = 0.01;     // of the Delta chi2 test
   int max_effects = 3;
+  // Solver iterations for a candidate that needs the simulated response (each iteration costs
+  // about 3 x 3 simulated resonances, ~3 s): the fit of one to three peaks converges in a few.
+  int simulated_max_iterations = 6;
   // The screen's threshold, in units of the smallest measured uncertainty.
   double screen_fraction = 0.25;
   // Runs independent tasks (the candidates of a round); default: one after the other.
@@ -80,6 +87,30 @@ struct ResonanceCandidate {
   double delta_chi2 = 0.0;   // the round's chi2 before it minus chi2
   double threshold = 0.0;    // the chi-square quantile Delta chi2 must exceed
   bool significant = false;
+  // Candidates of the same round whose chi2 is within kEquivalentChi2 of this one's: effects the
+  // resonances cannot tell apart from it (e.g. two compliances at the pipe inlet).
+  std::vector<std::string> equivalent;
+  // For a selected effect, once the selection has ended: the other fitted candidates that, put in
+  // its place in the final model and refitted, leave chi2 less than the test's threshold above
+  // the final model's: the readings do not exclude them (a stricter reading would).
+  struct Alternative {
+    std::string effect;
+    double chi2 = 0.0;
+    double max_error_hz = 0.0;
+  };
+  std::vector<Alternative> not_excluded;
+};
+
+// Delta chi2 = 1: the one-standard-deviation band of a least-squares fit's likelihood.
+inline constexpr double kEquivalentChi2 = 1.0;
+
+// An effect taken out again after a later one was added (the backward step of stepwise
+// selection): without it chi2 rose by less than the test's threshold.
+struct RemovedEffect {
+  std::string effect;
+  int round = 0;            // the round after which it was removed
+  double delta_chi2 = 0.0;  // chi2 without it minus chi2 with it
+  double threshold = 0.0;
 };
 std::string_view OutcomeName(ResonanceCandidate::Outcome outcome);
 
@@ -89,7 +120,9 @@ struct ResonanceDiagnosis {
   ResonanceFitResult base;     // the base keys fitted, no effect (beyond the start's)
   ResonanceFitResult uniform;  // the wave speed alone fitted, no effect (even if held)
   std::vector<ResonanceCandidate> candidates;  // round 1, best (lowest chi2) first
-  std::vector<ResonanceCandidate> selected;    // in the order added
+  std::vector<ResonanceCandidate> selected;    // the final model's effects, in the order added;
+                                               // each fit cumulative over those before it
+  std::vector<RemovedEffect> removed;
   std::optional<ResonanceCandidate> next;      // the best of the last round, not selected
   std::vector<ResonanceCandidate> not_fitted;  // failed, screened out or unidentifiable
   std::string selection_end;                   // why the selection stopped

@@ -64,7 +64,17 @@ std::string JsonCandidate(const ResonanceCandidate& c) {
       << ", \"significant\": " << (c.significant ? "true" : "false")
       << ", \"max_error_hz\": " << JsonNumber(c.fit.max_error_hz)
       << ", \"model_hz\": " << JsonModelHz(c.fit) << ", \"fitted\": " << JsonFitParams(c.fit)
-      << ", \"params\": [";
+      << ", \"equivalent\": [";
+  for (std::size_t i = 0; i < c.equivalent.size(); ++i) {
+    out << (i ? ", " : "") << JsonString(c.equivalent[i]);
+  }
+  out << "], \"not_excluded\": [";
+  for (std::size_t i = 0; i < c.not_excluded.size(); ++i) {
+    out << (i ? ", " : "") << "{\"effect\": " << JsonString(c.not_excluded[i].effect)
+        << ", \"chi2\": " << JsonNumber(c.not_excluded[i].chi2)
+        << ", \"max_error_hz\": " << JsonNumber(c.not_excluded[i].max_error_hz) << "}";
+  }
+  out << "], \"params\": [";
   for (std::size_t j = 0; j < c.params.size(); ++j) {
     const ResonanceParamEstimate& p = c.params[j];
     out << (j ? ", " : "") << "{\"key\": " << JsonString(p.key)
@@ -137,7 +147,14 @@ std::string DiagnosisJson(const ResonanceDiagnosis& d, const ResonanceDiagnoseAr
   for (std::size_t i = 0; i < d.selected.size(); ++i) {
     out << (i ? "," : "") << "\n    " << JsonCandidate(d.selected[i]);
   }
-  out << "\n  ],\n  \"next\": " << (d.next ? JsonCandidate(*d.next) : "null") << ",\n";
+  out << "\n  ],\n  \"removed\": [";
+  for (std::size_t i = 0; i < d.removed.size(); ++i) {
+    const RemovedEffect& r = d.removed[i];
+    out << (i ? ", " : "") << "{\"effect\": " << JsonString(r.effect) << ", \"round\": " << r.round
+        << ", \"delta_chi2\": " << JsonNumber(r.delta_chi2)
+        << ", \"threshold\": " << JsonNumber(r.threshold) << "}";
+  }
+  out << "],\n  \"next\": " << (d.next ? JsonCandidate(*d.next) : "null") << ",\n";
   out << "  \"not_fitted\": [";
   for (std::size_t i = 0; i < d.not_fitted.size(); ++i) {
     out << (i ? "," : "") << "\n    " << JsonCandidate(d.not_fitted[i]);
@@ -199,9 +216,23 @@ void PrintSummary(const ResonanceDiagnosis& d, FILE* out) {
   }
   for (std::size_t i = 0; i < d.selected.size(); ++i) {
     const ResonanceCandidate& s = d.selected[i];
-    std::fprintf(out, "selected %zu: %s (chi2 %.3g -> %.3g, needed a drop of %.3g)\n", i + 1,
-                 s.effect.c_str(), s.chi2 + s.delta_chi2, s.chi2, s.threshold);
+    std::string equivalent;
+    for (const std::string& e : s.equivalent) equivalent += (equivalent.empty() ? "" : ", ") + e;
+    std::fprintf(out, "selected %zu: %s (chi2 %.3g -> %.3g, needed a drop of %.3g)%s%s\n", i + 1,
+                 s.effect.c_str(), s.chi2 + s.delta_chi2, s.chi2, s.threshold,
+                 equivalent.empty() ? "" : "; as good: ", equivalent.c_str());
     PrintParams(s, out);
+    for (const ResonanceCandidate::Alternative& a : s.not_excluded) {
+      std::fprintf(out,
+                   "      not excluded in its place: %s (chi2 %.3g against %.3g, largest error "
+                   "%.4f Hz)\n",
+                   a.effect.c_str(), a.chi2, d.Final().chi2_after, a.max_error_hz);
+    }
+  }
+  for (const RemovedEffect& r : d.removed) {
+    std::fprintf(out,
+                 "removed after round %d: %s (without it chi2 rises by %.3g only, under %.3g)\n",
+                 r.round, r.effect.c_str(), r.delta_chi2, r.threshold);
   }
   if (d.next) {
     std::fprintf(out, "next: %s would lower chi2 by %.3g only (needs %.3g)\n",
