@@ -16,15 +16,16 @@
 // Two replays of a log, on purpose. Simulate on SignalsFromColumns is the reference (synthetic
 // logs, the tests): the whole log in memory as time functions, which SimulateEach may ask at any
 // time. RowPipeline is its streaming twin (compare, fit, diagnose, the shadow, and `mpdrig
-// simulate --inputs` through LogFileReplay, log_file_replay.h). Neither can be written through the other: the reference lies in model/sim, below this
-// folder in model/'s layer order, and a stream of rows cannot answer a time function; the other
-// way, time functions hold every input column whole (at least 40 bytes a row: 144 MB for an hour
-// at 1 kHz, where the stream holds a few thousand rows). What they can share they share (the
-// smoothing, the reconstruction, InitialInputs, InterpolateLinear, the piston velocity's window
-// PistonVelocityAtStepEnd); each still repeats by hand the bracket search between samples.
-// tests/model/analysis/compare_test.cc holds them together: ReplayGivesExactlyWhatSimulateGives
-// (the same doubles) and ReplayStartsFromTheMeanOfTheFirstInputs (the same start). A change to one
-// is a change to both.
+// simulate --inputs` through LogFileReplay, log_file_replay.h). Neither can be written through the
+// other: the reference lies in model/sim, below this folder in model/'s layer order, and a stream
+// of rows cannot answer a time function; the other way, time functions hold every input column
+// whole (at least 40 bytes a row: 144 MB for an hour at 1 kHz, where the stream holds a few
+// thousand rows). What they can share they share (the smoothing, the reconstruction, InitialInputs,
+// InterpolateLinear, the piston velocity's window PistonVelocityAtStepEnd); each still repeats by
+// hand the bracket search between samples. tests/model/analysis/compare_test.cc holds them
+// together: ReplayGivesExactlyWhatSimulateGives (the same doubles) and
+// ReplayStartsFromTheMeanOfTheFirstInputs (the same start), and log_file_replay_test.cc every
+// channel of simulate --inputs. A change to one is a change to both.
 #pragma once
 
 #include <algorithm>
