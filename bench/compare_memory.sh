@@ -4,6 +4,7 @@
 #
 #   bash bench/compare_memory.sh                     # 1 h at 1 kHz, all 16 compared channels
 #   DURATION_S=600 bash bench/compare_memory.sh      # a shorter log, to see that memory is flat
+#   COMMAND=simulate bash bench/compare_memory.sh    # `mpdrig simulate --inputs LOG` instead
 #
 # The log is made by `mpdrig simulate` (a 0.05 m, 0.2 Hz piston sine, choke 31 deg, pump 5 L/min;
 # every lab channel, ~1.2 GB for an hour at 1 kHz) and kept for the next run.
@@ -13,6 +14,8 @@
 #   DURATION_S  log length in seconds (default 3600)
 #   RATE_HZ     sample rate (default 1000)
 #   WORK_DIR    where the log and the outputs go (default: /tmp/mpdrig_compare_memory)
+#   COMMAND     compare (default) or simulate (the log's inputs replayed into a log of every
+#               channel, which streams the same way)
 set -euo pipefail
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -39,9 +42,22 @@ fi
 echo "== log: $(wc -c <"${log}") bytes, $(grep -vc '^#' "${log}") lines (header included)"
 echo "== machine: $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
 
-/usr/bin/time -v "${mpdrig}" compare "${log}" --json "${work}/compare.json" \
-  --report "${work}/compare.html" 2>"${work}/time.txt" | tee "${work}/stdout.txt"
-grep -E '^mpdrig compare: (read|replay) +100%' "${work}/time.txt" || true
+command="${COMMAND:-compare}"
+case "${command}" in
+  compare)
+    /usr/bin/time -v "${mpdrig}" compare "${log}" --json "${work}/compare.json" \
+      --report "${work}/compare.html" 2>"${work}/time.txt" | tee "${work}/stdout.txt"
+    grep -E '^mpdrig compare: (read|replay) +100%' "${work}/time.txt" || true
+    ;;
+  simulate)
+    /usr/bin/time -v "${mpdrig}" simulate --inputs "${log}" --out "${work}/replay.csv" \
+      2>"${work}/time.txt" | tee "${work}/stdout.txt"
+    ;;
+  *)
+    echo "error: COMMAND=${command}: compare or simulate" >&2
+    exit 1
+    ;;
+esac
 rss_kb="$(sed -n 's/^\s*Maximum resident set size (kbytes): //p' "${work}/time.txt")"
 wall="$(sed -n 's/^\s*Elapsed (wall clock) time (h:mm:ss or m:ss): //p' "${work}/time.txt")"
 cpu_user="$(sed -n 's/^\s*User time (seconds): //p' "${work}/time.txt")"

@@ -3,6 +3,9 @@
 // (deleting the writer unregisters every one of those instances at once). bench/unknown_id_flood.sh
 // reads the service's memory while the writer lives and its longest stall after it has gone.
 //   mpdrig_unknown_id_flood --domain 79 --count 100000 --hold 3
+// With --id-bytes N each id is padded to N bytes (issue 23: ten 10 MB ids cost a 1 kHz service 322
+// lost periods): what a huge key costs the service before it can refuse it.
+//   mpdrig_unknown_id_flood --domain 79 --count 10 --id-bytes 10000000
 #include <cstdio>
 #include <string>
 
@@ -18,6 +21,7 @@ int main(int argc, char** argv) {
   double hold_s = 3.0;
   std::string prefix = "stranger-";
   bool dispose = false;
+  long id_bytes = 0;
   app.add_option("--domain", domain, "DDS domain id")->capture_default_str();
   app.add_option("--count", count, "distinct unknown rig ids")->capture_default_str();
   app.add_option("--hold", hold_s, "seconds to keep the writer after the last write")
@@ -27,6 +31,10 @@ int main(int argc, char** argv) {
   app.add_flag("--dispose", dispose,
                "dispose each id (a key-only message, which topic filters do not see) instead of "
                "writing a command for it");
+  app.add_option("--id-bytes", id_bytes,
+                 "pad each id with 'x' to this many bytes (0: prefix + number only)")
+      ->check(CLI::Range(0L, 1L << 30))
+      ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   using namespace mpdrig;
   auto fail = [](const Status& s) {
@@ -54,6 +62,7 @@ int main(int argc, char** argv) {
   std::string id;
   for (long i = 0; i < count; ++i) {
     id = prefix + std::to_string(i);
+    if (static_cast<long>(id.size()) < id_bytes) id.resize(static_cast<std::size_t>(id_bytes), 'x');
     mpdrig_PumpCommand command{id.data(), 5.0};
     const Status written = dispose
                                ? dds::Check(dds_dispose(writer->handle(), &command), "dds_dispose")

@@ -8,10 +8,11 @@
 #   bash bench/unknown_id_flood.sh
 #   COUNT=200000 bash bench/unknown_id_flood.sh
 #   DISPOSE=1 bash bench/unknown_id_flood.sh
+#   COUNT=10 ID_BYTES=10000000 bash bench/unknown_id_flood.sh   # ten 10 MB ids
 #
 # DISPOSE=1: the ids are disposed (key-only messages, which the topic filters do not see).
 # Environment: BUILD_DIR (default <repo>/build, with -DMPDRIG_BUILD_BENCHMARKS=ON), DOMAIN
-# (default 79), COUNT, HOLD_S (default 3), RATE_HZ.
+# (default 79), COUNT, HOLD_S (default 3), RATE_HZ, ID_BYTES (pad each id to this many bytes).
 set -euo pipefail
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${BUILD_DIR:-$repo/build}"
@@ -35,7 +36,8 @@ rss_mb() { awk '/^VmRSS/ { printf "%.1f", $2 / 1024 }' "/proc/$1/status"; }
 serve_pid=$!
 sleep 2
 echo "service RSS before:            $(rss_mb "$serve_pid") MB"
-"$flood" --domain "$domain" --count "$count" --hold "$hold" ${DISPOSE:+--dispose} 2>"$work/flood.txt" &
+"$flood" --domain "$domain" --count "$count" --hold "$hold" --id-bytes "${ID_BYTES:-0}" \
+  ${DISPOSE:+--dispose} 2>"$work/flood.txt" &
 flood_pid=$!
 until grep -qE "written|disposed" "$work/flood.txt" 2>/dev/null; do
   kill -0 "$flood_pid" 2>/dev/null || break

@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "model/analysis/compare_accumulator.h"
+#include "model/analysis/log_file_replay.h"
 #include "model/analysis/log_stream.h"
 
 namespace mpdrig {
@@ -124,31 +125,6 @@ Result<FileScan> ScanFile(const std::string& path, const CompareOptions& options
   return scan;
 }
 
-// The replay's start (ChooseWarmup) and input levels (EstimateInputLevels, into `plan` and the
-// warm-up), decided on the file's first rows in memory, as PrepareLogReplay decides them on a
-// whole log in memory; `channels` as the second pass's source.
-Status PrepareStreamedReplay(const FileScan& scan, const std::vector<SourceChannel>& channels,
-                             const std::string& path, const RigParams& params,
-                             const SimulationOptions& sim_options, const CompareOptions& options,
-                             ReplayOptions* replay, std::optional<InputReconstruction>* plan) {
-  const bool estimate_levels = plan->has_value() && options.estimate_levels;
-  if (!options.choose_warmup && !estimate_levels) return Status::Ok();
-  auto head = scan.planner.HeadLog(channels, path, scan.atmospheric_pressure_pa);
-  if (!head.ok()) return head.status();
-  if (options.choose_warmup) {
-    auto warmup = ChooseWarmup(*head, params, sim_options, *replay);
-    if (!warmup.ok()) return warmup.status();
-    replay->warmup = *warmup;
-  }
-  if (estimate_levels) {
-    auto levels = EstimateInputLevels(*head, params, sim_options, *replay);
-    if (!levels.ok()) return levels.status();
-    (*plan)->levels = *levels;
-    ApplyInputLevels(*levels, replay);
-  }
-  return Status::Ok();
-}
-
 // Pass 2: the file's rows again, the model replayed in lock step, into the metrics. A file whose
 // rows differ in number or reach from pass 1's is refused.
 Result<Comparison> ReplayAndAccumulate(LogRowSource* source, const std::string& path,
@@ -205,8 +181,10 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
   replay.reconstruct_inputs = options.reconstruct_inputs;
   replay.piston_smoothing_s = options.piston_smoothing_s;
   replay.estimate_levels = options.estimate_levels;
-  MPDRIG_RETURN_IF_ERROR(PrepareStreamedReplay(*scan, source->channels(), path, params, sim_options,
-                                               options, &replay, &plan));
+  replay.choose_warmup = options.choose_warmup;
+  MPDRIG_RETURN_IF_ERROR(PrepareStreamedReplay(scan->planner, source->channels(), path,
+                                               scan->atmospheric_pressure_pa, params, sim_options,
+                                               &replay, &plan));
   if (plan) source = std::make_unique<ReconstructingRowSource>(std::move(source), *plan);
   auto result = ReplayAndAccumulate(source.get(), path, scan->summary, params, sim_options, options,
                                     replay, progress);

@@ -152,7 +152,7 @@ Result<bool> MemoryRowSource::Next(LogRow* row) {
 // ---- Input reconstruction --------------------------------------------------------------------
 
 void ReconstructionPlanner::Add(const LogRow& row) {
-  if (head_.time_s.size() >= kReconstructionPlanSamples) return;
+  if (head_.time_s.size() >= kReconstructionPlanSamples + kPlannerMarginSamples) return;
   head_.time_s.push_back(row.time_s);
   head_.piston_position_m.push_back(row.piston_position_m);
   head_.choke_opening_frac.push_back(row.choke_opening_frac);

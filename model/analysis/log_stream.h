@@ -13,18 +13,19 @@
 // It keeps only a lookahead window: the smoothing window and two solver steps beyond the sample
 // it hands out, plus one smoothing block (4096 samples).
 //
-// Two replays of a log, on purpose. Simulate on SignalsFromColumns is the reference (`mpdrig
-// simulate --inputs`, synthetic logs): the whole log in memory as time functions, which
-// SimulateEach may ask at any time. RowPipeline is its streaming twin (compare, fit, diagnose, the
-// shadow). Neither can be written through the other: the reference lies in model/sim, below this
-// folder in model/'s layer order, and a stream of rows cannot answer a time function; the other
-// way, time functions hold every input column whole (at least 40 bytes a row: 144 MB for an hour
-// at 1 kHz, where the stream holds a few thousand rows). What they can share they share (the
-// smoothing, the reconstruction, InitialInputs, InterpolateLinear, the piston velocity's window
-// PistonVelocityAtStepEnd); each still repeats by hand the bracket search between samples.
-// tests/model/analysis/compare_test.cc holds them together: ReplayGivesExactlyWhatSimulateGives
-// (the same doubles) and ReplayStartsFromTheMeanOfTheFirstInputs (the same start). A change to one
-// is a change to both.
+// Two replays of a log, on purpose. Simulate on SignalsFromColumns is the reference (synthetic
+// logs, the tests): the whole log in memory as time functions, which SimulateEach may ask at any
+// time. RowPipeline is its streaming twin (compare, fit, diagnose, the shadow, and `mpdrig
+// simulate --inputs` through LogFileReplay, log_file_replay.h). Neither can be written through the
+// other: the reference lies in model/sim, below this folder in model/'s layer order, and a stream
+// of rows cannot answer a time function; the other way, time functions hold every input column
+// whole (at least 40 bytes a row: 144 MB for an hour at 1 kHz, where the stream holds a few
+// thousand rows). What they can share they share (the smoothing, the reconstruction, InitialInputs,
+// InterpolateLinear, the piston velocity's window PistonVelocityAtStepEnd); each still repeats by
+// hand the bracket search between samples. tests/model/analysis/compare_test.cc holds them
+// together: ReplayGivesExactlyWhatSimulateGives (the same doubles) and
+// ReplayStartsFromTheMeanOfTheFirstInputs (the same start), and log_file_replay_test.cc every
+// channel of simulate --inputs. A change to one is a change to both.
 #pragma once
 
 #include <algorithm>
@@ -126,12 +127,23 @@ class MemoryRowSource final : public LogRowSource {
 };
 
 // Collects the first kReconstructionPlanSamples rows of a stream and plans their reconstruction
-// (PlanInputReconstruction): the same plan as for the whole log in memory.
+// (PlanInputReconstruction): the same plan as for the whole log in memory. It keeps the
+// reconstruction's longest reach beyond them (kPlannerMarginSamples), so that the head's
+// reconstructed inputs are the whole log's, not a log cut there (whose last rows' windows are
+// one-sided): the start and the levels decided on the head (ChooseWarmup, EstimateInputLevels)
+// are then those decided on the whole log, to the last bit.
 class ReconstructionPlanner {
  public:
+  // The most rows any reconstructed value reaches ahead (InputReconstruction: the level windows
+  // and the piston's), and one more.
+  static constexpr std::size_t kPlannerMarginSamples =
+      static_cast<std::size_t>(kMaxLevelHalfWidthSamples) +
+      static_cast<std::size_t>(kMaxPistonHalfWidthSamples) + 1;
   void Add(const LogRow& row);
   InputReconstruction Plan() const { return PlanInputReconstruction(head_); }
-  // The rows collected, as a log in memory (for ChooseWarmup): `channels` as the source's.
+  // The rows collected, reconstructed, as a log in memory (for ChooseWarmup and
+  // EstimateInputLevels, which take its first kReconstructionPlanSamples rows): `channels` as the
+  // source's.
   Result<MeasuredLog> HeadLog(const std::vector<SourceChannel>& channels, const std::string& path,
                               double atmospheric_pressure_pa) const;
 

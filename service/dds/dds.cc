@@ -15,6 +15,20 @@ std::string LoopbackConfig() {
          "<Peers><Peer address=\"127.0.0.1\"/></Peers></Discovery>";
 }
 
+std::string ServiceSampleLimitConfig() {
+  return std::string("<Internal><MaxSampleSize>") + kServiceMaxSampleSize +
+         "</MaxSampleSize></Internal>";
+}
+
+std::string AddConfigFragment(const std::string& config, const std::string& fragment) {
+  const std::size_t first = config.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos) return LoopbackConfig() + fragment;
+  if (config[first] == '<' && config.find("CycloneDDS") == std::string::npos) {
+    return config + fragment;
+  }
+  return config + "," + fragment;
+}
+
 std::string FastAckConfig() {
   return "<Internal><HeartbeatInterval min=\"1ms\" minsched=\"1ms\">1ms</HeartbeatInterval>"
          "</Internal>";

@@ -24,6 +24,20 @@ Status Check(dds_return_t code, const char* call);
 // discovery to localhost): every test and single-machine run uses it.
 std::string LoopbackConfig();
 
+// The largest serialised sample the rig service sends or takes (Cyclone's Internal/MaxSampleSize):
+// its own are a few kB (a pressure profile of at most 1000 points is 24 kB), and Cyclone drops a
+// larger one as its first fragment comes in, before it reassembles or copies any of it. Without
+// it a stranger's 10 MB rig id was received, copied and filtered in full: ten of them cost a
+// 1 kHz service about 1300 lost periods and a 0.21 s stall (bench/unknown_id_flood.sh, ID_BYTES).
+// Such a sample is not counted: Cyclone drops it below any reader.
+inline constexpr const char* kServiceMaxSampleSize = "256KiB";
+std::string ServiceSampleLimitConfig();
+
+// `config` (an XML fragment, a whole <CycloneDDS> document or a comma-separated list of file URIs
+// and fragments; empty: LoopbackConfig) with `fragment` added: appended to a fragment, one more
+// element of the list otherwise (Cyclone merges them; two <Internal> elements combine).
+std::string AddConfigFragment(const std::string& config, const std::string& fragment);
+
 // Configuration fragment for a client that waits for its commands' acknowledgements every step
 // (a lockstep controller): Cyclone 0.10 asks readers for an acknowledgement with its writer's
 // heartbeat, which a write carries only if the last one is older than the heartbeat interval

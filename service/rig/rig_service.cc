@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <deque>
 #include <limits>
 #include <map>
@@ -70,9 +71,13 @@ class UnknownRigGate {
  private:
   bool Admit(const char* rig_id) {
     const char* id = rig_id != nullptr ? rig_id : "";
+    // Every served id passes CheckRigId: one longer than kMaxRigIdBytes is no rig of ours, told
+    // after reading kMaxRigIdBytes + 1 bytes of it, not all of it.
+    const std::size_t length = strnlen(id, kMaxRigIdBytes + 1);
     std::lock_guard<std::mutex> lock(mutex_);
     for (const std::string& known : known_) {
-      if (known == id) return true;
+      if (length <= kMaxRigIdBytes && known.size() == length && known.compare(0, length, id) == 0)
+        return true;
     }
     std::string reported = ReportedId(id);
     ++refused_.count;
@@ -917,6 +922,7 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
                                                        const ServeOptions& options) {
   if (rigs.empty()) return Status::Error("no rigs to serve");
   for (std::size_t i = 0; i < rigs.size(); ++i) {
+    MPDRIG_RETURN_IF_ERROR(CheckRigId(rigs[i].rig_id()));
     for (std::size_t j = 0; j < i; ++j) {
       if (rigs[i].rig_id() == rigs[j].rig_id()) {
         return Status::Error("rig id '" + rigs[i].rig_id() + "' given twice");
@@ -951,7 +957,8 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
         1, static_cast<std::uint64_t>(std::lround(rate_hz / options.profile_hz)));
   }
 
-  auto domain = dds::Domain::Create(options.domain, options.dds_config);
+  auto domain = dds::Domain::Create(
+      options.domain, dds::AddConfigFragment(options.dds_config, dds::ServiceSampleLimitConfig()));
   if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
   impl->domain.emplace(std::move(domain).value());
   auto participant =

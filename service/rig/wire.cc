@@ -4,6 +4,18 @@
 
 namespace mpdrig::service {
 
+Status CheckRigId(std::string_view rig_id) {
+  bool printable = true;
+  for (char c : rig_id) printable = printable && c >= '!' && c <= '~';
+  if (!rig_id.empty() && rig_id.size() <= kMaxRigIdBytes && printable) return Status::Ok();
+  std::string shown;
+  for (char c : rig_id.substr(0, 64)) shown += c >= ' ' && c <= '~' ? c : '?';
+  return Status::Error("rig id '" + shown + (rig_id.size() > 64 ? "...' (" : "' (") +
+                       std::to_string(rig_id.size()) + " bytes): a rig id is 1 to " +
+                       std::to_string(kMaxRigIdBytes) +
+                       " bytes of printable ASCII without spaces ('!' .. '~')");
+}
+
 mpdrig_RigSensors ToWire(const std::string& rig_id, std::uint64_t sample_counter,
                          const RigSample& s, double atmosphere_pa) {
   auto barg = [atmosphere_pa](double pa) { return units::PaAbsToBarg(pa, atmosphere_pa); };

@@ -2,8 +2,12 @@
 // and the service's own types. Nothing else here: no physics, no transport.
 #pragma once
 
+#include <cstddef>
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include "model/common/status.h"
 
 #include "model/sim/rig_simulator.h"
 #include "mpdrig.h"
@@ -23,6 +27,15 @@ inline constexpr const char* kStatusTopic = "mpdrig_status";
 inline constexpr const char* kEstimateTopic = "mpdrig_estimate";
 inline constexpr const char* kPressureProfileTopic = "mpdrig_pressure_profile";
 inline constexpr const char* kRigRequestTopic = "mpdrig_rig_request";
+
+// A rig id (the key of every topic) is 1 to kMaxRigIdBytes bytes of printable ASCII without
+// spaces ('!' .. '~'): the service serves no other, so a sample whose id is longer is refused
+// after reading at most kMaxRigIdBytes + 1 of its bytes, whatever its length (a stranger's 10 MB
+// ids were compared and measured in full on Cyclone's receive thread). 128 holds a --security
+// name (at most 64 bytes, CheckSecureRigId) with its private rigs' ".N".
+inline constexpr std::size_t kMaxRigIdBytes = 128;
+// OK, or an error naming the id (at most its first 64 bytes) and the rule.
+Status CheckRigId(std::string_view rig_id);
 
 // A sample in the lab's units (bar gauge with the rig's atmospheric pressure, L/min, deg, m).
 // `rig_id` must outlive the returned struct (the wire struct points at it).

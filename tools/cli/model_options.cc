@@ -190,22 +190,26 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
       ->capture_default_str();
 }
 
-Status PrepareReplay(MeasuredLog* log, const RigParams& params, const SimulationOptions& simulation,
-                     InputReplayOptions* options, bool quiet, InputLevels levels) {
-  MPDRIG_RETURN_IF_ERROR(PrepareLogReplay(log, params, simulation, options, levels));
-  if (quiet) return Status::Ok();
-  if (options->reconstruct_inputs) {
-    std::fprintf(stderr, "%s\n", log->reconstruction.Describe().c_str());
-    if (options->estimate_levels && levels == InputLevels::kWithTheseParams) {
-      std::fprintf(stderr, "%s\n", log->reconstruction.levels.Describe().c_str());
+void DescribeReplay(const InputReconstruction* reconstruction, const InputReplayOptions& options,
+                    InputLevels levels) {
+  if (options.reconstruct_inputs && reconstruction != nullptr) {
+    std::fprintf(stderr, "%s\n", reconstruction->Describe().c_str());
+    if (options.estimate_levels && levels == InputLevels::kWithTheseParams) {
+      std::fprintf(stderr, "%s\n", reconstruction->levels.Describe().c_str());
     }
   }
-  if (options->warmup) {
+  if (options.warmup) {
     std::fprintf(stderr,
                  "the log starts mid-heave: replayed after a %.0f s warm-up on its periodic "
                  "excitation (period %.4f s)\n",
-                 options->warmup->duration_s, options->warmup->period_s);
+                 options.warmup->duration_s, options.warmup->period_s);
   }
+}
+
+Status PrepareReplay(MeasuredLog* log, const RigParams& params, const SimulationOptions& simulation,
+                     InputReplayOptions* options, bool quiet, InputLevels levels) {
+  MPDRIG_RETURN_IF_ERROR(PrepareLogReplay(log, params, simulation, options, levels));
+  if (!quiet) DescribeReplay(&log->reconstruction, *options, levels);
   return Status::Ok();
 }
 

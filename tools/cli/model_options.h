@@ -53,6 +53,12 @@ Status PrepareReplay(MeasuredLog* log, const RigParams& params, const Simulation
                      InputReplayOptions* options, bool quiet,
                      InputLevels levels = InputLevels::kWithTheseParams);
 
+// Tells stderr how a replay feeds the log's inputs (PrepareReplay's report): the reconstruction
+// (where given and the inputs are reconstructed), its level correction (kWithTheseParams) and the
+// warm-up.
+void DescribeReplay(const InputReconstruction* reconstruction, const InputReplayOptions& options,
+                    InputLevels levels);
+
 // A command-line number: finite, the whole text. The error names `what` and the text.
 Result<double> ParseFiniteNumber(const std::string& text, const std::string& what);
 // --bounds KEY=LOWER:UPPER (fit, fit --resonances): the key and a range with LOWER < UPPER.

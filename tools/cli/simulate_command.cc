@@ -3,12 +3,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "model/analysis/measured_log.h"
+#include "model/analysis/log_file_replay.h"
 #include "model/common/units.h"
 #include "model/riglog/rig_log.h"
 #include "model/sim/log_inputs.h"
@@ -69,41 +70,49 @@ Status CheckProfileRunLimits(double duration_s, double rate_hz) {
   return Status::Ok();
 }
 
-// What drives a run: its inputs, the times of its samples and the atmosphere of its log.
+// Runs the model and hands every sample to the sink as it comes; progress gets the share done.
+using RunFn = std::function<Result<RunSummary>(const std::function<void(const RigSample&)>& sink,
+                                               const std::function<void(double)>& progress)>;
+
+// What drives a run: how it runs, the time it spans and the atmosphere of its log.
 struct Drive {
-  InputSignals signals;
-  std::vector<double> output_times;
+  RunFn run;
+  double span_s = 0.0;
   double atmosphere_pa = 0.0;
   std::string description;  // the log's `drive` metadata
 };
 
 // The inputs of a measured log (--inputs). A log that starts mid-heave starts after a warm-up,
 // where its pressures say so, and its choke and FT2 levels are corrected from its pressures, as
-// compare's.
+// compare's. The log is read twice and never held (log_file_replay.h): 1e6 rows took 522 MB
+// in memory.
 Result<Drive> DriveFromLog(const SimulateArgs& args, const RigParams& params,
                            SimulationOptions* options) {
-  auto log = riglog::ReadRigLog(args.inputs_path, args.read);
-  if (!log.ok()) return log.status();
-  InputReplayOptions replay = args.replay;
-  std::optional<InputReconstruction> plan;
-  if (auto measured = MeasuredLogFromRigLog(*log, args.inputs_path); measured.ok()) {
-    MPDRIG_RETURN_IF_ERROR(PrepareReplay(&*measured, params, *options, &replay, false));
-    plan = measured->reconstruction;
-  }
-  auto columns = InputColumnsFromLog(*log, args.inputs_path);
-  if (!columns.ok()) return columns.status();
-  auto from_log = SignalsFromColumns(std::move(columns).value(), args.inputs_path, replay,
-                                     plan ? &*plan : nullptr);
-  if (!from_log.ok()) return from_log.status();
   options->choke_input = ChokeInput::kMeasured;
-  return Drive{*std::move(from_log), log->time_s, log->atmospheric_pressure_pa,
-               "inputs of " + args.inputs_path};
+  auto prepared =
+      LogFileReplay::Prepare(args.inputs_path, params, *options, args.replay, args.read);
+  if (!prepared.ok()) return prepared.status();
+  auto replay = std::make_shared<const LogFileReplay>(std::move(prepared).value());
+  if (replay->prepared_from_measurements()) {
+    DescribeReplay(replay->reconstruction() ? &*replay->reconstruction() : nullptr,
+                   replay->replay(), InputLevels::kWithTheseParams);
+  }
+  Drive drive;
+  drive.run = [replay](const std::function<void(const RigSample&)>& sink,
+                       const std::function<void(double)>& progress) {
+    return replay->Run(sink, progress);
+  };
+  drive.span_s = replay->end_s() - replay->start_s();
+  drive.atmosphere_pa = replay->atmospheric_pressure_pa();
+  drive.description = "inputs of " + args.inputs_path;
+  return drive;
 }
 
 // Profiles of the piston and the choke, a constant pump and outlet pressure (--piston, ...).
 Result<Drive> DriveFromProfiles(const SimulateArgs& args, const RigParams& params,
                                 SimulationOptions* options) {
   MPDRIG_RETURN_IF_ERROR(CheckProfileRunLimits(args.duration_s, args.rate_hz));
+  options->choke_input = ChokeInput::kReference;
   auto piston = ParseProfile(args.piston_spec, "m", args.duration_s);
   if (!piston.ok()) return piston.status().Within("--piston");
   auto choke = ParseProfile(args.choke_spec, "deg", args.duration_s);
@@ -112,11 +121,9 @@ Result<Drive> DriveFromProfiles(const SimulateArgs& args, const RigParams& param
   std::shared_ptr<Profile> choke_profile = std::move(choke).value();
   const double pump = units::LpmToM3ps(args.pump_lpm);
   const double outlet = units::BargToPaAbs(args.outlet_barg, params.atmospheric_pressure_pa);
-  Drive drive;
-  drive.signals.piston_position_m = [piston_profile](double t) {
-    return piston_profile->ValueAt(t);
-  };
-  drive.signals.rig = [choke_profile, pump, outlet](double t) {
+  InputSignals signals;
+  signals.piston_position_m = [piston_profile](double t) { return piston_profile->ValueAt(t); };
+  signals.rig = [choke_profile, pump, outlet](double t) {
     RigInputs in;
     in.choke_opening_frac = units::ChokeDegToFrac(choke_profile->ValueAt(t));
     in.pump_flow_m3ps = pump;
@@ -124,11 +131,19 @@ Result<Drive> DriveFromProfiles(const SimulateArgs& args, const RigParams& param
     return in;
   };
   const long count = std::lround(args.duration_s * args.rate_hz);
-  for (long i = 0; i <= count; ++i) drive.output_times.push_back(i / args.rate_hz);
+  std::vector<double> output_times;
+  for (long i = 0; i <= count; ++i) output_times.push_back(i / args.rate_hz);
+  Drive drive;
+  drive.span_s = output_times.back() - output_times.front();
+  drive.run = [params, options = *options, signals = std::move(signals),
+               output_times = std::move(output_times)](
+                  const std::function<void(const RigSample&)>& sink,
+                  const std::function<void(double)>& progress) {
+    return SimulateEach(params, options, signals, output_times, sink, progress);
+  };
   drive.atmosphere_pa = params.atmospheric_pressure_pa;
   drive.description = "piston " + piston_profile->Describe() + " m, choke " +
                       choke_profile->Describe() + " deg (through the actuator)";
-  options->choke_input = ChokeInput::kReference;
   return drive;
 }
 
@@ -166,7 +181,7 @@ int RunSimulate(const SimulateArgs& args) {
   auto drive = args.inputs_path.empty() ? DriveFromProfiles(args, *params, &*options)
                                         : DriveFromLog(args, *params, &*options);
   if (!drive.ok()) return Fail(name, drive.status());
-  const double span_s = drive->output_times.back() - drive->output_times.front();
+  const double span_s = drive->span_s;
   const bool show_progress = span_s > 600.0;
   // What the lab's sensors would read (sensor_noise.h); the extra --pressure-at outputs are the
   // model's, not sensors, and stay noise-free. `none` writes the model's output untouched.
@@ -179,8 +194,7 @@ int RunSimulate(const SimulateArgs& args) {
   if (!out.ok()) return Fail(name, out.status());
   Status written = Status::Ok();
   const auto started = std::chrono::steady_clock::now();
-  auto run = SimulateEach(
-      *params, *options, drive->signals, drive->output_times,
+  auto run = drive->run(
       [&](const RigSample& sample) {
         if (!written.ok()) return;
         RigSample measured = sample;

@@ -382,16 +382,18 @@ TEST_F(ServiceTest, BadCommandsAreRefusedCountedReportedAndTheRigRunsOn) {
 
 // Found by a bad-input probe: a stranger's 10 MB rig id was copied into every rig's last_rejection,
 // so each status carried 10 MB. The status now repeats at most 64 bytes of it, and its length.
+// (Samples over dds::kServiceMaxSampleSize no longer reach the service at all: the largest id it
+// still receives is just under it.)
 TEST_F(ServiceTest, AHugeUnknownRigIdIsNotCopiedIntoTheStatus) {
   Start();
-  std::string huge(1 << 20, 'x');
+  std::string huge(200000, 'x');
   mpdrig_ChokeCommand command{huge.data(), 40.0};
   ASSERT_TRUE(choke_->Write(command).ok());
   Acked(choke_->handle());
   auto [rejected, reason] = Step("rig-1", 1);
   EXPECT_EQ(rejected, 1u);
   EXPECT_LT(reason.size(), 300u);
-  EXPECT_NE(reason.find("unknown rig '" + std::string(64, 'x') + "...' (1048576 bytes) refused"),
+  EXPECT_NE(reason.find("unknown rig '" + std::string(64, 'x') + "...' (200000 bytes) refused"),
             std::string::npos)
       << reason.substr(0, 300);
 }
@@ -782,6 +784,113 @@ TEST(ServiceProcessTest, CommandsForManyUnknownRigIdsAreRefusedWithoutHoldingMem
 
 TEST(ServiceProcessTest, DisposesOfManyUnknownRigIdsAreRefusedAndReported) {
   ExpectAFloodOfUnknownRigIdsIsRefused(Stranger::kDisposes);
+}
+
+// A rig id is the key of every topic: 1 to kMaxRigIdBytes bytes of printable ASCII without
+// spaces. The service refuses to serve another (and so refuses any longer id it receives after
+// kMaxRigIdBytes + 1 bytes, UnknownRigGate), naming the id and the rule.
+TEST(RigIdTest, ServiceServesOnlyShortPrintableIds) {
+  EXPECT_TRUE(CheckRigId("rig-1").ok());
+  EXPECT_TRUE(CheckRigId("alice.12").ok());
+  EXPECT_TRUE(CheckRigId(std::string(kMaxRigIdBytes, 'r')).ok());
+  for (const std::string& bad :
+       {std::string(), std::string(kMaxRigIdBytes + 1, 'r'), std::string("rig 1"),
+        std::string("rig\n1"), std::string("rig\xff")}) {
+    const Status checked = CheckRigId(bad);
+    ASSERT_FALSE(checked.ok()) << bad;
+    EXPECT_NE(checked.message().find(std::to_string(bad.size()) + " bytes): a rig id is 1 to 128"),
+              std::string::npos)
+        << checked.message();
+  }
+  std::vector<RigHost> rigs;
+  auto rig = RigHost::Create("rig one", RigParams{}, SimulationOptions(), 100.0, {31.0, 5.0, 0.0});
+  ASSERT_TRUE(rig.ok()) << rig.status().message();
+  rigs.push_back(std::move(rig).value());
+  ServeOptions options;
+  options.domain = TestDomain();
+  auto service = RigService::Create(std::move(rigs), options);
+  ASSERT_FALSE(service.ok());
+  EXPECT_NE(service.status().message().find("rig id 'rig one' (7 bytes)"), std::string::npos)
+      << service.status().message();
+}
+
+// Found by a bad-input probe: ten commands with 10 MB rig ids cost a 1 kHz service 1300 lost
+// periods, a 0.21 s stall and 55 MB of memory (bench/unknown_id_flood.sh with ID_BYTES): Cyclone
+// received, reassembled and copied each in full before the topic filter could refuse it. The
+// service now takes no sample over dds::kServiceMaxSampleSize (Cyclone drops it at its first
+// fragment), and an id over kMaxRigIdBytes below that is refused after reading kMaxRigIdBytes + 1
+// bytes of it, counted and reported as any unknown rig.
+TEST(ServiceProcessTest, HugeRigIdsAreDroppedBeforeTheServiceHoldsThem) {
+  if (testing::kUnderAddressSanitizer) {
+    GTEST_SKIP() << "RSS under AddressSanitizer measures its quarantine";
+  }
+  const dds_domainid_t domain = TestDomain();
+  testing::ChildProcess serve(
+      {MPDRIG_EXE, "serve", "--clock", "realtime", "--rate-hz", "100", "--rig", "rig-1", "--domain",
+       std::to_string(domain), "--no-observer"},
+      testing::ChildOptions::Stderr(testing::Output::Discard()));
+  ASSERT_TRUE(serve.started()) << serve.error();
+  // The stranger's side has no limit of its own: it sends what it likes.
+  auto dds_domain = dds::Domain::Create(domain, dds::LoopbackConfig());
+  ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
+  auto participant = dds::CreateParticipant(domain);
+  ASSERT_TRUE(participant.ok());
+  const dds_entity_t p = participant->handle();
+  auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
+  auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, kPumpCommandTopic);
+  ASSERT_TRUE(status_topic.ok() && pump_topic.ok());
+  auto status = dds::Reader<mpdrig_RigStatus>::Create(p, status_topic->handle(), dds::StatusQos());
+  auto flood = dds::Writer<mpdrig_PumpCommand>::Create(p, pump_topic->handle(), dds::CommandQos());
+  ASSERT_TRUE(status.ok() && flood.ok());
+  for (int waited_ms = 0;; waited_ms += 10) {
+    dds_publication_matched_status_t matched{};
+    dds_get_publication_matched_status(flood->handle(), &matched);
+    if (matched.current_count > 0) break;
+    ASSERT_LT(waited_ms, 20000) << "the service never matched the pump writer";
+    dds_sleepfor(DDS_MSECS(10));
+  }
+  dds_sleepfor(DDS_SECS(1));  // the service settles (its buffers, the first statuses)
+  const std::uint64_t rss_before = ResidentBytes(serve.pid());
+  ASSERT_GT(rss_before, 0u);
+
+  constexpr int kHugeIds = 10;
+  constexpr std::size_t kHugeBytes = 10'000'000;
+  std::string id;
+  for (int i = 0; i < kHugeIds; ++i) {
+    id = "stranger-" + std::to_string(i);
+    id.resize(kHugeBytes, 'x');
+    mpdrig_PumpCommand command{id.data(), 5.0};
+    ASSERT_TRUE(flood->Write(command).ok());
+  }
+  ASSERT_EQ(dds_wait_for_acks(flood->handle(), DDS_SECS(60)), DDS_RETCODE_OK);
+  // Then one over kMaxRigIdBytes that Cyclone lets through: the filter refuses and counts it.
+  const std::string long_id(1000, 'y');
+  mpdrig_PumpCommand command{const_cast<char*>(long_id.c_str()), 5.0};
+  ASSERT_TRUE(flood->Write(command).ok());
+  ASSERT_EQ(dds_wait_for_acks(flood->handle(), DDS_SECS(10)), DDS_RETCODE_OK);
+  std::uint64_t rejected = 0;
+  std::string last_rejection;
+  const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (std::chrono::steady_clock::now() < until &&
+         last_rejection.find("yyy") == std::string::npos) {
+    auto ready = status->Wait(DDS_MSECS(100));
+    if (!ready.ok() || !*ready) continue;
+    (void)status->TakeEach([&](const mpdrig_RigStatus& s, const dds_sample_info_t&) {
+      rejected = s.rejected_commands;
+      last_rejection = s.last_rejection;
+    });
+  }
+  EXPECT_NE(last_rejection.find("unknown rig '" + std::string(64, 'y') + "...' (1000 bytes)"),
+            std::string::npos)
+      << last_rejection.substr(0, 300);
+  // The huge ones never reached the service's readers: only the last command was refused.
+  EXPECT_EQ(rejected, 1u) << last_rejection.substr(0, 300);
+  const double grown_mb =
+      (static_cast<double>(ResidentBytes(serve.pid())) - static_cast<double>(rss_before)) / 1e6;
+  std::printf("service RSS %.1f MB before, +%.1f MB after %d ids of %zu bytes\n", rss_before / 1e6,
+              grown_mb, kHugeIds, kHugeBytes);
+  // Received in full they took 55 MB (measured); allow 8 MB of the service's own growth.
+  EXPECT_LT(grown_mb, 8.0);
 }
 
 }  // namespace
