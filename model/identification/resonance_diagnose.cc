@@ -130,6 +130,12 @@ class RoundRunner {
     MPDRIG_CHECK(info != nullptr);
     const std::vector<const EffectParamInfo*> own = FittedParams(*info);
     candidate.new_parameters = static_cast<int>(own.size());
+    if (round > 1 && !options_.simulated_every_round &&
+        options_.fit.resonance.method != ResponseMethod::kAnalytic && !AnalyticRepresents(effect)) {
+      candidate.outcome = ResonanceCandidate::Outcome::kNotTried;
+      candidate.note = "needs the simulated response, tried in round 1 only";
+      return candidate;
+    }
     if (keys.size() + own.size() > measured_.size()) {
       candidate.outcome = ResonanceCandidate::Outcome::kUnidentifiable;
       candidate.note = std::to_string(keys.size() + own.size()) + " parameters for " +
@@ -364,6 +370,8 @@ std::string_view OutcomeName(ResonanceCandidate::Outcome outcome) {
       return "does_not_move_peaks";
     case ResonanceCandidate::Outcome::kUnidentifiable:
       return "unidentifiable";
+    case ResonanceCandidate::Outcome::kNotTried:
+      return "not_tried";
   }
   return "?";
 }

@@ -24,7 +24,8 @@
 // about 0.3 s per resonance: before it is fitted it is screened at the ends of its plausible
 // range (EffectParamInfo::plausible_min/max) in the round's model; one that cannot move any
 // resonance by a quarter of its uncertainty there is reported as such, not fitted and not tried
-// again. Every candidate is screened so (for an analytic one it costs two responses).
+// again. Every candidate is screened so (for an analytic one it costs two responses). Unless
+// simulated_every_round, such a candidate is fitted in round 1 only.
 //
 // Besides the selection, the diagnosis fits the wave speed alone (not held, no effect): a
 // uniformly slower line (lower c, or free gas at one mean pressure) scales every resonance alike,
@@ -55,6 +56,9 @@ struct ResonanceDiagnoseOptions {
   // Solver iterations for a candidate that needs the simulated response (each iteration costs
   // about 3 x 3 simulated resonances, ~3 s): the fit of one to three peaks converges in a few.
   int simulated_max_iterations = 6;
+  // Whether a candidate that needs the simulated response is tried after round 1 as well (each
+  // such fit takes minutes); if not, it is listed as not tried, with the reason.
+  bool simulated_every_round = false;
   // The screen's threshold, in units of the smallest measured uncertainty.
   double screen_fraction = 0.25;
   // Runs independent tasks (the candidates of a round); default: one after the other.
@@ -76,7 +80,7 @@ struct ResonanceParamEstimate {
 struct ResonanceCandidate {
   std::string effect;
   int round = 1;
-  enum class Outcome { kFitted, kFailed, kDoesNotMovePeaks, kUnidentifiable } outcome =
+  enum class Outcome { kFitted, kFailed, kDoesNotMovePeaks, kUnidentifiable, kNotTried } outcome =
       Outcome::kFitted;
   std::string note;                 // why it failed, or what the screen found
   double screen_shift_hz = 0.0;     // largest |resonance shift| over the plausible range

@@ -313,6 +313,9 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                    "--resonances: level of the chi2 test an added effect must pass")
       ->check(CLI::Range(1.0e-6, 0.2))
       ->capture_default_str();
+  command->add_flag("--thorough", resonance_args->thorough,
+                    "--resonances: try the effects that need the simulated response in every "
+                    "round, not only the first (minutes each)");
   command->callback([args, resonance_args, exit_code]() {
     if (!resonance_args->resonances_path.empty()) {
       if (!args->log_path.empty()) {

@@ -287,6 +287,7 @@ int RunDiagnoseResonances(const ModelOptions& model, const ResonanceDiagnoseArgs
   options.candidates = args.candidates;
   options.max_effects = args.max_effects;
   options.significance_level = args.significance;
+  options.simulated_every_round = args.thorough;
   options.fit.max_iterations = args.max_iterations;
   options.fit.resonance.simulation = *simulation;
   options.fit.resonance.simulated.amplitude_m = args.amplitude_m;

@@ -21,6 +21,7 @@ struct ResonanceDiagnoseArgs {
   double outlet_barg = 4.0;
   double amplitude_m = 2.5e-4;  // the simulated response's piston amplitude
   bool quiet = false;
+  bool thorough = false;  // simulated candidates in every round
 };
 
 int RunDiagnoseResonances(const ModelOptions& model, const ResonanceDiagnoseArgs& args);

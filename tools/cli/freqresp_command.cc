@@ -221,9 +221,18 @@ void AddFreqrespCommand(CLI::App* app, int* exit_code) {
       ->add_option("--min-coherence", log_args->response.min_coherence,
                    "--from-log: gamma^2 a resonance peak must have")
       ->capture_default_str();
+  command->add_option("--resonance-list", log_args->resonance_list_path,
+                      "--from-log: append the first resonance of --resonance-channel to this "
+                      "resonance list (CSV configuration,frequency_hz,uncertainty_hz) under "
+                      "--termination, for fit/diagnose --resonances");
+  command
+      ->add_option("--resonance-channel", log_args->resonance_channel,
+                   "--from-log: the channel whose first peak --resonance-list takes")
+      ->capture_default_str();
   AddLogReadOptions(command, &log_args->read);
   command->callback([args, log_args, fmax, exit_code]() {
     if (!log_args->log_path.empty()) {
+      log_args->termination = args->termination;
       if (args->analytic || args->simulated || !args->out_path.empty()) {
         *exit_code = Fail("freqresp", Status::Error("--from-log takes --json and --csv, not "
                                                     "--analytic, --simulated or --out"));

@@ -1,8 +1,11 @@
 #include "tools/cli/freqresp_log.h"
 
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 
+#include "model/analysis/resonance_list.h"
+#include "model/analysis/termination.h"
 #include "model/riglog/rig_log.h"
 #include "tools/cli/json_text.h"
 #include "tools/cli/model_options.h"
@@ -60,6 +63,54 @@ std::string ResponseCsv(const EmpiricalResponse& r) {
   return out.str();
 }
 
+// The first peak of the chosen channel as one more line of the resonance list: the header if the
+// file is new or empty; the whole list is parsed before it is written, so a termination given
+// twice or a damaged file is refused with its line, and the file is left as it was.
+Status AppendResonance(const EmpiricalResponse& response, const FreqrespLogArgs& args) {
+  if (args.termination.empty()) {
+    return Status::Error("--resonance-list needs --termination: the line end the log was "
+                         "recorded in (" + TerminationNames() + ")");
+  }
+  auto termination = ParseTermination(args.termination);
+  if (!termination.ok()) return termination.status().Within("--termination");
+  const ChannelResponse* channel = nullptr;
+  for (const ChannelResponse& c : response.channels) {
+    if (c.channel == args.resonance_channel) channel = &c;
+  }
+  if (channel == nullptr) {
+    return Status::Error("--resonance-channel " + args.resonance_channel +
+                         ": the log has no such pressure channel");
+  }
+  if (channel->peaks.empty()) {
+    return Status::Error("--resonance-list: " + args.resonance_channel +
+                         " has no resonance peak (gamma^2 >= --min-coherence, standing out of "
+                         "its valleys): sweep through it with the choke and the pump held");
+  }
+  std::string text;
+  if (std::ifstream in(args.resonance_list_path); in) {
+    std::ostringstream existing;
+    existing << in.rdbuf();
+    text = existing.str();
+  }
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+    text = std::string(kResonanceListHeader) + "\n";
+  } else if (text.back() != '\n') {
+    text += '\n';
+  }
+  const ResonancePeak& peak = channel->peaks.front();
+  char line[160];
+  std::snprintf(line, sizeof line, "%s,%.6g,%.3g\n", args.termination.c_str(), peak.freq_hz,
+                peak.uncertainty_hz);
+  text += line;
+  auto parsed = ParseResonanceList(text, args.resonance_list_path);
+  if (!parsed.ok()) return parsed.status();
+  MPDRIG_RETURN_IF_ERROR(WriteText(args.resonance_list_path, text));
+  std::fprintf(stderr, "freqresp: %s first resonance %.4f +- %.4f Hz (%s) -> %s\n",
+               args.resonance_channel.c_str(), peak.freq_hz, peak.uncertainty_hz,
+               args.termination.c_str(), args.resonance_list_path.c_str());
+  return Status::Ok();
+}
+
 }  // namespace
 
 int RunFreqrespFromLog(const FreqrespLogArgs& args) {
@@ -75,6 +126,10 @@ int RunFreqrespFromLog(const FreqrespLogArgs& args) {
   if (!args.csv_path.empty()) {
     Status written = WriteText(args.csv_path, ResponseCsv(*response));
     if (!written.ok()) return Fail(name, written);
+  }
+  if (!args.resonance_list_path.empty()) {
+    const Status appended = AppendResonance(*response, args);
+    if (!appended.ok()) return Fail(name, appended);
   }
   if (args.json_path == "-" || args.csv_path == "-") return 0;
   std::printf(

@@ -13,6 +13,11 @@ struct FreqrespLogArgs {
   std::string log_path;
   std::string json_path;  // empty: none; "-": stdout
   std::string csv_path;
+  // Appends the first resonance of `resonance_channel` as a line of a resonance list
+  // (model/analysis/resonance_list.h) for `termination`, the line end the log was recorded in.
+  std::string resonance_list_path;
+  std::string resonance_channel = "PT1";
+  std::string termination;
   riglog::ReadOptions read;
   EmpiricalResponseOptions response;
 };

@@ -141,5 +141,49 @@ TEST_F(FreqCommandsTest, FromLogWritesJsonAndCsv) {
   EXPECT_NE(mixed.exit_code, 0);
 }
 
+TEST_F(FreqCommandsTest, FromLogAppendsItsResonanceToAListThatDiagnoseReads) {
+  RunResult synth = Run("synth --seed 1 --duration 60 --out r.csv");
+  ASSERT_EQ(synth.exit_code, 0) << synth.err;
+  fs::remove(Path("list.csv"));
+  RunResult first = Run("freqresp --from-log r.csv --segment-s 30 --termination choke-open "
+                        "--resonance-list list.csv");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const std::string list = ReadFile(Path("list.csv"));
+  EXPECT_EQ(list.rfind("configuration,frequency_hz,uncertainty_hz\nchoke-open,", 0), 0u) << list;
+  // The same termination again is refused with the line, and the file is left as it was.
+  RunResult again = Run("freqresp --from-log r.csv --segment-s 30 --termination choke-open "
+                        "--resonance-list list.csv");
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_TRUE(Contains(again.err, "list.csv:3:1")) << again.err;
+  EXPECT_EQ(ReadFile(Path("list.csv")), list);
+  RunResult unnamed = Run("freqresp --from-log r.csv --segment-s 30 --resonance-list list.csv");
+  EXPECT_NE(unnamed.exit_code, 0);
+  EXPECT_TRUE(Contains(unnamed.err, "--termination")) << unnamed.err;
+
+  // diagnose --resonances on the thesis's three peaks, c held at the fronts' 1173 m/s.
+  std::ofstream(Path("thesis.csv")) << "configuration,frequency_hz,uncertainty_hz\n"
+                                    << "choke-closed,0.44,0.01\nchoke-open,0.25,0.01\n"
+                                    << "closed-at-pipe-end,0.49,0.01\n";
+  RunResult d = Run("diagnose --resonances thesis.csv --set wave_speed_mps=1173 --hold "
+                    "wave_speed_mps --response analytic --json d.json");
+  ASSERT_EQ(d.exit_code, 0) << d.err;
+  const std::string json = ReadFile(Path("d.json"));
+  for (const char* key :
+       {"\"resonances\"", "\"configuration\": \"choke-closed\"", "\"measured_hz\"",
+        "\"base_model_hz\"", "\"model_hz\"", "\"selected\"", "\"uniform_wave_speed\"",
+        "\"closed_open_ratio\"", "\"not_fitted\"", "\"selection_end\""}) {
+    EXPECT_TRUE(Contains(json, key)) << key;
+  }
+  // The final model's largest error: the top-level key, after every candidate's.
+  const std::size_t top = json.rfind("\n  \"max_error_hz\"");
+  ASSERT_NE(top, std::string::npos) << json;
+  EXPECT_LT(JsonValue(json.substr(top), "max_error_hz"), 0.015) << json;
+  EXPECT_TRUE(Contains(d.out, "selected:")) << d.out;
+  RunResult both = Run("diagnose r.csv --resonances thesis.csv");
+  EXPECT_NE(both.exit_code, 0);
+  RunResult neither = Run("diagnose --json -");
+  EXPECT_NE(neither.exit_code, 0);
+}
+
 }  // namespace
 }  // namespace mpdrig
