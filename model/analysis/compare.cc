@@ -89,6 +89,7 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
     result->atmospheric_pressure_pa = log.atmospheric_pressure_pa;
     if (model.inputs_reconstructed) result->input_reconstruction = replayed_log->reconstruction;
     result->warmup = model.warmup;
+    result->measured_start = model.profile;
   }
   return result;
 }
@@ -124,7 +125,7 @@ Result<FileScan> ScanFile(const std::string& path, const CompareOptions& options
   return scan;
 }
 
-// The replay's start (ChooseWarmup) and input levels (EstimateInputLevels, into `plan` and the
+// The replay's start (ChooseReplayStart) and input levels (EstimateInputLevels, into `plan` and the
 // warm-up), decided on the file's first rows in memory, as PrepareLogReplay decides them on a
 // whole log in memory; `channels` as the second pass's source.
 Status PrepareStreamedReplay(const FileScan& scan, const std::vector<SourceChannel>& channels,
@@ -136,9 +137,7 @@ Status PrepareStreamedReplay(const FileScan& scan, const std::vector<SourceChann
   auto head = scan.planner.HeadLog(channels, path, scan.atmospheric_pressure_pa);
   if (!head.ok()) return head.status();
   if (options.choose_warmup) {
-    auto warmup = ChooseWarmup(*head, params, sim_options, *replay);
-    if (!warmup.ok()) return warmup.status();
-    replay->warmup = *warmup;
+    MPDRIG_RETURN_IF_ERROR(ChooseReplayStart(*head, params, sim_options, replay));
   }
   if (estimate_levels) {
     auto levels = EstimateInputLevels(*head, params, sim_options, *replay);
@@ -160,7 +159,7 @@ Result<Comparison> ReplayAndAccumulate(LogRowSource* source, const std::string& 
   std::vector<double> model_si(summary.channels.size());
   PercentProgress percent(progress, "replay", summary.samples);
   RowPipeline pipeline(PipelineSmoothingS(replay),
-                       ReplaySetup{params, sim_options, summary.t1_s, replay.warmup},
+                       ReplaySetup{params, sim_options, summary.t1_s, replay.warmup, replay.profile},
                        [&](const PipelineSample& sample) {
                          for (std::size_t c = 0; c < model_si.size(); ++c) {
                            model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
@@ -214,6 +213,7 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
     result->atmospheric_pressure_pa = scan->atmospheric_pressure_pa;
     result->input_reconstruction = plan;
     result->warmup = replay.warmup;
+    result->measured_start = replay.profile;
   }
   return result;
 }

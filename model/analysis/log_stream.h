@@ -183,6 +183,7 @@ struct ReplaySetup {
   SimulationOptions options;
   double end_time_s = 0.0;  // the log's last time: the piston velocity is one-sided there
   std::optional<PeriodicWarmup> warmup;  // as SimulateEach with InputSignals::warmup
+  std::optional<PipeProfile> profile;    // as SimulateEach with InputSignals::profile
 };
 
 class RowPipeline {
