@@ -218,12 +218,29 @@ std::optional<Eigen::VectorXd> PressureError(const MeasuredLog& cut, const RigPa
   return Eigen::Map<const Eigen::VectorXd>(error.data(), static_cast<Eigen::Index>(error.size()));
 }
 
+// The sum of the finite squares of `error`.
 double SquaredError(const Eigen::VectorXd& error) {
   double sum = 0.0;
   for (double e : error) {
     if (std::isfinite(e)) sum += e * e;
   }
   return sum;
+}
+
+// The median over the channels of each one's squared error (`error` is PressureError's, `samples`
+// per channel). A wrong start is a state of the whole pipe and its transient reaches every channel;
+// a sensor's offset or delay, which a start fitted to the pressures would partly absorb, is one
+// channel's: the median leaves it out.
+double MedianChannelSquaredError(const Eigen::VectorXd& error, std::size_t samples) {
+  std::vector<double> channels;
+  for (Eigen::Index first = 0; first + static_cast<Eigen::Index>(samples) <= error.size();
+       first += static_cast<Eigen::Index>(samples)) {
+    channels.push_back(SquaredError(error.segment(first, static_cast<Eigen::Index>(samples))));
+  }
+  if (channels.empty()) return 0.0;
+  std::sort(channels.begin(), channels.end());
+  const std::size_t n = channels.size();
+  return n % 2 == 1 ? channels[n / 2] : 0.5 * (channels[n / 2 - 1] + channels[n / 2]);
 }
 
 }  // namespace
@@ -586,6 +603,7 @@ Status ChooseReplayStart(const MeasuredLog& log, const RigParams& params,
   const double window_s =
       std::max(warmup ? 2.0 * warmup->period_s : 0.0, kStartChoiceTravelTimes * travel_s);
   const MeasuredLog cut = MeasuredLogUntil(log, log.time_s().front() + window_s);
+
   // Steady, warm-up, measured: the first with the smallest error (a tie keeps the simpler start).
   double best = std::numeric_limits<double>::infinity();
   ReplayOptions chosen = *replay;
@@ -597,7 +615,7 @@ Status ChooseReplayStart(const MeasuredLog& log, const RigParams& params,
     if (kind == 2) start.profile = **profile;
     const auto error = PressureError(cut, params, sim_options, start);
     if (!error) continue;  // a start that leaves the model's range is not chosen
-    const double squared = SquaredError(*error);
+    const double squared = MedianChannelSquaredError(*error, cut.time_s().size());
     if (squared < best) {
       best = squared;
       chosen = start;
