@@ -158,15 +158,16 @@ Result<Comparison> ReplayAndAccumulate(LogRowSource* source, const std::string& 
   ComparisonAccumulator accumulator(summary, options);
   std::vector<double> model_si(summary.channels.size());
   PercentProgress percent(progress, "replay", summary.samples);
-  RowPipeline pipeline(PipelineSmoothingS(replay),
-                       ReplaySetup{params, sim_options, summary.t1_s, replay.warmup, replay.profile},
-                       [&](const PipelineSample& sample) {
-                         for (std::size_t c = 0; c < model_si.size(); ++c) {
-                           model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
-                         }
-                         accumulator.Add(sample, model_si.data());
-                         percent.Done(sample.index + 1);
-                       });
+  RowPipeline pipeline(
+      PipelineSmoothingS(replay),
+      ReplaySetup{params, sim_options, summary.t1_s, replay.warmup, replay.profile},
+      [&](const PipelineSample& sample) {
+        for (std::size_t c = 0; c < model_si.size(); ++c) {
+          model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
+        }
+        accumulator.Add(sample, model_si.data());
+        percent.Done(sample.index + 1);
+      });
   LogRow row;
   while (true) {
     auto more = source->Next(&row);

@@ -37,7 +37,8 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
   traces.warmup = replay.warmup;
   traces.profile = replay.profile;
   RowPipeline pipeline(
-      PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back(), replay.warmup, replay.profile},
+      PipelineSmoothingS(replay),
+      ReplaySetup{params, sim_options, times.back(), replay.warmup, replay.profile},
       [&](const PipelineSample& sample) {
         for (std::size_t i = 0; i < log.channels.size(); ++i) {
           traces.values_si[i].push_back(sample.model->values[Index(log.channels[i].channel)]);
@@ -133,8 +134,8 @@ double InterpolateAlong(const std::vector<std::pair<double, double>>& points, do
   if (fraction <= points.front().first) return points.front().second;
   for (std::size_t k = 1; k < points.size(); ++k) {
     if (fraction <= points[k].first) {
-      return InterpolateLinear(fraction, points[k - 1].first, points[k - 1].second,
-                               points[k].first, points[k].second);
+      return InterpolateLinear(fraction, points[k - 1].first, points[k - 1].second, points[k].first,
+                               points[k].second);
     }
   }
   return points.back().second;
@@ -193,9 +194,9 @@ std::optional<PipeProfile> ProfileAtStart(const MeasuredLog& log, const RigParam
     const double stiffness = sim_options.model == PipeModel::kLinear ? rho_c2 : k_pa + p;
     const double du_dx = -InterpolateAlong(rate, fraction) / stiffness;
     profile.pressure_pa.push_back(p);
-    profile.velocity_mps.push_back(
-        k == 0 ? inlet_velocity_mps
-               : profile.velocity_mps.back() + 0.5 * dx_m * (previous_rate + du_dx));
+    profile.velocity_mps.push_back(k == 0 ? inlet_velocity_mps
+                                          : profile.velocity_mps.back() +
+                                                0.5 * dx_m * (previous_rate + du_dx));
     previous_rate = du_dx;
   }
   return profile;
@@ -252,7 +253,8 @@ Result<std::optional<PipeProfile>> EstimatePipeProfile(const MeasuredLog& log,
   const std::vector<double>& t = log.time_s();
   if (t.size() < 2) return std::optional<PipeProfile>{};
   const double travel_s = params.pipe_length_m / params.wave_speed_mps;
-  auto guess = ProfileAtStart(log, params, sim_options, replay, kProfileWindowTravelTimes * travel_s);
+  auto guess =
+      ProfileAtStart(log, params, sim_options, replay, kProfileWindowTravelTimes * travel_s);
   if (!guess) return std::optional<PipeProfile>{};
   const MeasuredLog cut = MeasuredLogUntil(log, t.front() + kProfileFitTravelTimes * travel_s);
   ReplayOptions start = replay;
@@ -280,7 +282,8 @@ Result<std::optional<PipeProfile>> EstimatePipeProfile(const MeasuredLog& log,
     jacobian.col(j) = *base - *error;
   }
   // Least squares over the finite residuals, in the scaled values; a ridge far below the
-  // normal matrix's scale keeps a profile point no channel sees (too few transmitters) at its guess.
+  // normal matrix's scale keeps a profile point no channel sees (too few transmitters) at its
+  // guess.
   const auto solve = [&](const Eigen::VectorXd& error) -> Eigen::VectorXd {
     Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(kParameters, kParameters);
     Eigen::VectorXd projection = Eigen::VectorXd::Zero(kParameters);
@@ -301,7 +304,8 @@ Result<std::optional<PipeProfile>> EstimatePipeProfile(const MeasuredLog& log,
     const Eigen::VectorXd delta = solve(error);
     if (!delta.allFinite()) break;
     ReplayOptions trial = start;
-    for (int j = 0; j < kParameters; ++j) value(*trial.profile, j) = value(best, j) + delta(j) * scale(j);
+    for (int j = 0; j < kParameters; ++j)
+      value(*trial.profile, j) = value(best, j) + delta(j) * scale(j);
     const auto trial_error = PressureError(cut, params, sim_options, trial);
     if (!trial_error) break;
     const double squared = SquaredError(*trial_error);

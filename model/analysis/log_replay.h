@@ -3,10 +3,10 @@
 // at the log's times, for CompareTraces (compare.h), fit and diagnose.
 //
 // ReplayModel is the same replay as CompareLog's streamed second pass (RowPipeline, log_stream.h):
-// the same numbers. Before it runs, a replay decides from the log how it starts (ChooseWarmup: a
-// periodic warm-up or the steady state) and at which input levels (EstimateInputLevels: the
-// reconstructed choke and FT2 levels corrected from the measured pressures); PrepareLogReplay
-// does both.
+// the same numbers. Before it runs, a replay decides from the log how it starts (ChooseReplayStart:
+// the steady state, a periodic warm-up or the pipe's state estimated from the log's pressures) and
+// at which input levels (EstimateInputLevels: the reconstructed choke and FT2 levels corrected from
+// the measured pressures); PrepareLogReplay does both.
 //
 // Units: SI with absolute pressure (Pa, m^3/s, m, opening fraction).
 #pragma once
@@ -76,9 +76,11 @@ Result<std::optional<PipeProfile>> EstimatePipeProfile(const MeasuredLog& log,
 
 // How a replay of `log` starts: the steady state, the periodic warm-up (where ChooseWarmup's
 // candidate exists) or the measured pipe state (EstimatePipeProfile), whichever replays the log's
-// measured pressures with the smallest squared error over its first max(two periods,
-// kStartChoiceTravelTimes L/c) (a start whose replay fails is never chosen). Sets replay->warmup
-// and replay->profile (at most one of them).
+// measured pressures best over its first max(two periods, kStartChoiceTravelTimes L/c): the
+// smallest median over the pressure channels of each one's squared error (a wrong start reaches
+// every channel; a sensor's offset, which the measured state would partly absorb, one), a tie to
+// the simpler start, a start whose replay fails never. Sets replay->warmup and replay->profile (at
+// most one of them).
 inline constexpr double kStartChoiceTravelTimes = 10.0;
 Status ChooseReplayStart(const MeasuredLog& log, const RigParams& params,
                          const SimulationOptions& sim_options, ReplayOptions* replay);

@@ -118,8 +118,8 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
 // first fit's estimates. A measured start (ReplayOptions::profile, ChooseReplayStart) is chosen
 // again at the first fit's estimates before the levels: at the start values it may have absorbed
 // their error. Where options.replay does not reconstruct or estimate levels, or *log already has
-// levels, and the start is not a measured one, FitParameters alone. replays and iterations count both fits, error_before
-// is the first fit's.
+// levels, and the start is not a measured one, FitParameters alone. replays and iterations count
+// both fits, error_before is the first fit's.
 Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams& start,
                                               const std::vector<FitParameter>& parameters,
                                               FitOptions options = {});

@@ -43,9 +43,12 @@ constexpr double kCutS = 20.0;
 
 // Two tones, 0.06 and 0.23 Hz (the log): not periodic over the log.
 Scenario TwoTone(double cut_s) {
-  return {"two_tone", 60.0 + cut_s, cut_s,
+  return {"two_tone",
+          60.0 + cut_s,
+          cut_s,
           [](double t) { return Sine(t, 0.04, 0.06) + Sine(t + 1.3, 0.02, 0.23); },
-          [](double) { return 31.0; }, [](double) { return 5.0; }};
+          [](double) { return 31.0; },
+          [](double) { return 5.0; }};
 }
 
 // A random sea's heave: twelve tones from 0.05 to 0.3 Hz, amplitudes from a Pierson-Moskowitz
@@ -67,7 +70,9 @@ Scenario RandomSea(double cut_s, std::uint64_t seed) {
     variance += 0.5 * amp_m.back() * amp_m.back();
   }
   for (double& a : amp_m) a *= kStdM / std::sqrt(variance);
-  return {"random_sea_seed" + std::to_string(seed), 60.0 + cut_s, cut_s,
+  return {"random_sea_seed" + std::to_string(seed),
+          60.0 + cut_s,
+          cut_s,
           [=](double t) {
             double x = 0.0;
             for (std::size_t k = 0; k < freq_hz.size(); ++k) {
@@ -75,7 +80,8 @@ Scenario RandomSea(double cut_s, std::uint64_t seed) {
             }
             return x;
           },
-          [](double) { return 28.0; }, [](double) { return 6.0; }};
+          [](double) { return 28.0; },
+          [](double) { return 6.0; }};
 }
 
 double Fit(const std::vector<double>& y, const std::vector<double>& yhat) {
@@ -91,7 +97,7 @@ double Fit(const std::vector<double>& y, const std::vector<double>& yhat) {
 }
 
 struct Replayed {
-  double worst_fit = 100.0;      // over every compared channel
+  double worst_fit = 100.0;       // over every compared channel
   double worst_shortfall = -1e9;  // behind the perfect model, when given the truth
   std::string channel;            // of the worst shortfall (or fit)
   bool warmup = false, profile = false;
@@ -158,9 +164,8 @@ TEST(IrregularHeaveStart, ACutLogAtLabNoiseFitsWithinThreePointsOfAPerfectModel)
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
       SCOPED_TRACE(scenario.name + ", noise seed " + std::to_string(seed));
       const Replayed chosen = Replay(LabNoise(truth, seed), &truth);
-      std::printf("%s seed %d: worst shortfall %.2f points (%s, %s start)\n",
-                  scenario.name.c_str(), static_cast<int>(seed), chosen.worst_shortfall,
-                  chosen.channel.c_str(),
+      std::printf("%s seed %d: worst shortfall %.2f points (%s, %s start)\n", scenario.name.c_str(),
+                  static_cast<int>(seed), chosen.worst_shortfall, chosen.channel.c_str(),
                   chosen.profile ? "measured" : (chosen.warmup ? "warm-up" : "steady"));
       EXPECT_LE(chosen.worst_shortfall, kAllowedFitLossPoints) << chosen.channel;
     }
