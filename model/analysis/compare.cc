@@ -90,6 +90,7 @@ Result<Comparison> CompareTraces(const MeasuredLog& log, const ModelTraces& mode
     result->atmospheric_pressure_pa = log.atmospheric_pressure_pa;
     if (model.inputs_reconstructed) result->input_reconstruction = replayed_log->reconstruction;
     result->warmup = model.warmup;
+    result->measured_start = model.profile;
   }
   return result;
 }
@@ -135,15 +136,16 @@ Result<Comparison> ReplayAndAccumulate(LogRowSource* source, const std::string& 
   ComparisonAccumulator accumulator(summary, options);
   std::vector<double> model_si(summary.channels.size());
   PercentProgress percent(progress, "replay", summary.samples);
-  RowPipeline pipeline(PipelineSmoothingS(replay),
-                       ReplaySetup{params, sim_options, summary.t1_s, replay.warmup},
-                       [&](const PipelineSample& sample) {
-                         for (std::size_t c = 0; c < model_si.size(); ++c) {
-                           model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
-                         }
-                         accumulator.Add(sample, model_si.data());
-                         percent.Done(sample.index + 1);
-                       });
+  RowPipeline pipeline(
+      PipelineSmoothingS(replay),
+      ReplaySetup{params, sim_options, summary.t1_s, replay.warmup, replay.profile},
+      [&](const PipelineSample& sample) {
+        for (std::size_t c = 0; c < model_si.size(); ++c) {
+          model_si[c] = sample.model->values[Index(summary.channels[c].channel)];
+        }
+        accumulator.Add(sample, model_si.data());
+        percent.Done(sample.index + 1);
+      });
   LogRow row;
   while (true) {
     auto more = source->Next(&row);
@@ -192,6 +194,7 @@ Result<Comparison> CompareLog(const std::string& path, const RigParams& params,
     result->atmospheric_pressure_pa = scan->atmospheric_pressure_pa;
     result->input_reconstruction = plan;
     result->warmup = replay.warmup;
+    result->measured_start = replay.profile;
   }
   return result;
 }

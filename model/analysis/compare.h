@@ -91,7 +91,8 @@ struct CompareOptions {
   // CompareLog: replay reconstructed inputs (ReplayOptions::reconstruct_inputs). CompareTraces
   // follows the traces it is given (ModelTraces::inputs_reconstructed).
   bool reconstruct_inputs = true;
-  // CompareLog: start the replay after a warm-up where ChooseWarmup says so.
+  // CompareLog: start the replay after a warm-up or from the measured pipe state where
+  // ChooseReplayStart says so; false: from the steady state.
   bool choose_warmup = true;
   // CompareLog: correct the reconstructed choke and FT2 levels from the measured pressures
   // (EstimateInputLevels).
@@ -214,8 +215,10 @@ struct Comparison {
   InputCloseUp input_close_up;
   // How the replayed inputs were reconstructed; absent when replayed as measured.
   std::optional<InputReconstruction> input_reconstruction;
-  // The warm-up the replay started after; absent: from the steady state.
+  // The warm-up the replay started after, or the measured pipe state it started from; both
+  // absent: from the steady state.
   std::optional<PeriodicWarmup> warmup;
+  std::optional<PipeProfile> measured_start;
 
   const ChannelMetrics* Find(Channel channel) const;
 };

@@ -18,9 +18,7 @@ Status PrepareStreamedReplay(const ReconstructionPlanner& head,
   auto head_log = head.HeadLog(channels, path, atmospheric_pressure_pa);
   if (!head_log.ok()) return head_log.status();
   if (replay->choose_warmup) {
-    auto warmup = ChooseWarmup(*head_log, params, sim_options, *replay);
-    if (!warmup.ok()) return warmup.status();
-    replay->warmup = *warmup;
+    MPDRIG_RETURN_IF_ERROR(ChooseReplayStart(*head_log, params, sim_options, replay));
   }
   if (estimate_levels) {
     auto levels = EstimateInputLevels(*head_log, params, sim_options, *replay);
@@ -82,7 +80,7 @@ Result<RunSummary> LogFileReplay::Run(const std::function<void(const RigSample&)
   const double span_s = end_s_ - start_s_;
   double next_progress = 0.05;
   RowPipeline pipeline(PipelineSmoothingS(replay_),
-                       ReplaySetup{params_, sim_options_, end_s_, replay_.warmup},
+                       ReplaySetup{params_, sim_options_, end_s_, replay_.warmup, replay_.profile},
                        [&](const PipelineSample& sample) {
                          sink(*sample.model);
                          const double done = (sample.row->time_s - start_s_) / span_s;

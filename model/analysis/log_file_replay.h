@@ -6,7 +6,7 @@
 // Two passes over the file, as CompareLog's (compare.h):
 //   1. Prepare reads and checks every row (a bad line fails before any output) and keeps the
 //      first kReconstructionPlanSamples rows: the reconstruction's plan, the replay's start
-//      (ChooseWarmup) and input levels (EstimateInputLevels) are decided on them, as
+//      (ChooseReplayStart) and input levels (EstimateInputLevels) are decided on them, as
 //      PrepareLogReplay decides them on the whole log.
 //   2. Run reads the rows again through ReconstructingRowSource and RowPipeline (log_stream.h),
 //      which give the same doubles as the whole log in memory, and hands each row's RigSample to
@@ -28,7 +28,7 @@
 
 namespace mpdrig {
 
-// The replay's start (ChooseWarmup, where replay->choose_warmup) and input levels
+// The replay's start (ChooseReplayStart, where replay->choose_warmup) and input levels
 // (EstimateInputLevels where `plan` is set and replay->estimate_levels: into the plan's levels and
 // the warm-up), decided on a file's first rows held by `head`, as PrepareLogReplay decides them on
 // the whole log in memory. `channels`: the file's compared channels (LogRowSource::channels()).

@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 
 #include "model/analysis/log_stream.h"
+#include "model/boundary/piston.h"
 
 namespace mpdrig {
 
@@ -34,8 +35,10 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
   }
   traces.inputs_reconstructed = replay.reconstruct_inputs;
   traces.warmup = replay.warmup;
+  traces.profile = replay.profile;
   RowPipeline pipeline(
-      PipelineSmoothingS(replay), ReplaySetup{params, sim_options, times.back(), replay.warmup},
+      PipelineSmoothingS(replay),
+      ReplaySetup{params, sim_options, times.back(), replay.warmup, replay.profile},
       [&](const PipelineSample& sample) {
         for (std::size_t i = 0; i < log.channels.size(); ++i) {
           traces.values_si[i].push_back(sample.model->values[Index(log.channels[i].channel)]);
@@ -88,6 +91,230 @@ Result<std::optional<PeriodicWarmup>> ChooseWarmup(const MeasuredLog& log, const
     }
   }
   return error[1] < error[0] ? candidate : std::nullopt;
+}
+
+namespace {
+
+// Where along the pipe a channel measures the pressure, as a fraction of its length: P2 = p(0),
+// PTk at (k - 1)/9, C2 = p(L) (design.md). None for P1 (below the piston) and the flows.
+std::optional<double> PipeFraction(Channel channel) {
+  if (channel == Channel::kP2) return 0.0;
+  if (channel == Channel::kC2) return 1.0;
+  const int k = static_cast<int>(Index(channel)) - static_cast<int>(Index(Channel::kPT1));
+  if (k >= 0 && k < kPipeTransmitterCount) {
+    return static_cast<double>(k) / (kPipeTransmitterCount - 1);
+  }
+  return std::nullopt;
+}
+
+// Value and slope at t[0] of the least-squares quadratic through the finite samples with
+// t - t[0] <= window_s. None with fewer than 6 of them.
+std::optional<Eigen::Vector2d> QuadraticAtStart(const std::vector<double>& t,
+                                                const std::vector<double>& y, double window_s) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d projection = Eigen::Vector3d::Zero();
+  int count = 0;
+  for (std::size_t i = 0; i < t.size() && t[i] - t[0] <= window_s; ++i) {
+    if (!std::isfinite(y[i])) continue;
+    const double tau = (t[i] - t[0]) / window_s;
+    const Eigen::Vector3d b(1.0, tau, tau * tau);
+    normal += b * b.transpose();
+    projection += b * y[i];
+    ++count;
+  }
+  if (count < 6) return std::nullopt;
+  const Eigen::Vector3d c = normal.ldlt().solve(projection);
+  if (!c.allFinite()) return std::nullopt;
+  return Eigen::Vector2d(c(0), c(1) / window_s);
+}
+
+// y at `fraction` from the (fraction, y) points sorted by fraction: linear between them, held
+// beyond the ends.
+double InterpolateAlong(const std::vector<std::pair<double, double>>& points, double fraction) {
+  if (fraction <= points.front().first) return points.front().second;
+  for (std::size_t k = 1; k < points.size(); ++k) {
+    if (fraction <= points[k].first) {
+      return InterpolateLinear(fraction, points[k - 1].first, points[k - 1].second, points[k].first,
+                               points[k].second);
+    }
+  }
+  return points.back().second;
+}
+
+// The first guess of the pipe's state at t0 from the measurements there (EstimatePipeProfile);
+// none with fewer than two pipe pressure channels at distinct places.
+std::optional<PipeProfile> ProfileAtStart(const MeasuredLog& log, const RigParams& params,
+                                          const SimulationOptions& sim_options,
+                                          const ReplayOptions& replay, double window_s) {
+  const std::vector<double>& t = log.time_s();
+  // p and dp/dt at each measured place (channels at one place averaged).
+  std::vector<std::pair<double, Eigen::Vector3d>> places;  // fraction, (sum p, sum dp/dt, count)
+  for (const MeasuredChannel& channel : log.channels) {
+    const auto fraction = PipeFraction(channel.channel);
+    if (!fraction) continue;
+    const auto start = QuadraticAtStart(t, channel.values_si, window_s);
+    if (!start) continue;
+    auto place = std::find_if(places.begin(), places.end(),
+                              [&](const auto& p) { return p.first == *fraction; });
+    if (place == places.end()) {
+      places.emplace_back(*fraction, Eigen::Vector3d::Zero());
+      place = places.end() - 1;
+    }
+    place->second += Eigen::Vector3d((*start)(0), (*start)(1), 1.0);
+  }
+  if (places.size() < 2) return std::nullopt;
+  std::sort(places.begin(), places.end(),
+            [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<std::pair<double, double>> pressure, rate;
+  for (const auto& [fraction, sums] : places) {
+    pressure.emplace_back(fraction, sums(0) / sums(2));
+    rate.emplace_back(fraction, sums(1) / sums(2));
+  }
+  // The piston's velocity at t0 from the piston position the replay is fed.
+  const std::vector<double> piston =
+      replay.reconstruct_inputs && log.reconstructed_inputs.time_s.size() == t.size()
+          ? log.reconstructed_inputs.piston_position_m
+          : SmoothedPistonPosition(log.inputs, replay.piston_smoothing_s);
+  const auto piston_start = QuadraticAtStart(t, piston, window_s);
+  if (!piston_start) return std::nullopt;
+  PipeProfile profile;
+  profile.piston_velocity_mps = (*piston_start)(1);
+  const double inlet_velocity_mps =
+      PistonBoundary(params).InletVelocityMps(profile.piston_velocity_mps);
+  // Continuity (thesis 6.1.1 with rho(p) of 5.2.1): dp/dt = -(k + p) du/dx (quasi-linear), -rho c^2
+  // du/dx (linear), the convective u dp/dx left out (u / c < 1e-3): u integrated from the inlet by
+  // the trapezoid over the profile's points.
+  const double k_pa = params.QuasiLinearK();
+  const double rho_c2 = params.density_kgpm3 * params.wave_speed_mps * params.wave_speed_mps;
+  const double dx_m = params.pipe_length_m / (kProfilePoints - 1);
+  double previous_rate = 0.0;
+  for (int k = 0; k < kProfilePoints; ++k) {
+    const double fraction = static_cast<double>(k) / (kProfilePoints - 1);
+    const double p = InterpolateAlong(pressure, fraction);
+    const double stiffness = sim_options.model == PipeModel::kLinear ? rho_c2 : k_pa + p;
+    const double du_dx = -InterpolateAlong(rate, fraction) / stiffness;
+    profile.pressure_pa.push_back(p);
+    profile.velocity_mps.push_back(k == 0 ? inlet_velocity_mps
+                                          : profile.velocity_mps.back() +
+                                                0.5 * dx_m * (previous_rate + du_dx));
+    previous_rate = du_dx;
+  }
+  return profile;
+}
+
+// The measured minus the model's pressures over the pressure channels (every sample, channel by
+// channel; NaN where either is not finite). None if the replay fails.
+std::optional<Eigen::VectorXd> PressureError(const MeasuredLog& cut, const RigParams& params,
+                                             const SimulationOptions& sim_options,
+                                             const ReplayOptions& replay) {
+  auto traces = ReplayModel(cut, params, sim_options, replay);
+  if (!traces.ok()) return std::nullopt;
+  std::vector<double> error;
+  for (std::size_t c = 0; c < cut.channels.size(); ++c) {
+    if (!IsPressure(cut.channels[c].channel)) continue;
+    for (std::size_t i = 0; i < cut.time_s().size(); ++i) {
+      error.push_back(cut.channels[c].values_si[i] - traces->values_si[c][i]);
+    }
+  }
+  return Eigen::Map<const Eigen::VectorXd>(error.data(), static_cast<Eigen::Index>(error.size()));
+}
+
+// The sum of the finite squares of `error`.
+double SquaredError(const Eigen::VectorXd& error) {
+  double sum = 0.0;
+  for (double e : error) {
+    if (std::isfinite(e)) sum += e * e;
+  }
+  return sum;
+}
+
+// The median over the channels of each one's squared error (`error` is PressureError's, `samples`
+// per channel). A wrong start is a state of the whole pipe and its transient reaches every channel;
+// a sensor's offset or delay, which a start fitted to the pressures would partly absorb, is one
+// channel's: the median leaves it out.
+double MedianChannelSquaredError(const Eigen::VectorXd& error, std::size_t samples) {
+  std::vector<double> channels;
+  for (Eigen::Index first = 0; first + static_cast<Eigen::Index>(samples) <= error.size();
+       first += static_cast<Eigen::Index>(samples)) {
+    channels.push_back(SquaredError(error.segment(first, static_cast<Eigen::Index>(samples))));
+  }
+  if (channels.empty()) return 0.0;
+  std::sort(channels.begin(), channels.end());
+  const std::size_t n = channels.size();
+  return n % 2 == 1 ? channels[n / 2] : 0.5 * (channels[n / 2 - 1] + channels[n / 2]);
+}
+
+}  // namespace
+
+Result<std::optional<PipeProfile>> EstimatePipeProfile(const MeasuredLog& log,
+                                                       const RigParams& params,
+                                                       const SimulationOptions& sim_options,
+                                                       const ReplayOptions& replay) {
+  const std::vector<double>& t = log.time_s();
+  if (t.size() < 2) return std::optional<PipeProfile>{};
+  const double travel_s = params.pipe_length_m / params.wave_speed_mps;
+  auto guess =
+      ProfileAtStart(log, params, sim_options, replay, kProfileWindowTravelTimes * travel_s);
+  if (!guess) return std::optional<PipeProfile>{};
+  const MeasuredLog cut = MeasuredLogUntil(log, t.front() + kProfileFitTravelTimes * travel_s);
+  ReplayOptions start = replay;
+  start.warmup.reset();
+  start.profile = guess;
+  const auto base = PressureError(cut, params, sim_options, start);
+  if (!base) return std::optional<PipeProfile>{};
+  // The Jacobian of the model's pressures in the profile's values, by forward differences of a
+  // step well inside the model's linear range and well above its rounding: 0.01 bar, and the
+  // velocity that carries it in a wave (Joukowsky, dp = rho c du).
+  const double step_pa = 1.0e3;
+  const double step_mps = step_pa / (params.density_kgpm3 * params.wave_speed_mps);
+  constexpr int kParameters = 2 * kProfilePoints;
+  const auto value = [](PipeProfile& profile, int j) -> double& {
+    return j < kProfilePoints ? profile.pressure_pa[j] : profile.velocity_mps[j - kProfilePoints];
+  };
+  const auto scale = [&](int j) { return j < kProfilePoints ? step_pa : step_mps; };
+  Eigen::MatrixXd jacobian(base->size(), kParameters);
+  for (int j = 0; j < kParameters; ++j) {
+    ReplayOptions nudged = start;
+    value(*nudged.profile, j) += scale(j);
+    const auto error = PressureError(cut, params, sim_options, nudged);
+    if (!error || error->size() != base->size()) return std::optional<PipeProfile>{};
+    // d(model)/d(value / scale) = -(d error).
+    jacobian.col(j) = *base - *error;
+  }
+  // Least squares over the finite residuals, in the scaled values; a ridge far below the
+  // normal matrix's scale keeps a profile point no channel sees (too few transmitters) at its
+  // guess.
+  const auto solve = [&](const Eigen::VectorXd& error) -> Eigen::VectorXd {
+    Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(kParameters, kParameters);
+    Eigen::VectorXd projection = Eigen::VectorXd::Zero(kParameters);
+    for (Eigen::Index i = 0; i < error.size(); ++i) {
+      if (!std::isfinite(error(i)) || !jacobian.row(i).allFinite()) continue;
+      normal += jacobian.row(i).transpose() * jacobian.row(i);
+      projection += jacobian.row(i).transpose() * error(i);
+    }
+    normal.diagonal().array() += 1e-9 * std::max(normal.diagonal().maxCoeff(), 1e-300);
+    return normal.ldlt().solve(projection);
+  };
+  // The model is linear in its initial state to first order: two chord steps (one Jacobian),
+  // each kept only if the error falls.
+  PipeProfile best = *guess;
+  double best_error = SquaredError(*base);
+  Eigen::VectorXd error = *base;
+  for (int iteration = 0; iteration < 2; ++iteration) {
+    const Eigen::VectorXd delta = solve(error);
+    if (!delta.allFinite()) break;
+    ReplayOptions trial = start;
+    for (int j = 0; j < kParameters; ++j)
+      value(*trial.profile, j) = value(best, j) + delta(j) * scale(j);
+    const auto trial_error = PressureError(cut, params, sim_options, trial);
+    if (!trial_error) break;
+    const double squared = SquaredError(*trial_error);
+    if (!(squared < best_error)) break;
+    best = *trial.profile;
+    best_error = squared;
+    error = *trial_error;
+  }
+  return std::optional<PipeProfile>{best};
 }
 
 namespace {
@@ -367,13 +594,46 @@ void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay)
   warm.pump_flow_m3ps = std::max(0.0, warm.pump_flow_m3ps + levels.PumpAt(start_s));
 }
 
+Status ChooseReplayStart(const MeasuredLog& log, const RigParams& params,
+                         const SimulationOptions& sim_options, ReplayOptions* replay) {
+  replay->warmup.reset();
+  replay->profile.reset();
+  const std::optional<PeriodicWarmup> warmup =
+      PlanPeriodicWarmup(log.inputs, replay->reconstruct_inputs);
+  auto profile = EstimatePipeProfile(log, params, sim_options, *replay);
+  if (!profile.ok()) return profile.status();
+  if (!warmup && !*profile) return Status::Ok();
+  const double travel_s = params.pipe_length_m / params.wave_speed_mps;
+  const double window_s =
+      std::max(warmup ? 2.0 * warmup->period_s : 0.0, kStartChoiceTravelTimes * travel_s);
+  const MeasuredLog cut = MeasuredLogUntil(log, log.time_s().front() + window_s);
+
+  // Steady, warm-up, measured: the first with the smallest error (a tie keeps the simpler start).
+  double best = std::numeric_limits<double>::infinity();
+  ReplayOptions chosen = *replay;
+  for (int kind = 0; kind < 3; ++kind) {
+    ReplayOptions start = *replay;
+    if (kind == 1 && !warmup) continue;
+    if (kind == 2 && !*profile) continue;
+    if (kind == 1) start.warmup = warmup;
+    if (kind == 2) start.profile = **profile;
+    const auto error = PressureError(cut, params, sim_options, start);
+    if (!error) continue;  // a start that leaves the model's range is not chosen
+    const double squared = MedianChannelSquaredError(*error, cut.time_s().size());
+    if (squared < best) {
+      best = squared;
+      chosen = start;
+    }
+  }
+  *replay = chosen;
+  return Status::Ok();
+}
+
 Status PrepareLogReplay(MeasuredLog* log, const RigParams& params,
                         const SimulationOptions& sim_options, ReplayOptions* replay,
                         InputLevels levels) {
   if (replay->choose_warmup) {
-    auto warmup = ChooseWarmup(*log, params, sim_options, *replay);
-    if (!warmup.ok()) return warmup.status();
-    replay->warmup = *warmup;
+    MPDRIG_RETURN_IF_ERROR(ChooseReplayStart(*log, params, sim_options, replay));
   }
   if (levels == InputLevels::kWithTheseParams && replay->reconstruct_inputs &&
       replay->estimate_levels) {

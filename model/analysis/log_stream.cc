@@ -389,6 +389,8 @@ Status RowPipeline::Emit() {
                            : RigSimulator::Create(replay_->params, replay_->options, initial.Mean(),
                                                   first_.smoothed_m, first_.row.time_s);
       if (!simulator.ok()) return simulator.status();
+      MPDRIG_CHECK(!(replay_->warmup && replay_->profile));
+      if (replay_->profile) MPDRIG_RETURN_IF_ERROR(simulator->SetPipeProfile(*replay_->profile));
       sampler_.emplace(std::move(simulator).value());
     }
     // Everything the step inputs up to row i can reach (one step and a half past it) must be

@@ -130,7 +130,7 @@ class MemoryRowSource final : public LogRowSource {
 // (PlanInputReconstruction): the same plan as for the whole log in memory. It keeps the
 // reconstruction's longest reach beyond them (kPlannerMarginSamples), so that the head's
 // reconstructed inputs are the whole log's, not a log cut there (whose last rows' windows are
-// one-sided): the start and the levels decided on the head (ChooseWarmup, EstimateInputLevels)
+// one-sided): the start and the levels decided on the head (ChooseReplayStart, EstimateInputLevels)
 // are then those decided on the whole log, to the last bit.
 class ReconstructionPlanner {
  public:
@@ -141,7 +141,7 @@ class ReconstructionPlanner {
       static_cast<std::size_t>(kMaxPistonHalfWidthSamples) + 1;
   void Add(const LogRow& row);
   InputReconstruction Plan() const { return PlanInputReconstruction(head_); }
-  // The rows collected, reconstructed, as a log in memory (for ChooseWarmup and
+  // The rows collected, reconstructed, as a log in memory (for ChooseReplayStart and
   // EstimateInputLevels, which take its first kReconstructionPlanSamples rows): `channels` as the
   // source's.
   Result<MeasuredLog> HeadLog(const std::vector<SourceChannel>& channels, const std::string& path,
@@ -195,6 +195,7 @@ struct ReplaySetup {
   SimulationOptions options;
   double end_time_s = 0.0;  // the log's last time: the piston velocity is one-sided there
   std::optional<PeriodicWarmup> warmup;  // as SimulateEach with InputSignals::warmup
+  std::optional<PipeProfile> profile;    // as SimulateEach with InputSignals::profile
 };
 
 class RowPipeline {

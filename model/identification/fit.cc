@@ -587,23 +587,39 @@ Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams&
                                               FitOptions options) {
   auto first = FitParameters(*log, start, parameters, options);
   if (!first.ok()) return first;
-  const ReplayOptions& replay = options.replay;
-  if (!replay.reconstruct_inputs || !replay.estimate_levels ||
-      log->reconstruction.levels.applied()) {
-    return first;
+  // The start chosen at the start values (ChooseReplayStart) may be one that absorbed their error
+  // (a measured state fitted under a wrong wave speed): chosen again at the fitted parameters.
+  bool start_changed = false;
+  if (options.replay.choose_warmup && options.replay.profile) {
+    ReplayOptions again = options.replay;
+    MPDRIG_RETURN_IF_ERROR(ChooseReplayStart(*log, first->params, options.simulation, &again));
+    start_changed = true;
+    options.replay = again;
   }
-  auto levels = EstimateInputLevels(*log, first->params, options.simulation, replay);
-  if (!levels.ok()) return levels.status();
-  if (!levels->applied()) return first;
-  ApplyInputLevels(*levels, log);
-  ApplyInputLevels(*levels, &options.replay);
+  const ReplayOptions& replay = options.replay;
+  bool levels_changed = false;
+  InputLevelCorrection levels;
+  if (replay.reconstruct_inputs && replay.estimate_levels &&
+      !log->reconstruction.levels.applied()) {
+    auto estimate = EstimateInputLevels(*log, first->params, options.simulation, replay);
+    if (!estimate.ok()) return estimate.status();
+    levels = *estimate;
+    levels_changed = levels.applied();
+  }
+  if (!start_changed && !levels_changed) return first;
+  if (levels_changed) {
+    ApplyInputLevels(levels, log);
+    ApplyInputLevels(levels, &options.replay);
+  }
   auto second = FitParameters(*log, first->params, parameters, options);
-  if (!second.ok()) return second.status().Within("refitting on the estimated input levels");
+  if (!second.ok()) {
+    return second.status().Within("refitting on the start and input levels estimated at the fit");
+  }
   second->initial = first->initial;  // the user's start, not the second fit's
   second->error_before = first->error_before;
   second->iterations += first->iterations;
   second->replays += first->replays + 3;
-  second->input_levels = *levels;
+  if (levels_changed) second->input_levels = levels;
   return second;
 }
 

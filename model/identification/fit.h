@@ -115,9 +115,11 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
 // What `mpdrig fit` runs: FitParameters on the log as reconstructed, then the choke's and FT2's
 // levels estimated at the fitted parameters (EstimateInputLevels; at the start values a wrong
 // parameter would pass for a level error) and applied to *log, then FitParameters again from the
-// first fit's estimates. Where options.replay does not reconstruct or estimate levels, or *log
-// already has levels, FitParameters alone. replays and iterations count both fits, error_before
-// is the first fit's.
+// first fit's estimates. A measured start (ReplayOptions::profile, ChooseReplayStart) is chosen
+// again at the first fit's estimates before the levels: at the start values it may have absorbed
+// their error. Where options.replay does not reconstruct or estimate levels, or *log already has
+// levels, and the start is not a measured one, FitParameters alone. replays and iterations count
+// both fits, error_before is the first fit's.
 Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams& start,
                                               const std::vector<FitParameter>& parameters,
                                               FitOptions options = {});

@@ -54,6 +54,16 @@ void PipeSolver::SetRestState(double outlet_pressure_pa) {
   OnStateReset();
 }
 
+void PipeSolver::SetState(const std::vector<double>& pressure_pa,
+                          const std::vector<double>& velocity_mps) {
+  MPDRIG_CHECK(pressure_pa.size() == alpha_.size() && velocity_mps.size() == alpha_.size());
+  for (std::size_t i = 0; i < alpha_.size(); ++i) {
+    alpha_[i] = law_.Alpha(pressure_pa[i], velocity_mps[i]);
+    beta_[i] = law_.Beta(pressure_pa[i], velocity_mps[i]);
+  }
+  OnStateReset();
+}
+
 Status PipeSolver::SetExtensions(std::vector<const PipeExtension*> extensions) {
   source_extensions_.clear();
   inlet_closure_ = nullptr;

@@ -83,6 +83,10 @@ class PipeSolver {
   // Sets the steady state with the pipe at rest and outlet pressure p_l (thesis 6.5): hydrostatic
   // profile (6.5.3) for the quasi-linear model, p_l + rho g sin(gamma) (L - x) for the linear one.
   void SetRestState(double outlet_pressure_pa);
+  // Sets the state at the N + 1 nodes from a pressure [Pa abs] and a velocity [m/s] profile (a
+  // state other than a steady one: a replay that starts from the measured pipe). Both have N + 1
+  // values.
+  void SetState(const std::vector<double>& pressure_pa, const std::vector<double>& velocity_mps);
 
   // Physics beyond the thesis's pipe (model/effects), consulted every step; not owned, must outlive
   // the solver. Refused when the scheme does not support a hook one of them uses, when two

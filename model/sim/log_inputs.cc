@@ -418,6 +418,7 @@ Result<InputSignals> SignalsFromColumns(LogInputColumns columns, const std::stri
   signals.rig = [shared](double t) { return shared->Rig(t); };
   signals.initial = initial.Mean();
   signals.warmup = options.warmup;
+  signals.profile = options.profile;
   return signals;
 }
 

@@ -64,7 +64,12 @@ struct InputReplayOptions {
   // of a periodic excitation (PlanPeriodicWarmup; ChooseWarmup in model/analysis/log_replay.h
   // decides from the measured pressures).
   std::optional<PeriodicWarmup> warmup;
-  // Commands that have the measured log let ChooseWarmup set `warmup`; false: always steady.
+  // Start from this state of the pipe instead (not with a warm-up): for a log that starts in the
+  // middle of an excitation that is not periodic (EstimatePipeProfile and ChooseReplayStart in
+  // model/analysis/log_replay.h).
+  std::optional<PipeProfile> profile;
+  // Commands that have the measured log let ChooseReplayStart set `warmup` or `profile`; false:
+  // always the steady state.
   bool choose_warmup = true;
   // Commands that have the measured log correct the reconstructed choke and FT2 levels from the
   // measured pressures (EstimateInputLevels); false: the levels as reconstructed.

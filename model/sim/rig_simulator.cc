@@ -113,6 +113,58 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
   return simulator;
 }
 
+std::vector<double> PipeProfile::AtNodes(const std::vector<double>& values, int cells) {
+  const std::size_t n = values.size();
+  MPDRIG_CHECK(n >= 2 && cells >= 1);
+  // Natural cubic spline on the unit spacing: second derivatives m from the tridiagonal system
+  // m_{k-1} + 4 m_k + m_{k+1} = 6 (y_{k-1} - 2 y_k + y_{k+1}), m_0 = m_{n-1} = 0 (Thomas).
+  std::vector<double> m(n, 0.0);
+  if (n > 2) {
+    std::vector<double> diagonal(n, 4.0), rhs(n, 0.0);
+    for (std::size_t k = 1; k + 1 < n; ++k) {
+      rhs[k] = 6.0 * (values[k - 1] - 2.0 * values[k] + values[k + 1]);
+    }
+    for (std::size_t k = 2; k + 1 < n; ++k) {
+      const double w = 1.0 / diagonal[k - 1];
+      diagonal[k] -= w;
+      rhs[k] -= w * rhs[k - 1];
+    }
+    for (std::size_t k = n - 2; k >= 1; --k) {
+      m[k] = (rhs[k] - (k + 2 < n ? m[k + 1] : 0.0)) / diagonal[k];
+    }
+  }
+  std::vector<double> nodes(cells + 1);
+  for (int i = 0; i <= cells; ++i) {
+    const double s = static_cast<double>(i) * static_cast<double>(n - 1) / cells;
+    const std::size_t k = std::min(n - 2, static_cast<std::size_t>(s));
+    const double b = s - static_cast<double>(k), a = 1.0 - b;
+    nodes[i] = a * values[k] + b * values[k + 1] +
+               ((a * a * a - a) * m[k] + (b * b * b - b) * m[k + 1]) / 6.0;
+  }
+  return nodes;
+}
+
+Status RigSimulator::SetPipeProfile(const PipeProfile& profile) {
+  MPDRIG_CHECK(steps_ == 0);
+  if (profile.pressure_pa.size() < 2 || profile.velocity_mps.size() < 2) {
+    return Status::Error("a pipe profile needs at least 2 points");
+  }
+  for (const auto* values : {&profile.pressure_pa, &profile.velocity_mps}) {
+    for (double v : *values) {
+      if (!std::isfinite(v)) return Status::Error("a pipe profile's values must be finite");
+    }
+  }
+  const int cells = pipe_->config().cells;
+  pipe_->SetState(PipeProfile::AtNodes(profile.pressure_pa, cells),
+                  PipeProfile::AtNodes(profile.velocity_mps, cells));
+  boundary_.inlet_velocity_mps = pipe_->VelocityAt(0.0);
+  last_inputs_.piston_velocity_mps = profile.piston_velocity_mps;
+  const ChannelValues initial = ModelChannels();
+  for (auto& effect : effects_) effect->Initialize(*pipe_, initial);
+  sensor_values_ = initial;
+  return Status::Ok();
+}
+
 Status RigSimulator::Step(const StepInputs& inputs) {
   const RigInputs& in = inputs.rig;
   if (!std::isfinite(inputs.piston_velocity_mps) || !std::isfinite(in.choke_opening_frac) ||
@@ -304,10 +356,12 @@ Result<RunSummary> SimulateEach(const RigParams& params, const SimulationOptions
   };
 
   const RigInputs initial = inputs.initial.value_or(inputs.rig(t0));
+  MPDRIG_CHECK(!(inputs.warmup && inputs.profile));
   auto simulator = inputs.warmup ? CreateWarmedUp(params, options, t0, *inputs.warmup)
                                  : RigSimulator::Create(params, options, initial,
                                                         inputs.piston_position_m(t0), t0);
   if (!simulator.ok()) return simulator.status();
+  if (inputs.profile) MPDRIG_RETURN_IF_ERROR(simulator->SetPipeProfile(*inputs.profile));
   RigSampler sampler(std::move(simulator).value());
 
   double next_progress = 0.05;

@@ -102,6 +102,20 @@ struct RangeEvent {
   std::string Describe() const;
 };
 
+// The pipe's state at a run's first time, as measured (a log that joins a running rig with an
+// excitation that is not periodic: neither the steady state nor a periodic warm-up is its start):
+// pressure and velocity at n >= 2 points evenly spaced over the pipe, x_k = k L / (n - 1), between
+// them a natural cubic spline (thesis 6.5's initial steady state generalised to any smooth state).
+// EstimatePipeProfile (model/analysis/log_replay.h) makes one from a log's pressures.
+struct PipeProfile {
+  std::vector<double> pressure_pa;   // p(x_k), absolute
+  std::vector<double> velocity_mps;  // u(x_k), positive towards the choke
+  double piston_velocity_mps = 0.0;  // v_d at the first time (P1's term, 5.4.2)
+
+  // The profile at the solver's N + 1 nodes x_i = i L / N.
+  static std::vector<double> AtNodes(const std::vector<double>& values, int cells);
+};
+
 class RigSimulator {
  public:
   static Result<RigSimulator> Create(const RigParams& params, const SimulationOptions& options,
@@ -116,6 +130,10 @@ class RigSimulator {
   const PipeSolver& pipe() const { return *pipe_; }
   const RigParams& params() const { return params_; }
   double choke_opening_frac() const { return choke_opening_frac_; }
+
+  // Replaces the pipe's state (before the first Step) by `profile`, the effects re-initialised
+  // from it. Fails if the profile has fewer than 2 points or a value is not finite.
+  Status SetPipeProfile(const PipeProfile& profile);
 
   // Advances one step. Fails on solver failure, or on a range violation when the options say so;
   // otherwise the first violation is kept in first_range_event().
@@ -205,6 +223,7 @@ struct InputSignals {
   // replay gives its inputs' mean over the first moments (log_inputs.h).
   std::optional<RigInputs> initial;
   std::optional<PeriodicWarmup> warmup;  // none: the run starts from the steady state at t0
+  std::optional<PipeProfile> profile;    // the pipe's state at t0 (not with a warm-up)
 };
 
 // What a run did besides its samples: what SimulateEach returns, which hands the samples to a

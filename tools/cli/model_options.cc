@@ -181,8 +181,9 @@ void AddInputReplayOptions(CLI::App* command, InputReplayOptions* options) {
   command->add_flag_callback(
       "--steady-start", [options]() { options->choose_warmup = false; },
       "start the replay from the steady state even where the log starts in the middle of a "
-      "periodic heave (by default such a log is replayed after a 30 s warm-up on its first "
-      "period, if its pressures fit that start better)");
+      "heave (by default such a log is replayed after a 30 s warm-up on its first period, or from "
+      "the pipe's state estimated from the pressures of its first travel times, if its pressures "
+      "fit that start better)");
   command
       ->add_option("--piston-smoothing-s", options->piston_smoothing_s,
                    "with --raw-inputs: window of the local quadratic fit that smooths the measured "
@@ -203,6 +204,12 @@ void DescribeReplay(const InputReconstruction* reconstruction, const InputReplay
                  "the log starts mid-heave: replayed after a %.0f s warm-up on its periodic "
                  "excitation (period %.4f s)\n",
                  options.warmup->duration_s, options.warmup->period_s);
+  }
+  if (options.profile) {
+    std::fprintf(stderr,
+                 "the log starts mid-excitation: replayed from the pipe's state estimated from "
+                 "its pressures over the first %.0f travel times\n",
+                 kProfileFitTravelTimes);
   }
 }
 

@@ -121,6 +121,7 @@ void WriteInputs(const Comparison& comparison, JsonWriter& json) {
     json.Key("warmup_period_s").Number(comparison.warmup->period_s);
     json.Key("warmup_s").Number(comparison.warmup->duration_s);
   }
+  json.Key("measured_start").Bool(comparison.measured_start.has_value());
   json.EndObject();
 }
 

@@ -190,6 +190,12 @@ std::string InputsSection(const Comparison& comparison) {
             FormatValue(comparison.warmup->duration_s, 3) + " s warm-up on its periodic " +
             "excitation (period " + FormatValue(comparison.warmup->period_s, 4) + " s).";
   }
+  if (comparison.measured_start) {
+    html +=
+        " The log starts in the middle of an excitation that is not periodic: the replay "
+        "started from the pipe's state as measured (pressures and velocities along the pipe "
+        "fitted to the first travel times).";
+  }
   html += " First " + FormatValue(inputs.time_s.back() - inputs.time_s.front(), 3) +
           " s.</p><div class=row>";
   struct Input {

@@ -91,3 +91,67 @@ TEST(RigSimulator, LeavingTheRangeIsAModelRangeErrorWithTimeAndPlace) {
 
 }  // namespace
 }  // namespace mpdrig
+
+namespace mpdrig {
+namespace {
+
+// A natural cubic spline through the profile's points: exact at the points, and exact for a
+// straight line between them (its second derivatives vanish).
+TEST(PipeProfile, SplineHitsThePointsAndKeepsAStraightLine) {
+  const std::vector<double> line = {1.0, 3.0, 5.0, 7.0, 9.0};
+  const std::vector<double> nodes = PipeProfile::AtNodes(line, 8);
+  ASSERT_EQ(nodes.size(), 9u);
+  for (int i = 0; i <= 8; ++i) EXPECT_NEAR(nodes[i], 1.0 + i, 1e-12);
+  const std::vector<double> bumpy = {0.0, 2.0, -1.0, 4.0, 0.5, 3.0};
+  const std::vector<double> at = PipeProfile::AtNodes(bumpy, 25);  // 5 nodes per interval
+  for (std::size_t k = 0; k < bumpy.size(); ++k) EXPECT_NEAR(at[5 * k], bumpy[k], 1e-12);
+}
+
+// The pipe's state carried over as a profile through every node (cells + 1 points) is the same
+// state: a run started from it follows the run it was taken from to rounding.
+TEST(PipeProfile, AStateTakenAsAProfileContinuesTheSameRun) {
+  const RigParams params;
+  SimulationOptions options;
+  options.cells = 40;
+  const InputSignals drive = SineDrive();
+  auto first = RigSimulator::Create(params, options, drive.rig(0.0), 0.0);
+  ASSERT_TRUE(first.ok());
+  const auto step = [&](RigSimulator* sim) {
+    const double t_b = sim->next_step_end_s(), dt = sim->time_step_s();
+    StepInputs in;
+    in.piston_position_m = drive.piston_position_m(t_b);
+    in.piston_velocity_mps =
+        (drive.piston_position_m(t_b + 0.5 * dt) - drive.piston_position_m(t_b - 0.5 * dt)) / dt;
+    in.rig = drive.rig(t_b);
+    return sim->Step(in);
+  };
+  while (first->time_s() < 7.3) ASSERT_TRUE(step(&*first).ok());
+  PipeProfile profile;
+  for (int i = 0; i <= options.cells; ++i) {
+    const double x = params.pipe_length_m * i / options.cells;
+    profile.pressure_pa.push_back(first->PressureAtPa(x));
+    profile.velocity_mps.push_back(first->pipe().VelocityAt(x));
+  }
+  auto second = RigSimulator::Create(params, options, drive.rig(0.0),
+                                     drive.piston_position_m(first->time_s()), first->time_s());
+  ASSERT_TRUE(second.ok());
+  ASSERT_TRUE(second->SetPipeProfile(profile).ok());
+  for (int k = 0; k < 500; ++k) {
+    ASSERT_TRUE(step(&*first).ok());
+    ASSERT_TRUE(step(&*second).ok());
+    for (Channel c : {Channel::kPT1, Channel::kPT5, Channel::kC2}) {
+      // 1e-3 Pa (1e-8 of the pressure): the invariants' round trip through p and u rounds.
+      ASSERT_NEAR(second->Sample()[c], first->Sample()[c], 1e-3) << k;
+    }
+  }
+  auto fresh = RigSimulator::Create(params, options, drive.rig(0.0), 0.0);
+  ASSERT_TRUE(fresh.ok());
+  PipeProfile bad = profile;
+  bad.velocity_mps[3] = std::nan("");
+  EXPECT_FALSE(fresh->SetPipeProfile(bad).ok());
+  bad.pressure_pa.resize(1);
+  EXPECT_FALSE(fresh->SetPipeProfile(bad).ok());
+}
+
+}  // namespace
+}  // namespace mpdrig

@@ -201,11 +201,11 @@ TEST(ReportTest, StreamedAndInMemoryComparisonsRenderTheSame) {
     ASSERT_TRUE(streamed.ok()) << streamed.status().message();
     auto log = LoadMeasuredLog(path);
     ASSERT_TRUE(log.ok()) << log.status().message();
-    // As CompareLog: the start (steady or warmed up) chosen from the measured pressures.
+    // As CompareLog: the start (steady, warmed up or measured) chosen from the measured
+    // pressures.
     ReplayOptions replay;
-    auto warmup = ChooseWarmup(*log, RigParams{}, SimulationOptions{}, replay);
-    ASSERT_TRUE(warmup.ok()) << warmup.status().message();
-    replay.warmup = *warmup;
+    const Status start = ChooseReplayStart(*log, RigParams{}, SimulationOptions{}, &replay);
+    ASSERT_TRUE(start.ok()) << start.message();
     auto model = ReplayModel(*log, RigParams{}, SimulationOptions{}, replay);
     ASSERT_TRUE(model.ok()) << model.status().message();
     auto in_memory = CompareTraces(*log, *model, options);
