@@ -578,8 +578,7 @@ Result<Baseline> FitBaseline(const RigParams& start, DiagnoseRun* run, Diagnosis
   run->Report("baseline", 0.0);
   const bool fits_wave_speed = std::find(options.base_params.begin(), options.base_params.end(),
                                          "wave_speed_mps") != options.base_params.end();
-  const RigParams base_start =
-      fits_wave_speed ? ScanWaveSpeed(*run, start, runs) : start;
+  const RigParams base_start = fits_wave_speed ? ScanWaveSpeed(*run, start, runs) : start;
   auto base_fit = FitBaseModel(base_start, baseline.parameters, run, runs);
   if (!base_fit.ok()) return base_fit.status();
   SearchContext& search = baseline.search;
@@ -857,8 +856,8 @@ void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis, StageRuns* runs
   diagnosis->verdict = winner.effect;
   run.Report("compare",
              1.5 + static_cast<double>(diagnosis->candidates.size() + diagnosis->failed.size()));
-  auto traces = ReplayWithOwnLevels(run.measured, winner.fitted, run.simulation, run.options.replay,
-                                    runs);
+  auto traces =
+      ReplayWithOwnLevels(run.measured, winner.fitted, run.simulation, run.options.replay, runs);
   if (!traces.ok()) return;
   auto comparison = CompareTraces(run.log, *traces);
   if (comparison.ok()) diagnosis->winner_comparison = std::move(comparison).value();
@@ -990,8 +989,7 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
     StageRuns* screening = &diagnosis->runs[diagnosis->runs.size() - 2];
     StageRuns* polishing = &diagnosis->runs.back();
     RoundData data;
-    auto reference =
-        SelectedReference(run, baseline, diagnosis->selected.back(), &data, screening);
+    auto reference = SelectedReference(run, baseline, diagnosis->selected.back(), &data, screening);
     if (!reference.ok()) return reference.status();
     // The reference's own search (without a new effect) beside the candidates.
     std::optional<FitResult> searched;
@@ -999,8 +997,7 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
     const auto own_search = [&] {
       SearchContext context = reference->search;
       context.fit_options.max_iterations = run.options.candidate_iterations;
-      auto fit =
-          SearchAndFit(context, reference->fit.params, reference->parameters, &search_runs);
+      auto fit = SearchAndFit(context, reference->fit.params, reference->parameters, &search_runs);
       if (fit.ok() && fit->error_after < reference->fit.error_after) {
         KeepFit(*context.fit_log, reference->parameters, context.fit_options, &*fit, &search_runs);
         searched = *std::move(fit);

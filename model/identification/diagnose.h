@@ -201,9 +201,9 @@ struct Diagnosis {
   // The best candidate of the round that ended the selection (not significant), with its
   // detectability measured against the model selected so far; none where no round tried one.
   std::optional<CandidateResult> next;
-  std::string selection_end;  // why the selection ended ("no candidate significant", ...)
-  int replays = 0;                 // model runs: the sum over `runs`
-  std::vector<StageRuns> runs;     // in the order of the stages
+  std::string selection_end;    // why the selection ended ("no candidate significant", ...)
+  int replays = 0;              // model runs: the sum over `runs`
+  std::vector<StageRuns> runs;  // in the order of the stages
 };
 
 Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,

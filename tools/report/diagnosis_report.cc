@@ -90,8 +90,7 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   std::ostringstream out;
   const CandidateResult& b = d.baseline;
   out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
-      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":"
-      << d.replays << ",\"runs\":[";
+      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays << ",\"runs\":[";
   // Where the model runs went, stage by stage.
   for (std::size_t i = 0; i < d.runs.size(); ++i) {
     const StageRuns& r = d.runs[i];
