@@ -171,6 +171,11 @@ void Axpy(std::size_t n, double a, const double* x, double* y) {
   for (std::size_t j = 0; j < n; ++j) y[j] += a * x[j];
 }
 
+// Pass 2's rings: the last segment (AddSegment copies exactly summary.segment_length samples).
+std::size_t RingCapacity(const LogSummary& summary) {
+  return std::max<std::size_t>(1, summary.segment_length);
+}
+
 }  // namespace
 
 // ---- Pass 1 -----------------------------------------------------------------------------------
@@ -330,7 +335,9 @@ ComparisonAccumulator::ComparisonAccumulator(const LogSummary& summary,
     : summary_(summary),
       options_(options),
       segmenter_(static_cast<std::size_t>(std::max(8, options.welch_segment_samples))),
-      piston_ring_(segmenter_.max_length()) {
+      // Pass 2 knows the segments' length: its rings hold one segment, not the longest one
+      // (2^17 doubles each, 2 per channel: 30 MB to clear for a 40 s log of 15 channels).
+      piston_ring_(RingCapacity(summary)) {
   const double dt = summary.sample_interval_s;
   const std::size_t length = summary.segment_length;
   band_centres_ = DominantFrequencies(summary.piston_power, summary.df_hz, options);
@@ -393,8 +400,8 @@ void ComparisonAccumulator::InitChannel(ChannelState* state,
     state->du[u].assign(2 * lags + 2, 0.0);
     if (summary.has_gaps) state->mu[u].assign(2 * lags + 2, 0.0);
   }
-  state->measured_ring = std::make_unique<SampleRing>(segmenter_.max_length());
-  state->model_ring = std::make_unique<SampleRing>(segmenter_.max_length());
+  state->measured_ring = std::make_unique<SampleRing>(RingCapacity(summary_));
+  state->model_ring = std::make_unique<SampleRing>(RingCapacity(summary_));
   for (auto* v :
        {&state->band_power_measured, &state->band_power_model, &state->band_power_error}) {
     v->assign(band_centres_.size(), 0.0);

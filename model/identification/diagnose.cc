@@ -106,6 +106,15 @@ Scored ScoredOf(const CandidateResult& candidate) {
   return {candidate.error, candidate.block_errors, candidate.channel_errors};
 }
 
+// The fit kept of those tried (fit on `log` with `options`, which leave out the standard
+// errors): its standard errors added, their replays counted.
+void KeepFit(const MeasuredLog& log, const std::vector<FitParameter>& parameters,
+             const FitOptions& options, FitResult* fit, StageRuns* runs) {
+  const int before = fit->replays;
+  MPDRIG_CHECK(EstimateStandardErrors(log, parameters, options, fit).ok());
+  runs->fits += fit->replays - before;
+}
+
 // What a local search (scans, then Levenberg-Marquardt) needs to know, shared by the candidates
 // and the baseline's second search.
 struct SearchContext {
@@ -141,10 +150,10 @@ struct ScanPoints {
 };
 
 void ReplayScanPoint(const SearchContext& context, const RigParams& trial, ScanPoints* scan,
-                     int* replays) {
+                     StageRuns* runs) {
   auto traces =
       ReplayModel(*context.fit_log, trial, context.simulation, context.fit_options.replay);
-  ++*replays;
+  ++runs->scans;
   if (!traces.ok()) return;
   const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
   scan->points.push_back({error, trial});
@@ -187,7 +196,7 @@ std::optional<RigParams> AtStrength(RigParams strength, const std::vector<FitPar
 // hidden hose_compliance (seed 2), the fit from the best point ended 0.9% high in c with 4% more
 // error on the fitting data than the fit from the second start, 0.4% from the true c.
 Result<FitResult> FitFromTwoStarts(const SearchContext& context, const ScanPoints& scan,
-                                   const std::vector<FitParameter>& parameters, int* replays) {
+                                   const std::vector<FitParameter>& parameters, StageRuns* runs) {
   const ScanPoints::Point* second = nullptr;
   for (const ScanPoints::Point& point : scan.points) {
     const bool elsewhere =
@@ -195,11 +204,11 @@ Result<FitResult> FitFromTwoStarts(const SearchContext& context, const ScanPoint
     if (elsewhere && (second == nullptr || point.error < second->error)) second = &point;
   }
   auto fit = FitParameters(*context.fit_log, scan.best, parameters, context.fit_options);
-  if (fit.ok()) *replays += fit->replays;
+  if (fit.ok()) runs->fits += fit->replays;
   if (second != nullptr) {
     auto other = FitParameters(*context.fit_log, second->params, parameters, context.fit_options);
     if (other.ok()) {
-      *replays += other->replays;
+      runs->fits += other->replays;
       if (!fit.ok() || other->error_after < fit->error_after) return other;
     }
   }
@@ -217,7 +226,7 @@ Result<FitResult> FitFromTwoStarts(const SearchContext& context, const ScanPoint
 // higher f1 standing in for unsteady friction, and then hold the candidate back). Without effect
 // parameters this is the same search for the base model alone.
 Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& params,
-                               const std::vector<FitParameter>& parameters, int* replays) {
+                               const std::vector<FitParameter>& parameters, StageRuns* runs) {
   RigParams from_start = *context.start;
   from_start.wave_speed_mps = params.wave_speed_mps;
   from_start.effects = params.effects;
@@ -239,7 +248,7 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
           trial.wave_speed_mps =
               centre * (1.0 - kFineScanSpan + 2.0 * kFineScanSpan * k / (speeds - 1));
         }
-        ReplayScanPoint(context, trial, &scan, replays);
+        ReplayScanPoint(context, trial, &scan, runs);
       }
     }
   }
@@ -251,10 +260,10 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
       trial.wave_speed_mps =
           around.wave_speed_mps *
           (1.0 - kFinestScanSpan + 2.0 * kFinestScanSpan * k / (kFineScanPoints - 1));
-      ReplayScanPoint(context, trial, &scan, replays);
+      ReplayScanPoint(context, trial, &scan, runs);
     }
   }
-  return FitFromTwoStarts(context, scan, parameters, replays);
+  return FitFromTwoStarts(context, scan, parameters, runs);
 }
 
 // The strengths of an effect parameter over which detectability is scanned: its plausible range
@@ -284,7 +293,7 @@ void EstimateDetectability(const MeasuredLog& log, const RigParams& baseline,
                            const ModelTraces& baseline_traces, double baseline_error,
                            const SimulationOptions& simulation, const ReplayOptions& replay,
                            const FitParameter& parameter, double default_value, double score_begin,
-                           double score_end, CandidateResult* candidate, int* replays) {
+                           double score_end, CandidateResult* candidate, StageRuns* runs) {
   candidate->strength_key = parameter.key;
   // The baseline as the "measurement": the change is measured against its own variation.
   MeasuredLog reference = log;
@@ -300,22 +309,30 @@ void EstimateDetectability(const MeasuredLog& log, const RigParams& baseline,
   RigParams params = baseline;
   params.effects.push_back({candidate->effect, {}});
   const std::vector<double> strengths = StrengthScan(parameter, default_value);
-  std::vector<double> change(strengths.size(), 0.0);
-  for (std::size_t k = 0; k < strengths.size(); ++k) {
-    if (!SetParamValue(&params, parameter.key, strengths[k]).ok()) return;
-    auto traces = ReplayModel(log, params, simulation, replay);
-    ++*replays;
-    if (traces.ok()) change[k] = WindowError(reference, *traces, score_begin, score_end);
+  for (double strength : strengths) {
+    if (!SetParamValue(&params, parameter.key, strength).ok()) return;
   }
   if (strengths.empty()) return;
+  // The change at strength k, replayed when first asked for: the scan stops at the first
+  // detectable strength from the weak end, and the strengths past it are never replayed.
+  std::vector<std::optional<double>> change(strengths.size());
+  const auto change_at = [&](std::size_t k) {
+    if (!change[k]) {
+      MPDRIG_CHECK(SetParamValue(&params, parameter.key, strengths[k]).ok());
+      auto traces = ReplayModel(log, params, simulation, replay);
+      ++runs->detectability;
+      change[k] = traces.ok() ? WindowError(reference, *traces, score_begin, score_end) : 0.0;
+    }
+    return *change[k];
+  };
   // Most parameters grow with the effect (a friction factor, a time constant); some shrink (a
   // bulk modulus): the weak end is the one with the smaller change.
-  candidate->strength_inverse = change.front() > change.back();
+  candidate->strength_inverse = change_at(0) > change_at(strengths.size() - 1);
   candidate->strength_scan_limit =
       candidate->strength_inverse ? strengths.front() : strengths.back();
   for (std::size_t j = 0; j < strengths.size(); ++j) {
     const std::size_t k = candidate->strength_inverse ? strengths.size() - 1 - j : j;
-    if (change[k] >= needed) {
+    if (change_at(k) >= needed) {
       candidate->detectable_from = strengths[k];
       candidate->detectable_at_weakest = j == 0;
       return;
@@ -371,23 +388,23 @@ namespace {
 // came with its levels applied, or `replay` does not estimate them, the plain replay.
 Result<ModelTraces> ReplayWithOwnLevels(const MeasuredLog& reconstructed, const RigParams& params,
                                         const SimulationOptions& simulation,
-                                        const ReplayOptions& replay, int* replays,
+                                        const ReplayOptions& replay, StageRuns* runs,
                                         InputLevelCorrection* levels_used = nullptr) {
   if (replay.reconstruct_inputs && replay.estimate_levels &&
       !reconstructed.reconstruction.levels.applied()) {
     auto levels = EstimateInputLevels(reconstructed, params, simulation, replay);
-    *replays += 3;
+    runs->scoring += 3;
     if (levels.ok() && levels->applied()) {
       MeasuredLog leveled = reconstructed;
       ReplayOptions leveled_replay = replay;
       ApplyInputLevels(*levels, &leveled);
       ApplyInputLevels(*levels, &leveled_replay);
       if (levels_used != nullptr) *levels_used = *levels;
-      ++*replays;
+      ++runs->scoring;
       return ReplayModel(leveled, params, simulation, leveled_replay);
     }
   }
-  ++*replays;
+  ++runs->scoring;
   return ReplayModel(reconstructed, params, simulation, replay);
 }
 
@@ -455,6 +472,8 @@ DiagnoseRun SplitLog(const MeasuredLog& measured, const DiagnoseOptions& options
   run.fit_options.window_end_s = run.fit_end_s;
   run.fit_options.max_iterations = options.max_iterations;
   run.fit_options.solver_log = options.solver_log;
+  // Several fits from several starts, one kept: its standard errors only (KeepFit).
+  run.fit_options.standard_errors = false;
   // The baseline, then one per candidate, per later round of the selection up to its cap.
   run.progress_steps = 1.0 + static_cast<double>(candidate_count) +
                        static_cast<double>((kMaxSelectedEffects - 1) * candidate_count);
@@ -478,7 +497,7 @@ struct Baseline {
 // friction, 9.4): the cost is not convex in c. A wrong c puts the resonances in the wrong place,
 // and a local fit from there finds it cheaper to damp the response (raise f1) than to move c.
 // Returns `start` with the best wave speed (and f1, where another one moved it).
-RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, int* replays) {
+RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, StageRuns* runs) {
   // Coarse then fine: the valley in c is about 1% wide (the sweep's higher resonances), so a
   // coarse step of 2.5% finds its side and a fine step of 0.25% its floor.
   double best_error = std::numeric_limits<double>::infinity();
@@ -488,7 +507,7 @@ RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, int* rep
       RigParams trial = from;
       trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
       auto traces = ReplayModel(run.fit_log, trial, run.simulation, run.replay);
-      ++*replays;
+      ++runs->scans;
       if (!traces.ok()) continue;
       const double error = WindowError(run.fit_log, *traces, run.t_begin, run.fit_end_s);
       if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
@@ -522,15 +541,15 @@ RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, int* rep
 // replay and fitting data: every candidate sees the same levels.
 Result<FitResult> FitBaseModel(const RigParams& base_start,
                                const std::vector<FitParameter>& parameters, DiagnoseRun* run,
-                               Diagnosis* diagnosis) {
+                               StageRuns* runs) {
   auto base_fit = FitParameters(run->fit_log, base_start, parameters, run->fit_options);
   if (!base_fit.ok()) return base_fit.status().Within("fitting the base model");
-  diagnosis->replays += base_fit->replays;
+  runs->fits += base_fit->replays;
   if (run->replay.reconstruct_inputs && run->replay.estimate_levels &&
       !run->log.reconstruction.levels.applied()) {
     auto levels = EstimateInputLevels(run->log, base_fit->params, run->simulation, run->replay);
     if (!levels.ok()) return levels.status();
-    diagnosis->replays += 3;
+    runs->scoring += 3;
     if (levels->applied()) {
       ApplyInputLevels(*levels, &run->log);
       ApplyInputLevels(*levels, &run->replay);
@@ -538,7 +557,7 @@ Result<FitResult> FitBaseModel(const RigParams& base_start,
       run->fit_options.replay = run->replay;
       auto refit = FitParameters(run->fit_log, base_fit->params, parameters, run->fit_options);
       if (!refit.ok()) return refit.status().Within("refitting the base model on the input levels");
-      diagnosis->replays += refit->replays;
+      runs->fits += refit->replays;
       base_fit = std::move(refit);
     }
   }
@@ -547,7 +566,8 @@ Result<FitResult> FitBaseModel(const RigParams& base_start,
 
 // Step 2 of diagnose.h: the base parameters fitted (after the wave-speed scan), given the
 // candidates' search too, and scored; diagnosis->baseline and its comparison filled in.
-Result<Baseline> FitBaseline(const RigParams& start, DiagnoseRun* run, Diagnosis* diagnosis) {
+Result<Baseline> FitBaseline(const RigParams& start, DiagnoseRun* run, Diagnosis* diagnosis,
+                             StageRuns* runs) {
   const DiagnoseOptions& options = run->options;
   Baseline baseline;
   for (const std::string& key : options.base_params) {
@@ -558,9 +578,8 @@ Result<Baseline> FitBaseline(const RigParams& start, DiagnoseRun* run, Diagnosis
   run->Report("baseline", 0.0);
   const bool fits_wave_speed = std::find(options.base_params.begin(), options.base_params.end(),
                                          "wave_speed_mps") != options.base_params.end();
-  const RigParams base_start =
-      fits_wave_speed ? ScanWaveSpeed(*run, start, &diagnosis->replays) : start;
-  auto base_fit = FitBaseModel(base_start, baseline.parameters, run, diagnosis);
+  const RigParams base_start = fits_wave_speed ? ScanWaveSpeed(*run, start, runs) : start;
+  auto base_fit = FitBaseModel(base_start, baseline.parameters, run, runs);
   if (!base_fit.ok()) return base_fit.status();
   SearchContext& search = baseline.search;
   search.fit_log = &run->fit_log;
@@ -577,17 +596,16 @@ Result<Baseline> FitBaseline(const RigParams& start, DiagnoseRun* run, Diagnosis
   // an effect), and keeps whichever fits the fitting data better. Otherwise a candidate could win
   // by its search alone: a better base point found from its other start, credited to its effect.
   {
-    int null_replays = 0;
-    auto second = SearchAndFit(search, base_fit->params, baseline.parameters, &null_replays);
-    diagnosis->replays += null_replays;
+    auto second = SearchAndFit(search, base_fit->params, baseline.parameters, runs);
     if (second.ok() && second->error_after < base_fit->error_after) {
       second->error_before = base_fit->error_before;
       base_fit = std::move(second);
     }
   }
+  KeepFit(run->fit_log, baseline.parameters, run->fit_options, &*base_fit, runs);
   baseline.fit = std::move(base_fit).value();
   auto traces = ReplayWithOwnLevels(run->measured, baseline.fit.params, run->simulation,
-                                    options.replay, &diagnosis->replays, &diagnosis->input_levels);
+                                    options.replay, runs, &diagnosis->input_levels);
   if (!traces.ok()) return traces.status();
   baseline.traces = std::move(traces).value();
   baseline.score = Score(run->log, baseline.traces, run->score_begin, run->t_end);
@@ -632,7 +650,7 @@ RigParams AtZeroStrength(RigParams params, const std::vector<FitParameter>& para
 // own point with the effect at zero strength (AtZeroStrength), and the better one is kept.
 void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const EffectInfo& info,
                   const std::vector<FitParameter>& parameters, CandidateResult* candidate,
-                  Scored* score, int* replays) {
+                  Scored* score, StageRuns* runs) {
   const std::size_t base_count = reference.parameters.size();
   candidate->effect = std::string(info.name);
   candidate->explains = std::string(info.explains);
@@ -645,13 +663,13 @@ void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const Effec
         found.ok() && found->effect_param != nullptr ? found->effect_param->default_value : 0.0;
     EstimateDetectability(*reference.log, reference.fit.params, reference.traces,
                           reference.score.error, run.simulation, *reference.replay, strength,
-                          default_value, run.score_begin, run.t_end, candidate, replays);
+                          default_value, run.score_begin, run.t_end, candidate, runs);
   }
   RigParams params = reference.fit.params;
   params.effects.push_back({candidate->effect, {}});
   SearchContext context = reference.search;
   context.fit_options.max_iterations = run.options.candidate_iterations;
-  auto fit = SearchAndFit(context, params, parameters, replays);
+  auto fit = SearchAndFit(context, params, parameters, runs);
   // The reference's own point, the effect at zero strength: its error on the fitting data.
   const RigParams zero =
       AtZeroStrength(params, parameters, base_count, candidate->strength_inverse);
@@ -659,14 +677,14 @@ void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const Effec
   {
     auto traces =
         ReplayModel(*context.fit_log, zero, context.simulation, context.fit_options.replay);
-    ++*replays;
+    ++runs->fits;
     if (traces.ok())
       zero_error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
   }
   if (!fit.ok() || !(fit->error_after <= zero_error)) {
     auto from_zero = FitParameters(*context.fit_log, zero, parameters, context.fit_options);
     if (from_zero.ok()) {
-      *replays += from_zero->replays;
+      runs->fits += from_zero->replays;
       if (!fit.ok() || from_zero->error_after < fit->error_after) fit = std::move(from_zero);
     }
   }
@@ -679,7 +697,7 @@ void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const Effec
     stay_options.max_iterations = 0;
     auto stay = FitParameters(*context.fit_log, zero, parameters, stay_options);
     if (stay.ok()) {
-      *replays += stay->replays;
+      runs->fits += stay->replays;
       fit = std::move(stay);
     }
   }
@@ -689,12 +707,13 @@ void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const Effec
     return;
   }
   auto traces =
-      ReplayWithOwnLevels(run.measured, fit->params, run.simulation, run.options.replay, replays);
+      ReplayWithOwnLevels(run.measured, fit->params, run.simulation, run.options.replay, runs);
   if (!traces.ok()) {
     candidate->failure = traces.status().message();
     return;
   }
   *score = Score(run.log, *traces, run.score_begin, run.t_end);
+  KeepFit(*context.fit_log, parameters, context.fit_options, &*fit, runs);
   candidate->params = Named(*fit);
   candidate->fit_error = fit->error_after;
   candidate->fitted = fit->params;
@@ -742,24 +761,24 @@ Result<std::vector<std::vector<FitParameter>>> CandidateParameters(
 Status ScreenCandidates(const DiagnoseRun& run, const Baseline& reference,
                         const std::vector<const EffectInfo*>& candidates, double progress_at,
                         std::vector<CandidateResult>* ranked, std::vector<CandidateResult>* failed,
-                        int* replays_total, const std::function<void()>& extra_task = {}) {
+                        StageRuns* runs_total, const std::function<void()>& extra_task = {}) {
   auto candidate_parameters = CandidateParameters(reference, candidates);
   if (!candidate_parameters.ok()) return candidate_parameters.status();
   std::vector<CandidateResult> results(candidates.size());
   std::vector<Scored> scores(candidates.size());
-  std::vector<int> replays(candidates.size(), 0);
+  std::vector<StageRuns> runs(candidates.size());
   std::vector<std::function<void()>> tasks;
   if (extra_task) tasks.push_back(extra_task);
   for (std::size_t i = 0; i < candidates.size(); ++i) {
     tasks.push_back([&, i] {
       if (!run.options.run_tasks) run.Report(candidates[i]->name, progress_at + i);
       FitCandidate(run, reference, *candidates[i], (*candidate_parameters)[i], &results[i],
-                   &scores[i], &replays[i]);
+                   &scores[i], &runs[i]);
     });
   }
   RunTasks(run, tasks);
   for (std::size_t i = 0; i < results.size(); ++i) {
-    *replays_total += replays[i];
+    *runs_total += runs[i];
     (results[i].failure.empty() ? ranked : failed)->push_back(std::move(results[i]));
   }
   RankCandidates(ranked);
@@ -770,9 +789,9 @@ Status ScreenCandidates(const DiagnoseRun& run, const Baseline& reference,
 // and the ranking is redone. A polished fit is kept when it fits the fitting data better (never
 // chosen by the scoring data, which must stay unseen).
 void PolishLeaders(const DiagnoseRun& run, const Baseline& reference,
-                   std::vector<CandidateResult>* ranked, int* replays_total) {
+                   std::vector<CandidateResult>* ranked, StageRuns* runs_total) {
   const std::size_t count = std::min(kPolishedCandidates, ranked->size());
-  std::vector<int> replays(count, 0);
+  std::vector<StageRuns> runs(count);
   std::vector<std::function<void()>> tasks;
   for (std::size_t i = 0; i < count; ++i) {
     tasks.push_back([&, i] {
@@ -791,7 +810,7 @@ void PolishLeaders(const DiagnoseRun& run, const Baseline& reference,
           !run.measured.reconstruction.levels.applied()) {
         auto levels =
             EstimateInputLevels(run.measured, candidate.fitted, run.simulation, run.options.replay);
-        replays[i] += 3;
+        runs[i].scoring += 3;
         if (levels.ok() && levels->applied()) {
           MeasuredLog own_log = run.measured;
           own_options.replay = run.options.replay;
@@ -802,11 +821,12 @@ void PolishLeaders(const DiagnoseRun& run, const Baseline& reference,
       }
       auto polished = FitParameters(own_fit_log, candidate.fitted, parameters, own_options);
       if (!polished.ok()) return;
-      replays[i] += polished->replays;
+      runs[i].fits += polished->replays;
       if (!(polished->error_after < candidate.fit_error)) return;
       auto traces = ReplayWithOwnLevels(run.measured, polished->params, run.simulation,
-                                        run.options.replay, &replays[i]);
+                                        run.options.replay, &runs[i]);
       if (!traces.ok()) return;
+      KeepFit(own_fit_log, parameters, own_options, &*polished, &runs[i]);
       candidate.params = Named(*polished);
       candidate.fit_error = polished->error_after;
       candidate.fitted = polished->params;
@@ -815,13 +835,13 @@ void PolishLeaders(const DiagnoseRun& run, const Baseline& reference,
     });
   }
   RunTasks(run, tasks);
-  for (int r : replays) *replays_total += r;
+  for (const StageRuns& r : runs) *runs_total += r;
   RankCandidates(ranked);
 }
 
 // The verdict (step 4 of diagnose.h): the leading candidate if it is significant, the others as
 // good as it, and its model compared over the whole log.
-void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis) {
+void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis, StageRuns* runs) {
   if (diagnosis->candidates.empty() || !diagnosis->candidates.front().significant) return;
   const CandidateResult& winner = diagnosis->candidates.front();
   // Others as good as the winner: significant, and the winner's lead over them below what
@@ -836,8 +856,8 @@ void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis) {
   diagnosis->verdict = winner.effect;
   run.Report("compare",
              1.5 + static_cast<double>(diagnosis->candidates.size() + diagnosis->failed.size()));
-  auto traces = ReplayWithOwnLevels(run.measured, winner.fitted, run.simulation, run.options.replay,
-                                    &diagnosis->replays);
+  auto traces =
+      ReplayWithOwnLevels(run.measured, winner.fitted, run.simulation, run.options.replay, runs);
   if (!traces.ok()) return;
   auto comparison = CompareTraces(run.log, *traces);
   if (comparison.ok()) diagnosis->winner_comparison = std::move(comparison).value();
@@ -859,7 +879,8 @@ struct RoundData {
 // the candidates repeat (now with every one of them as base), its fitting error on the round's
 // data, its traces with its own levels and its score.
 Result<Baseline> SelectedReference(const DiagnoseRun& run, const Baseline& baseline,
-                                   const CandidateResult& current, RoundData* data, int* replays) {
+                                   const CandidateResult& current, RoundData* data,
+                                   StageRuns* runs) {
   Baseline reference;
   for (const NamedValue& value : current.params) {
     auto parameter = DefaultFitParameter(value.key);
@@ -872,7 +893,7 @@ Result<Baseline> SelectedReference(const DiagnoseRun& run, const Baseline& basel
       !run.measured.reconstruction.levels.applied()) {
     auto levels =
         EstimateInputLevels(run.measured, current.fitted, run.simulation, run.options.replay);
-    *replays += 3;
+    runs->scoring += 3;
     if (levels.ok() && levels->applied()) {
       data->log = run.measured;
       data->replay = run.options.replay;
@@ -889,16 +910,16 @@ Result<Baseline> SelectedReference(const DiagnoseRun& run, const Baseline& basel
   reference.search.base_count = reference.parameters.size();
   reference.fit.params = current.fitted;
   auto fit_traces = ReplayModel(data->fit_log, current.fitted, run.simulation, data->replay);
-  ++*replays;
+  ++runs->fits;
   if (!fit_traces.ok()) return fit_traces.status().Within("replaying " + current.effect);
   reference.fit.error_after = WindowError(data->fit_log, *fit_traces, run.t_begin, run.fit_end_s);
   return reference;
 }
 
 // The reference's traces over the whole log (its own levels) and its score.
-Status ScoreReference(const DiagnoseRun& run, Baseline* reference, int* replays) {
+Status ScoreReference(const DiagnoseRun& run, Baseline* reference, StageRuns* runs) {
   auto traces = ReplayWithOwnLevels(run.measured, reference->fit.params, run.simulation,
-                                    run.options.replay, replays);
+                                    run.options.replay, runs);
   if (!traces.ok()) return traces.status();
   reference->traces = std::move(traces).value();
   reference->score = Score(run.log, reference->traces, run.score_begin, run.t_end);
@@ -961,32 +982,39 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
       return Status::Ok();
     }
     run.Report("selection", progress);
+    // This round's runs: the screening (reference included), then the polishing.
+    const std::string round = "round " + std::to_string(diagnosis->selected.size() + 1);
+    diagnosis->runs.push_back({.stage = round});
+    diagnosis->runs.push_back({.stage = round + " polish"});
+    StageRuns* screening = &diagnosis->runs[diagnosis->runs.size() - 2];
+    StageRuns* polishing = &diagnosis->runs.back();
     RoundData data;
-    auto reference =
-        SelectedReference(run, baseline, diagnosis->selected.back(), &data, &diagnosis->replays);
+    auto reference = SelectedReference(run, baseline, diagnosis->selected.back(), &data, screening);
     if (!reference.ok()) return reference.status();
     // The reference's own search (without a new effect) beside the candidates.
     std::optional<FitResult> searched;
-    int search_replays = 0;
+    StageRuns search_runs;
     const auto own_search = [&] {
       SearchContext context = reference->search;
       context.fit_options.max_iterations = run.options.candidate_iterations;
-      auto fit =
-          SearchAndFit(context, reference->fit.params, reference->parameters, &search_replays);
-      if (fit.ok() && fit->error_after < reference->fit.error_after) searched = *std::move(fit);
+      auto fit = SearchAndFit(context, reference->fit.params, reference->parameters, &search_runs);
+      if (fit.ok() && fit->error_after < reference->fit.error_after) {
+        KeepFit(*context.fit_log, reference->parameters, context.fit_options, &*fit, &search_runs);
+        searched = *std::move(fit);
+      }
     };
     // The candidates start from the reference as it is; they are scored against it as the
     // search leaves it.
-    MPDRIG_RETURN_IF_ERROR(ScoreReference(run, &*reference, &diagnosis->replays));
+    MPDRIG_RETURN_IF_ERROR(ScoreReference(run, &*reference, screening));
     std::vector<CandidateResult> ranked, failed;
     MPDRIG_RETURN_IF_ERROR(ScreenCandidates(run, *reference, candidates, progress, &ranked, &failed,
-                                            &diagnosis->replays, own_search));
-    diagnosis->replays += search_replays;
+                                            screening, own_search));
+    *screening += search_runs;
     progress += static_cast<double>(candidates.size());
     CandidateResult& current = diagnosis->selected.back();
     if (searched) {
       reference->fit = *searched;
-      MPDRIG_RETURN_IF_ERROR(ScoreReference(run, &*reference, &diagnosis->replays));
+      MPDRIG_RETURN_IF_ERROR(ScoreReference(run, &*reference, screening));
       current.params = Named(*searched);
       current.fit_error = searched->error_after;
       current.fitted = searched->params;
@@ -1003,7 +1031,7 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
     for (CandidateResult& candidate : ranked) {
       candidate.round = static_cast<int>(diagnosis->selected.size()) + 1;
     }
-    PolishLeaders(run, *reference, &ranked, &diagnosis->replays);
+    PolishLeaders(run, *reference, &ranked, polishing);
     if (ranked.empty() || !ranked.front().significant) {
       if (!ranked.empty()) diagnosis->next = ranked.front();
       diagnosis->selection_end =
@@ -1017,6 +1045,14 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
 }
 
 }  // namespace
+
+StageRuns& StageRuns::operator+=(const StageRuns& other) {
+  scans += other.scans;
+  fits += other.fits;
+  detectability += other.detectability;
+  scoring += other.scoring;
+  return *this;
+}
 
 Status DiagnoseOptions::Validate() const {
   if (!(fit_fraction > 0.1 && fit_fraction < 0.95)) {
@@ -1044,16 +1080,24 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   DiagnoseRun run = SplitLog(measured, options, candidates.size(), &diagnosis);
   if (run.fit_log.time_s().size() < 4) return Status::Error("too few samples to fit on");
 
-  auto baseline = FitBaseline(start, &run, &diagnosis);
+  StageRuns base_runs{.stage = "baseline"};
+  auto baseline = FitBaseline(start, &run, &diagnosis, &base_runs);
+  diagnosis.runs.push_back(base_runs);
   if (!baseline.ok()) return baseline.status();
   run.Report("candidates", 1.0);
+  StageRuns screening{.stage = "round 1"}, polishing{.stage = "round 1 polish"},
+      verdict{.stage = "verdict"};
   MPDRIG_RETURN_IF_ERROR(ScreenCandidates(run, *baseline, candidates, 1.0, &diagnosis.candidates,
-                                          &diagnosis.failed, &diagnosis.replays));
+                                          &diagnosis.failed, &screening));
+  diagnosis.runs.push_back(screening);
   run.Report("polish", 1.0 + static_cast<double>(candidates.size()));
-  PolishLeaders(run, *baseline, &diagnosis.candidates, &diagnosis.replays);
-  DecideVerdict(run, &diagnosis);
+  PolishLeaders(run, *baseline, &diagnosis.candidates, &polishing);
+  diagnosis.runs.push_back(polishing);
+  DecideVerdict(run, &diagnosis, &verdict);
+  diagnosis.runs.push_back(verdict);
   MPDRIG_RETURN_IF_ERROR(SelectEffects(run, *baseline, &diagnosis));
   run.Report("done", run.progress_steps);
+  for (const StageRuns& stage : diagnosis.runs) diagnosis.replays += stage.total();
   return diagnosis;
 }
 

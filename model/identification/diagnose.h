@@ -161,6 +161,19 @@ struct CandidateResult {
   RigParams fitted;
 };
 
+// Where a diagnosis's model runs went, by stage and kind (bench/diagnose_speed.sh prints them):
+// its wall time follows them, a run on the fitting data costing fit_fraction of one over the
+// whole log.
+struct StageRuns {
+  std::string stage;      // "baseline", "round 1", "round 1 polish", "verdict", "round 2", ...
+  int scans = 0;          // scan points on the fitting data (wave speed; strength x wave speed)
+  int fits = 0;           // the local fits' replays on the fitting data
+  int detectability = 0;  // the detectability scans, over the whole log
+  int scoring = 0;        // the inputs' levels and the scored replays, over the whole log
+  int total() const { return scans + fits + detectability + scoring; }
+  StageRuns& operator+=(const StageRuns& other);
+};
+
 struct Diagnosis {
   double fit_end_s = 0.0;    // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
   double noise_floor = 0.0;  // estimated measurement noise as a mean NRMSE (second differences)
@@ -188,8 +201,9 @@ struct Diagnosis {
   // The best candidate of the round that ended the selection (not significant), with its
   // detectability measured against the model selected so far; none where no round tried one.
   std::optional<CandidateResult> next;
-  std::string selection_end;  // why the selection ended ("no candidate significant", ...)
-  int replays = 0;
+  std::string selection_end;    // why the selection ended ("no candidate significant", ...)
+  int replays = 0;              // model runs: the sum over `runs`
+  std::vector<StageRuns> runs;  // in the order of the stages
 };
 
 Result<Diagnosis> Diagnose(const MeasuredLog& log, const RigParams& start,

@@ -459,12 +459,11 @@ std::optional<Eigen::MatrixXd> CentralJacobian(ReplayResiduals* residuals,
 // Standard errors and correlations from the Jacobian at the optimum (scaled parameters) and the
 // residuals r there: cov_z = s^2 (J^T J)^-1, s^2 = ||r||^2 / (m - p); cov_x = S cov_z S,
 // S = diag(scales). A parameter in a null direction of J^T J keeps NaN.
-void StandardErrors(const Eigen::MatrixXd& jacobian, const std::vector<double>& r,
+void StandardErrors(const Eigen::MatrixXd& jacobian, double residual_square_sum,
                     const std::vector<double>& scales, FitResult* result) {
   const std::size_t p = scales.size();
-  const int m = static_cast<int>(r.size());
-  const double s2 = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm() /
-                    static_cast<double>(m - static_cast<int>(p));
+  const auto m = static_cast<int>(jacobian.rows());
+  const double s2 = residual_square_sum / static_cast<double>(m - static_cast<int>(p));
   const Eigen::MatrixXd jtj = jacobian.transpose() * jacobian;
   // Column scaling to unit diagonal, so the condition test sees the shape, not the units.
   Eigen::VectorXd d = jtj.diagonal().cwiseSqrt();
@@ -503,13 +502,16 @@ void StandardErrors(const Eigen::MatrixXd& jacobian, const std::vector<double>& 
 // Covariance from the central-difference Jacobian at the optimum x.z, residuals r there: the
 // standard errors and correlations into *result, NaN where the Jacobian's replays fail.
 void EstimateCovariance(ReplayResiduals* residuals, const ScaledParameters& x,
-                        const std::vector<double>& r, double relative_step, FitResult* result) {
-  const std::size_t p = x.size();
+                        double residual_square_sum, double relative_step, FitResult* result) {
   const std::optional<Eigen::MatrixXd> jacobian = CentralJacobian(residuals, x, relative_step);
+  if (jacobian) StandardErrors(*jacobian, residual_square_sum, x.scale, result);
+}
+
+// No covariance yet: standard errors NaN, correlations NaN off the diagonal.
+void NoCovariance(std::size_t p, FitResult* result) {
   result->standard_errors.assign(p, kNaN);
   result->correlation.assign(p, std::vector<double>(p, kNaN));
   for (std::size_t j = 0; j < p; ++j) result->correlation[j][j] = 1.0;
-  if (jacobian) StandardErrors(*jacobian, r, x.scale, result);
 }
 
 }  // namespace
@@ -577,9 +579,43 @@ Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
     result.estimates.push_back(estimate);
     MPDRIG_RETURN_IF_ERROR(SetParamValue(&result.params, result.keys[j], estimate));
   }
-  EstimateCovariance(&residuals, x, r, options.relative_step, &result);
+  result.scaled_estimates = x.z;
+  result.residual_square_sum = Eigen::Map<const Eigen::VectorXd>(r.data(), m).squaredNorm();
+  NoCovariance(p, &result);
+  if (options.standard_errors) {
+    EstimateCovariance(&residuals, x, result.residual_square_sum, options.relative_step, &result);
+  }
   result.replays = residuals.replays();
   return result;
+}
+
+Status EstimateStandardErrors(const MeasuredLog& log, const std::vector<FitParameter>& parameters,
+                              const FitOptions& options, FitResult* fit) {
+  const std::size_t p = parameters.size();
+  if (fit->keys.size() != p || fit->scaled_estimates.size() != p) {
+    return Status::Error("standard errors: not the fit of these parameters");
+  }
+  // The fit's scaling again: from its start values (ScaleParameters).
+  FitResult scratch;
+  scratch.params = fit->params;
+  for (std::size_t j = 0; j < p; ++j) {
+    if (parameters[j].key != fit->keys[j]) {
+      return Status::Error("standard errors: not the fit of these parameters");
+    }
+    MPDRIG_RETURN_IF_ERROR(SetParamValue(&scratch.params, fit->keys[j], fit->initial[j]));
+  }
+  const RigParams start = scratch.params;
+  auto scaled = ScaleParameters(start, parameters, &scratch);
+  if (!scaled.ok()) return scaled.status();
+  ScaledParameters& x = *scaled;
+  x.z = fit->scaled_estimates;
+  ReplayResiduals residuals(
+      log, scratch.params, scratch.keys, x.scale, options,
+      WindowChannels(log, options.window_begin_s, options.window_end_s, options.weighting));
+  NoCovariance(p, fit);
+  EstimateCovariance(&residuals, x, fit->residual_square_sum, options.relative_step, fit);
+  fit->replays += residuals.replays();
+  return Status::Ok();
 }
 
 Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams& start,

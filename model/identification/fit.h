@@ -74,6 +74,10 @@ struct FitOptions {
   // false: forward differences inside the solver (p replays per Jacobian); true: central (2p).
   // The covariance at the optimum always uses central differences.
   bool central_differences = false;
+  // false: no covariance at the optimum (standard errors and correlations NaN, none of its 2p
+  // replays); EstimateStandardErrors adds it later to the fit that is kept, with the same
+  // numbers (diagnose fits from several starts and keeps one).
+  bool standard_errors = true;
   // Called after each solver iteration: iteration number and current error (mean NRMSE).
   std::function<void(int iteration, double error)> progress;
   // Prints Ceres's per-iteration table to stdout (trust region ratio, step, radius): the way to
@@ -104,6 +108,10 @@ struct FitResult {
   std::string solver_report;  // Ceres's brief report
   // FitParametersAndInputLevels: the levels estimated at the first fit's parameters.
   InputLevelCorrection input_levels;
+  // What EstimateStandardErrors needs: the optimum as the solver scaled it (x / scale) and the
+  // squared norm of the normalised residuals there.
+  std::vector<double> scaled_estimates;
+  double residual_square_sum = 0.0;
 };
 
 // Fits `parameters` starting from `start` (its values are the initial guesses, clamped into the
@@ -111,6 +119,12 @@ struct FitResult {
 Result<FitResult> FitParameters(const MeasuredLog& log, const RigParams& start,
                                 const std::vector<FitParameter>& parameters,
                                 const FitOptions& options = {});
+
+// The standard errors and correlations of `fit` (FitParameters's, with the same log, parameters
+// and options but FitOptions::standard_errors false), as FitParameters would have given them:
+// the central-difference Jacobian at its optimum (2p replays, added to fit->replays).
+Status EstimateStandardErrors(const MeasuredLog& log, const std::vector<FitParameter>& parameters,
+                              const FitOptions& options, FitResult* fit);
 
 // What `mpdrig fit` runs: FitParameters on the log as reconstructed, then the choke's and FT2's
 // levels estimated at the fitted parameters (EstimateInputLevels; at the start values a wrong

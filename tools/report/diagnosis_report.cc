@@ -90,8 +90,15 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   std::ostringstream out;
   const CandidateResult& b = d.baseline;
   out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
-      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":"
-      << d.replays
+      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays << ",\"runs\":[";
+  // Where the model runs went, stage by stage.
+  for (std::size_t i = 0; i < d.runs.size(); ++i) {
+    const StageRuns& r = d.runs[i];
+    out << (i ? "," : "") << "{\"stage\":" << Quote(r.stage) << ",\"scans\":" << r.scans
+        << ",\"fits\":" << r.fits << ",\"detectability\":" << r.detectability
+        << ",\"scoring\":" << r.scoring << "}";
+  }
+  out << "]"
       // The choke's and FT2's levels as estimated at the fitted base model, lab units.
       << ",\"input_levels\":{\"choke_offset_deg\":"
       << Num(units::ChokeFracToDeg(d.input_levels.choke_offset_frac))

@@ -272,6 +272,40 @@ TEST(FitTest, AParameterWithoutInfluenceIsHeldAndTheOthersStillFit) {
   EXPECT_TRUE(fit->converged);
 }
 
+// Standard errors left out of the fit and added later (diagnose keeps one of several fits):
+// the same numbers as the fit's own, for 2p replays, and none before.
+TEST(FitTest, StandardErrorsAddedLaterAreTheFitsOwn) {
+  const MeasuredLog log = MakeLog(Truth(), 1.0);
+  const std::vector<FitParameter> parameters =
+      Defaults({"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"});
+  FitOptions options = Options();
+  options.window_end_s = 14.5;  // the leak is held there: a NaN standard error to carry
+  auto with = FitParameters(log, RigParams{}, parameters, options);
+  ASSERT_TRUE(with.ok()) << with.status().message();
+  options.standard_errors = false;
+  auto without = FitParameters(log, RigParams{}, parameters, options);
+  ASSERT_TRUE(without.ok()) << without.status().message();
+  EXPECT_EQ(without->estimates, with->estimates);
+  for (double se : without->standard_errors) EXPECT_TRUE(std::isnan(se));
+  const int replays = without->replays;
+  ASSERT_TRUE(EstimateStandardErrors(log, parameters, options, &*without).ok());
+  EXPECT_EQ(without->replays, replays + 2 * static_cast<int>(parameters.size()));
+  for (std::size_t j = 0; j < parameters.size(); ++j) {
+    SCOPED_TRACE(parameters[j].key);
+    if (std::isnan(with->standard_errors[j])) {
+      EXPECT_TRUE(std::isnan(without->standard_errors[j]));
+    } else {
+      EXPECT_EQ(without->standard_errors[j], with->standard_errors[j]);
+    }
+    for (std::size_t k = 0; k < parameters.size(); ++k) {
+      if (std::isnan(with->correlation[j][k])) continue;
+      EXPECT_EQ(without->correlation[j][k], with->correlation[j][k]);
+    }
+  }
+  // Another fit's parameters are refused.
+  EXPECT_FALSE(EstimateStandardErrors(log, Defaults({"wave_speed_mps"}), options, &*without).ok());
+}
+
 TEST(FitTest, RecoversAnEffectParameter) {
   RigParams truth;
   truth.effects.push_back({"sensor_lag", {{"time_constant_s", 0.15}}});
