@@ -332,6 +332,11 @@ void AddAlternatives(const std::vector<MeasuredResonance>& measured,
           d->selected.begin(), d->selected.end(),
           [&](const ResonanceCandidate& s) { return s.effect == other.effect; });
       if (in_model || other.effect == chosen.effect) continue;
+      // A swap that needs the simulated response costs minutes: as in the rounds after the first.
+      if (!options.simulated_every_round && !AnalyticRepresents(other.effect) &&
+          options.fit.resonance.method != ResponseMethod::kAnalytic) {
+        continue;
+      }
       auto without = FitWithout(measured, options.fit, final_model, chosen.effect);
       if (!without.ok()) continue;
       RigParams params = without->params;

@@ -96,7 +96,8 @@ struct ResonanceCandidate {
   std::vector<std::string> equivalent;
   // For a selected effect, once the selection has ended: the other fitted candidates that, put in
   // its place in the final model and refitted, leave chi2 less than the test's threshold above
-  // the final model's: the readings do not exclude them (a stricter reading would).
+  // the final model's: the readings do not exclude them (a stricter reading would). Candidates
+  // that need the simulated response are swapped in only with simulated_every_round.
   struct Alternative {
     std::string effect;
     double chi2 = 0.0;
