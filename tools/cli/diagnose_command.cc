@@ -20,8 +20,9 @@
 #include "model/riglog/rig_log.h"
 #include "model/sim/sensor_noise.h"
 #include "tools/cli/commands.h"
-#include "tools/cli/model_options.h"
 #include "tools/cli/diagnose_resonances.h"
+#include "tools/cli/fit_resonances.h"
+#include "tools/cli/model_options.h"
 #include "tools/cli/parallel_tasks.h"
 #include "tools/report/diagnosis_report.h"
 
@@ -284,20 +285,8 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                    "diagnose measured first resonances instead of a log: CSV "
                    "configuration,frequency_hz,uncertainty_hz (docs/rig-measurements.md)")
       ->check(CLI::ExistingFile);
-  command
-      ->add_option("--hold", resonance_args->hold,
-                   "--resonances: keep this parameter at its start value (repeatable)")
-      ->type_name("KEY");
-  command
-      ->add_option("--response", resonance_args->method,
-                   "--resonances: auto (analytic where it holds the effects, else simulated), "
-                   "analytic or simulated")
-      ->check(CLI::IsMember({"auto", "analytic", "simulated"}))
-      ->capture_default_str();
-  command
-      ->add_option("--outlet-barg", resonance_args->outlet_barg,
-                   "--resonances: outlet pressure of the terminations [bar gauge]")
-      ->capture_default_str();
+  AddResonanceOptions(command, &resonance_args->hold, &resonance_args->method,
+                      &resonance_args->outlet_barg);
   command
       ->add_option("--amplitude-m", resonance_args->amplitude_m,
                    "--resonances: piston amplitude of the simulated response [m]")

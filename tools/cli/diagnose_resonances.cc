@@ -11,6 +11,7 @@
 #include "model/common/units.h"
 #include "model/effects/param_by_key.h"
 #include "model/identification/resonance_diagnose.h"
+#include "tools/cli/fit_resonances.h"
 #include "tools/cli/json_text.h"
 #include "tools/cli/parallel_tasks.h"
 
@@ -275,12 +276,10 @@ void PrintSummary(const ResonanceDiagnosis& d, FILE* out) {
 
 int RunDiagnoseResonances(const ModelOptions& model, const ResonanceDiagnoseArgs& args) {
   const std::string name = "diagnose";
-  auto start = model.LoadParams();
-  if (!start.ok()) return Fail(name, start.status());
-  auto simulation = model.LoadSimulationOptions();
-  if (!simulation.ok()) return Fail(name, simulation.status());
-  auto measured = ReadResonanceList(args.resonances_path);
-  if (!measured.ok()) return Fail(name, measured.status());
+  auto inputs = LoadResonanceInputs(model, args.resonances_path, args.method, args.outlet_barg);
+  if (!inputs.ok()) return Fail(name, inputs.status());
+  const RigParams* start = &inputs->start;
+  const std::vector<MeasuredResonance>* measured = &inputs->measured;
 
   ResonanceDiagnoseOptions options;
   options.hold = args.hold;
@@ -289,13 +288,8 @@ int RunDiagnoseResonances(const ModelOptions& model, const ResonanceDiagnoseArgs
   options.significance_level = args.significance;
   options.simulated_every_round = args.thorough;
   options.fit.max_iterations = args.max_iterations;
-  options.fit.resonance.simulation = *simulation;
+  options.fit.resonance = inputs->resonance;
   options.fit.resonance.simulated.amplitude_m = args.amplitude_m;
-  options.fit.resonance.simulated.outlet_pressure_pa =
-      units::BargToPaAbs(args.outlet_barg, start->atmospheric_pressure_pa);
-  options.fit.resonance.method = args.method == "analytic"    ? ResponseMethod::kAnalytic
-                                 : args.method == "simulated" ? ResponseMethod::kSimulated
-                                                              : ResponseMethod::kAuto;
   std::mutex progress_lock;
   if (!args.quiet) {
     std::fprintf(stderr, "mpdrig diagnose: %zu measured resonances from %s\n", measured->size(),

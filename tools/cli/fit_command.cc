@@ -283,20 +283,8 @@ void AddFitCommand(CLI::App* app, int* exit_code) {
                    "fit to measured first resonances instead of a log: CSV "
                    "configuration,frequency_hz,uncertainty_hz (docs/rig-measurements.md)")
       ->check(CLI::ExistingFile);
-  command
-      ->add_option("--hold", resonance_args->hold,
-                   "--resonances: keep this parameter at its start value (repeatable)")
-      ->type_name("KEY");
-  command
-      ->add_option("--response", resonance_args->method,
-                   "--resonances: auto (analytic where it holds the effects, else simulated), "
-                   "analytic or simulated")
-      ->check(CLI::IsMember({"auto", "analytic", "simulated"}))
-      ->capture_default_str();
-  command
-      ->add_option("--outlet-barg", resonance_args->outlet_barg,
-                   "--resonances: outlet pressure of the terminations [bar gauge]")
-      ->capture_default_str();
+  AddResonanceOptions(command, &resonance_args->hold, &resonance_args->method,
+                      &resonance_args->outlet_barg);
   command->add_option("--out-config", args->out_config_path,
                       "write the fitted configuration (Protobuf text) for simulate/compare "
                       "--config");

@@ -96,25 +96,56 @@ std::string FitJson(const ResonanceFitResult& fit, const ResonanceFitArgs& args,
 
 }  // namespace
 
+Result<ResonanceInputs> LoadResonanceInputs(const ModelOptions& model, const std::string& path,
+                                            const std::string& method, double outlet_barg) {
+  ResonanceInputs inputs;
+  auto start = model.LoadParams();
+  if (!start.ok()) return start.status();
+  inputs.start = *start;
+  auto simulation = model.LoadSimulationOptions();
+  if (!simulation.ok()) return simulation.status();
+  auto measured = ReadResonanceList(path);
+  if (!measured.ok()) return measured.status();
+  inputs.measured = *measured;
+  inputs.resonance.simulation = *simulation;
+  inputs.resonance.simulated.outlet_pressure_pa =
+      units::BargToPaAbs(outlet_barg, start->atmospheric_pressure_pa);
+  inputs.resonance.method = method == "analytic"    ? ResponseMethod::kAnalytic
+                            : method == "simulated" ? ResponseMethod::kSimulated
+                                                    : ResponseMethod::kAuto;
+  return inputs;
+}
+
+void AddResonanceOptions(CLI::App* command, std::vector<std::string>* hold, std::string* method,
+                         double* outlet_barg) {
+  command
+      ->add_option("--hold", *hold,
+                   "--resonances: keep this parameter at its start value (repeatable)")
+      ->type_name("KEY");
+  command
+      ->add_option("--response", *method,
+                   "--resonances: auto (analytic where it holds the effects, else simulated), "
+                   "analytic or simulated")
+      ->check(CLI::IsMember({"auto", "analytic", "simulated"}))
+      ->capture_default_str();
+  command
+      ->add_option("--outlet-barg", *outlet_barg,
+                   "--resonances: outlet pressure of the terminations [bar gauge]")
+      ->capture_default_str();
+}
+
 int RunFitResonances(const ModelOptions& model, const ResonanceFitArgs& args) {
   const std::string name = "fit";
-  auto start = model.LoadParams();
-  if (!start.ok()) return Fail(name, start.status());
-  auto simulation = model.LoadSimulationOptions();
-  if (!simulation.ok()) return Fail(name, simulation.status());
-  auto measured = ReadResonanceList(args.resonances_path);
-  if (!measured.ok()) return Fail(name, measured.status());
+  auto inputs = LoadResonanceInputs(model, args.resonances_path, args.method, args.outlet_barg);
+  if (!inputs.ok()) return Fail(name, inputs.status());
+  const RigParams* start = &inputs->start;
+  const std::vector<MeasuredResonance>* measured = &inputs->measured;
   auto parameters = Parameters(*start, args);
   if (!parameters.ok()) return Fail(name, parameters.status());
 
   ResonanceFitOptions options;
   options.max_iterations = args.max_iterations;
-  options.resonance.simulation = *simulation;
-  options.resonance.simulated.outlet_pressure_pa =
-      units::BargToPaAbs(args.outlet_barg, start->atmospheric_pressure_pa);
-  options.resonance.method = args.method == "analytic"    ? ResponseMethod::kAnalytic
-                             : args.method == "simulated" ? ResponseMethod::kSimulated
-                                                          : ResponseMethod::kAuto;
+  options.resonance = inputs->resonance;
   if (!args.quiet) {
     std::string keys;
     for (const FitParameter& p : *parameters) keys += (keys.empty() ? "" : ", ") + p.key;
