@@ -217,8 +217,7 @@ Result<Resonance> FirstAnalyticResonance(const RigParams& params, const ChokeSet
         }
       }
       const double peak = 0.5 * (a + b);
-      return Resonance{peak, line.Magnitude(peak),
-                       ResponseMethod::kAnalytic, 0};
+      return Resonance{peak, line.Magnitude(peak), ResponseMethod::kAnalytic, 0};
     }
     m_prev = m, m = m_next;
   }

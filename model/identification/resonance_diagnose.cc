@@ -212,8 +212,8 @@ class RoundRunner {
     candidate.fit = std::move(*fit);
     candidate.chi2 = candidate.fit.chi2_after;
     candidate.delta_chi2 = model.chi2_after - candidate.chi2;
-    candidate.threshold = ChiSquareQuantile(std::max(1, candidate.new_parameters),
-                                            options_.significance_level);
+    candidate.threshold =
+        ChiSquareQuantile(std::max(1, candidate.new_parameters), options_.significance_level);
     candidate.significant = candidate.delta_chi2 > candidate.threshold;
     candidate.params = EffectEstimates(candidate.fit);
     return candidate;
@@ -332,9 +332,9 @@ void AddAlternatives(const std::vector<MeasuredResonance>& measured,
   const ResonanceFitResult& final_model = d->Final();
   for (ResonanceCandidate& chosen : d->selected) {
     for (const ResonanceCandidate& other : d->candidates) {
-      const bool in_model = std::any_of(
-          d->selected.begin(), d->selected.end(),
-          [&](const ResonanceCandidate& s) { return s.effect == other.effect; });
+      const bool in_model =
+          std::any_of(d->selected.begin(), d->selected.end(),
+                      [&](const ResonanceCandidate& s) { return s.effect == other.effect; });
       if (in_model || other.effect == chosen.effect) continue;
       // A swap that needs the simulated response costs minutes: as in the rounds after the first.
       if (!options.simulated_every_round && !AnalyticRepresents(other.effect) &&
@@ -360,8 +360,7 @@ void AddAlternatives(const std::vector<MeasuredResonance>& measured,
       const double threshold =
           ChiSquareQuantile(std::max(1, other.new_parameters), options.significance_level);
       if (swapped->chi2_after - final_model.chi2_after < threshold) {
-        chosen.not_excluded.push_back(
-            {other.effect, swapped->chi2_after, swapped->max_error_hz});
+        chosen.not_excluded.push_back({other.effect, swapped->chi2_after, swapped->max_error_hz});
       }
     }
   }
@@ -498,10 +497,9 @@ Result<ResonanceDiagnosis> DiagnoseResonances(const std::vector<MeasuredResonanc
       (r.outcome == ResonanceCandidate::Outcome::kFitted ? fitted : d.not_fitted)
           .push_back(std::move(r));
     }
-    std::stable_sort(fitted.begin(), fitted.end(),
-                     [](const ResonanceCandidate& a, const ResonanceCandidate& b) {
-                       return a.chi2 < b.chi2;
-                     });
+    std::stable_sort(
+        fitted.begin(), fitted.end(),
+        [](const ResonanceCandidate& a, const ResonanceCandidate& b) { return a.chi2 < b.chi2; });
     if (round == 1) d.candidates = fitted;
     if (fitted.empty()) {
       d.selection_end = "no candidate could be fitted";

@@ -80,16 +80,21 @@ struct ResonanceParamEstimate {
 struct ResonanceCandidate {
   std::string effect;
   int round = 1;
-  enum class Outcome { kFitted, kFailed, kDoesNotMovePeaks, kUnidentifiable, kNotTried } outcome =
-      Outcome::kFitted;
-  std::string note;                 // why it failed, or what the screen found
-  double screen_shift_hz = 0.0;     // largest |resonance shift| over the plausible range
-  ResonanceFitResult fit;           // kFitted: the round's model with this effect, refitted
+  enum class Outcome {
+    kFitted,
+    kFailed,
+    kDoesNotMovePeaks,
+    kUnidentifiable,
+    kNotTried
+  } outcome = Outcome::kFitted;
+  std::string note;              // why it failed, or what the screen found
+  double screen_shift_hz = 0.0;  // largest |resonance shift| over the plausible range
+  ResonanceFitResult fit;        // kFitted: the round's model with this effect, refitted
   std::vector<ResonanceParamEstimate> params;  // every effect parameter of `fit`
   int new_parameters = 0;
   double chi2 = 0.0;
-  double delta_chi2 = 0.0;   // the round's chi2 before it minus chi2
-  double threshold = 0.0;    // the chi-square quantile Delta chi2 must exceed
+  double delta_chi2 = 0.0;  // the round's chi2 before it minus chi2
+  double threshold = 0.0;   // the chi-square quantile Delta chi2 must exceed
   bool significant = false;
   // Candidates of the same round whose chi2 is within kEquivalentChi2 of this one's: effects the
   // resonances cannot tell apart from it (e.g. two compliances at the pipe inlet).

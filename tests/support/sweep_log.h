@@ -45,7 +45,7 @@ inline const SimulationOptions& SweepSimulation() {
 // 400 s of sweeps 0.1 -> 1 Hz (100 s each), 5 mm, at 100 Hz, choke shut, pump off, 4 barg at the
 // outlet; the lab's noise on every channel (seed `seed`).
 inline riglog::RigLog MakeSweepLog(const RigParams& params, const ChokeSetting& choke,
-                            std::uint64_t seed) {
+                                   std::uint64_t seed) {
   const double rate_hz = 100.0, duration_s = 400.0;
   std::vector<double> times;
   for (int i = 0; i <= static_cast<int>(duration_s * rate_hz); ++i) times.push_back(i / rate_hz);

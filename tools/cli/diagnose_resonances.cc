@@ -210,10 +210,9 @@ void PrintSummary(const ResonanceDiagnosis& d, FILE* out) {
                  c.fit.max_error_hz, c.significant ? "significant" : "not significant");
   }
   for (const ResonanceCandidate& c : d.not_fitted) {
-    std::fprintf(out, "  %-24s %s%s: %s\n", c.effect.c_str(),
-                 std::string(OutcomeName(c.outcome)).c_str(),
-                 c.round > 1 ? (" (round " + std::to_string(c.round) + ")").c_str() : "",
-                 c.note.c_str());
+    std::fprintf(
+        out, "  %-24s %s%s: %s\n", c.effect.c_str(), std::string(OutcomeName(c.outcome)).c_str(),
+        c.round > 1 ? (" (round " + std::to_string(c.round) + ")").c_str() : "", c.note.c_str());
   }
   for (std::size_t i = 0; i < d.selected.size(); ++i) {
     const ResonanceCandidate& s = d.selected[i];
@@ -250,7 +249,8 @@ void PrintSummary(const ResonanceDiagnosis& d, FILE* out) {
   // Why a uniformly slower line cannot do it.
   const Ratios measured = RatiosOf([&](Termination t) { return Measured(d, t); });
   const Ratios uniform = RatiosOf([&](Termination t) { return Modelled(d.uniform, t); });
-  std::fprintf(out, "a uniform wave speed alone (fitted, not held): c = %.4g m/s, largest error "
+  std::fprintf(out,
+               "a uniform wave speed alone (fitted, not held): c = %.4g m/s, largest error "
                "%.4f Hz",
                d.uniform.estimates.empty() ? std::nan("") : d.uniform.estimates[0],
                d.uniform.max_error_hz);

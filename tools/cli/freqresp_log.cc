@@ -68,8 +68,10 @@ std::string ResponseCsv(const EmpiricalResponse& r) {
 // twice or a damaged file is refused with its line, and the file is left as it was.
 Status AppendResonance(const EmpiricalResponse& response, const FreqrespLogArgs& args) {
   if (args.termination.empty()) {
-    return Status::Error("--resonance-list needs --termination: the line end the log was "
-                         "recorded in (" + TerminationNames() + ")");
+    return Status::Error(
+        "--resonance-list needs --termination: the line end the log was "
+        "recorded in (" +
+        TerminationNames() + ")");
   }
   auto termination = ParseTermination(args.termination);
   if (!termination.ok()) return termination.status().Within("--termination");

@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include "model/effects/effect.h"
 #include "model/analysis/empirical_response.h"
+#include "model/effects/effect.h"
 #include "model/effects/param_by_key.h"
 #include "tests/support/sweep_log.h"
 
@@ -69,14 +69,13 @@ ResonanceDiagnoseOptions AnalyticCatalogue() {
 
 struct HiddenCase {
   std::string name;
-  std::vector<std::string> effects;  // --effect specs of the truth
+  std::vector<std::string> effects;   // --effect specs of the truth
   std::vector<std::string> expected;  // sorted names
 };
 
 // The thesis's readings are +-0.01 Hz; a 0.002 Hz reading (a 100 s Welch segment's peak,
 // docs/rig-measurements.md: 0.0003-0.006 Hz) is what a sweep log gives. Both are tried.
-class HiddenResonanceEffects
-    : public ::testing::TestWithParam<std::tuple<HiddenCase, double>> {};
+class HiddenResonanceEffects : public ::testing::TestWithParam<std::tuple<HiddenCase, double>> {};
 
 TEST_P(HiddenResonanceEffects, AreNamedAndNoOtherWithTheWaveSpeedHeldAtItsMeasuredValue) {
   const auto& [hidden, uncertainty] = GetParam();
@@ -121,7 +120,8 @@ const HiddenCase kHidden[] = {
      {"topside_compliance:compliance_m3_per_pa=3e-11", "gas_entrainment:void_fraction=1e-3"},
      {"gas_entrainment", "topside_compliance"}},
     {"tubes_and_hose",
-     {"topside_compliance:compliance_m3_per_pa=3e-11", "hose_compliance:compliance_m3_per_pa=5e-11"},
+     {"topside_compliance:compliance_m3_per_pa=3e-11",
+      "hose_compliance:compliance_m3_per_pa=5e-11"},
      {"hose_compliance", "topside_compliance"}},
 };
 
@@ -132,7 +132,8 @@ INSTANTIATE_TEST_SUITE_P(
                       std::make_tuple(kHidden[1], 0.01), std::make_tuple(kHidden[1], 0.002),
                       std::make_tuple(kHidden[2], 0.002)),
     [](const ::testing::TestParamInfo<HiddenResonanceEffects::ParamType>& info) {
-      return std::get<0>(info.param).name + (std::get<1>(info.param) > 0.005 ? "_thesis" : "_sweep");
+      return std::get<0>(info.param).name +
+             (std::get<1>(info.param) > 0.005 ? "_thesis" : "_sweep");
     });
 
 TEST(ResonanceDiagnosis, AtTheThesisPrecisionAnInletComplianceBesideTheTubesIsNotToldFromGas) {
@@ -149,26 +150,24 @@ TEST(ResonanceDiagnosis, AtTheThesisPrecisionAnInletComplianceBesideTheTubesIsNo
   start.wave_speed_mps = 1173.0;
   int inlet = 0;
   for (unsigned seed = 1; seed <= 6; ++seed) {
-    auto d = DiagnoseResonances(MeasuredResonancesOf(truth, 0.01, seed), start,
-                                AnalyticCatalogue());
+    auto d =
+        DiagnoseResonances(MeasuredResonancesOf(truth, 0.01, seed), start, AnalyticCatalogue());
     ASSERT_TRUE(d.ok()) << d.status().message();
     std::string names;
     for (const ResonanceCandidate& s : d->selected) names += s.effect + " ";
     std::printf("seed %u: %s(largest error %.4f Hz)\n", seed, names.c_str(),
                 d->Final().max_error_hz);
-    EXPECT_TRUE(std::any_of(d->selected.begin(), d->selected.end(),
-                            [](const ResonanceCandidate& s) {
-                              return s.effect == "topside_compliance";
-                            }))
+    EXPECT_TRUE(
+        std::any_of(d->selected.begin(), d->selected.end(),
+                    [](const ResonanceCandidate& s) { return s.effect == "topside_compliance"; }))
         << names;
     EXPECT_EQ(d->selected.size(), 2u) << names;
-    const bool named = std::any_of(d->selected.begin(), d->selected.end(),
-                                   [](const ResonanceCandidate& s) {
-                                     return Names(s, "hose_compliance");
-                                   });
+    const bool named =
+        std::any_of(d->selected.begin(), d->selected.end(),
+                    [](const ResonanceCandidate& s) { return Names(s, "hose_compliance"); });
     // Where gas is named instead, the diagnosis says the inlet compliance is not excluded.
-    const bool not_excluded = std::any_of(
-        d->selected.begin(), d->selected.end(), [](const ResonanceCandidate& s) {
+    const bool not_excluded =
+        std::any_of(d->selected.begin(), d->selected.end(), [](const ResonanceCandidate& s) {
           return std::any_of(s.not_excluded.begin(), s.not_excluded.end(),
                              [](const auto& a) { return a.effect == "hose_compliance"; });
         });

@@ -145,14 +145,16 @@ TEST_F(FreqCommandsTest, FromLogAppendsItsResonanceToAListThatDiagnoseReads) {
   RunResult synth = Run("synth --seed 1 --duration 60 --out r.csv");
   ASSERT_EQ(synth.exit_code, 0) << synth.err;
   fs::remove(Path("list.csv"));
-  RunResult first = Run("freqresp --from-log r.csv --segment-s 30 --termination choke-open "
-                        "--resonance-list list.csv");
+  RunResult first =
+      Run("freqresp --from-log r.csv --segment-s 30 --termination choke-open "
+          "--resonance-list list.csv");
   ASSERT_EQ(first.exit_code, 0) << first.err;
   const std::string list = ReadFile(Path("list.csv"));
   EXPECT_EQ(list.rfind("configuration,frequency_hz,uncertainty_hz\nchoke-open,", 0), 0u) << list;
   // The same termination again is refused with the line, and the file is left as it was.
-  RunResult again = Run("freqresp --from-log r.csv --segment-s 30 --termination choke-open "
-                        "--resonance-list list.csv");
+  RunResult again =
+      Run("freqresp --from-log r.csv --segment-s 30 --termination choke-open "
+          "--resonance-list list.csv");
   EXPECT_NE(again.exit_code, 0);
   EXPECT_TRUE(Contains(again.err, "list.csv:3:1")) << again.err;
   EXPECT_EQ(ReadFile(Path("list.csv")), list);
@@ -164,8 +166,9 @@ TEST_F(FreqCommandsTest, FromLogAppendsItsResonanceToAListThatDiagnoseReads) {
   std::ofstream(Path("thesis.csv")) << "configuration,frequency_hz,uncertainty_hz\n"
                                     << "choke-closed,0.44,0.01\nchoke-open,0.25,0.01\n"
                                     << "closed-at-pipe-end,0.49,0.01\n";
-  RunResult d = Run("diagnose --resonances thesis.csv --set wave_speed_mps=1173 --hold "
-                    "wave_speed_mps --response analytic --json d.json");
+  RunResult d =
+      Run("diagnose --resonances thesis.csv --set wave_speed_mps=1173 --hold "
+          "wave_speed_mps --response analytic --json d.json");
   ASSERT_EQ(d.exit_code, 0) << d.err;
   const std::string json = ReadFile(Path("d.json"));
   for (const char* key :
