@@ -19,6 +19,7 @@
 #include "model/analysis/measured_log.h"
 #include "model/riglog/rig_log.h"
 #include "tests/support/lab_scenario.h"
+#include "tests/support/statistics.h"
 
 namespace mpdrig {
 namespace {
@@ -85,15 +86,7 @@ Scenario RandomSea(double cut_s, std::uint64_t seed) {
 }
 
 double Fit(const std::vector<double>& y, const std::vector<double>& yhat) {
-  double mean = 0.0;
-  for (double v : y) mean += v;
-  mean /= static_cast<double>(y.size());
-  double err = 0.0, var = 0.0;
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    err += (y[i] - yhat[i]) * (y[i] - yhat[i]);
-    var += (y[i] - mean) * (y[i] - mean);
-  }
-  return 100.0 * (1.0 - std::sqrt(err / var));
+  return teststats::FitPercent(y, yhat);
 }
 
 struct Replayed {
