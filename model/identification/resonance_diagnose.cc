@@ -331,6 +331,10 @@ void AddAlternatives(const std::vector<MeasuredResonance>& measured,
   if (d->selected.empty()) return;
   const ResonanceFitResult& final_model = d->Final();
   for (ResonanceCandidate& chosen : d->selected) {
+    // The final model without the chosen effect, once: every swap starts from it.
+    auto without = FitWithout(measured, options.fit, final_model, chosen.effect);
+    if (!without.ok()) continue;
+    d->resonances_computed += without->evaluations;
     for (const ResonanceCandidate& other : d->candidates) {
       const bool in_model =
           std::any_of(d->selected.begin(), d->selected.end(),
@@ -341,8 +345,6 @@ void AddAlternatives(const std::vector<MeasuredResonance>& measured,
           options.fit.resonance.method != ResponseMethod::kAnalytic) {
         continue;
       }
-      auto without = FitWithout(measured, options.fit, final_model, chosen.effect);
-      if (!without.ok()) continue;
       RigParams params = without->params;
       if (!ApplyEffectSpec(&params, other.effect).ok() || !ValidateEffects(params).ok()) continue;
       std::vector<FitParameter> keys;
@@ -356,7 +358,7 @@ void AddAlternatives(const std::vector<MeasuredResonance>& measured,
       }
       auto swapped = FitResonances(measured, params, keys, CappedFor(params, options));
       if (!swapped.ok()) continue;
-      d->resonances_computed += without->evaluations + swapped->evaluations;
+      d->resonances_computed += swapped->evaluations;
       const double threshold =
           ChiSquareQuantile(std::max(1, other.new_parameters), options.significance_level);
       if (swapped->chi2_after - final_model.chi2_after < threshold) {

@@ -51,6 +51,15 @@ double PipeCompliance(const RigParams& p) {
   return p.PipeAreaM2() * p.pipe_length_m / (p.density_kgpm3 * p.wave_speed_mps * p.wave_speed_mps);
 }
 
+// The simulated response the comparisons use: the linear model (9.2.13 is linear), 60 cells.
+ResonanceOptions SimulatedOptions() {
+  ResonanceOptions options;
+  options.simulation.cells = 60;
+  options.simulation.model = PipeModel::kLinear;
+  options.method = ResponseMethod::kSimulated;
+  return options;
+}
+
 // Relative tolerance of the closed forms: f1 = 1e-6 /s moves a peak by far less.
 constexpr double kClosedFormTolerance = 1e-5;
 
@@ -145,10 +154,7 @@ TEST(SimulatedResonance, AgreesWithTheAnalyticOneWithTheTubes) {
   // the parabola).
   RigParams params = With(RigParams(), "topside_compliance:compliance_m3_per_pa=3.2e-11");
   params.friction_f2_per_m = 0.0;
-  ResonanceOptions options;
-  options.simulation.cells = 60;
-  options.simulation.model = PipeModel::kLinear;
-  options.method = ResponseMethod::kSimulated;
+  const ResonanceOptions options = SimulatedOptions();
   auto simulated = FirstResonance(params, Termination::kChokeClosed, options);
   ASSERT_TRUE(simulated.ok()) << simulated.status().message();
   const double analytic = Analytic(params, Termination::kChokeClosed);
@@ -184,11 +190,8 @@ TEST(SimulatedResonance, AgreesWithTheAnalyticOneWithACompressibleCompartment) {
   // 2x2 system, within 0.5 % as for the tubes, in both choke terminations.
   RigParams params = With(RigParams(), "piston_compressibility:bulk_modulus_pa=2e7");
   params.friction_f2_per_m = 0.0;
-  ResonanceOptions options;
-  options.simulation.cells = 60;
-  options.simulation.model = PipeModel::kLinear;
+  ResonanceOptions options = SimulatedOptions();
   options.simulated.amplitude_m = 2.5e-4;
-  options.method = ResponseMethod::kSimulated;
   for (Termination termination : {Termination::kChokeClosed, Termination::kChokeOpen}) {
     auto simulated = FirstResonance(params, termination, options);
     ASSERT_TRUE(simulated.ok()) << simulated.status().message();
