@@ -1,4 +1,4 @@
-// Channel and unit vocabulary of rig-log v1 (/work/shared/rig-log-format.md).
+// Channel and unit vocabulary of rig-log v1 (docs/rig-log-format.md).
 //
 // A rig-log column is named `<channel>_<unit>`: `PT3_barg`, `FT2_lpm`, `choke_position_deg`.
 // The unit suffix is what follows the last underscore (no unit contains an underscore), so

@@ -1,4 +1,4 @@
-// A whole rig log in memory (/work/shared/rig-log-format.md), for tools that want the table:
+// A whole rig log in memory (docs/rig-log-format.md), for tools that want the table:
 // column-major vectors in SI with absolute pressure (channels.h). For long logs that need not be
 // held at once, use RigLogReader / RigLogWriter directly; ReadRigLog and WriteRigLog are thin
 // loops around them and accept and refuse exactly the same files (see rig_log_reader.h).

@@ -1,4 +1,4 @@
-// Streaming reader for rig-log v1 (/work/shared/rig-log-format.md), in bounded memory: an hour of
+// Streaming reader for rig-log v1 (docs/rig-log-format.md), in bounded memory: an hour of
 // 1 kHz samples is read one line at a time. Samples come out in SI with absolute pressure
 // (channels.h): time s, position m, choke opening fraction 0..1, flow m^3/s, pressure Pa abs.
 //

@@ -1,4 +1,4 @@
-// Streaming writer for rig-log v1 (/work/shared/rig-log-format.md). Takes samples in SI with
+// Streaming writer for rig-log v1 (docs/rig-log-format.md). Takes samples in SI with
 // absolute pressure (channels.h) and writes each column in its own unit.
 //
 // Output, in this order:

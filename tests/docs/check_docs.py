@@ -8,6 +8,12 @@ script of the repository; CI (.ci/run) must still run the second. Every page in 
 the README's contents and link back to it. docs/incoming-*.md are drafts being folded in and are
 not checked.
 
+A clone is all a reader has, so no file of the repository (code comments and scripts too) may
+point at files beside it (`../shared/...`, an absolute path of a developer's machine), and
+docs/layout.md names every folder: each folder two levels deep has its own row, and a deeper one
+is named (`name/`) in the row of the folder above it, unless it is a tests/ folder mirroring a
+folder of the same path outside tests/.
+
 Usage: check_docs.py REPOSITORY_ROOT. Prints each problem as file:line: reason; exit 1 if any.
 """
 import os
@@ -183,6 +189,79 @@ def check_pages(root, readme, pages, problems):
             problems.append(f"{name}: its first paragraph does not link back to ../README.md")
 
 
+# A path that leaves the repository: ../shared/..., or a developer machine's absolute path.
+OUTSIDE_REFERENCE = re.compile(r"(?:\.\./)+shared/|/work/(?:shared|main|wt)\b|\bseed/000_")
+SKIPPED_DIRS = {".git", "node_modules", "__pycache__"}
+TEXT_SUFFIXES = {".md", ".h", ".cc", ".cc.in", ".txt", ".py", ".pyi", ".sh", ".cmake", ".proto",
+                 ".idl", ".xml", ".yml", ".yaml", ".conf", ".html", ".in", ".csv", ".json", ""}
+
+
+def repository_files(root):
+    """Every file of the repository (git's list when there is one; else a walk that skips build
+    trees, which hold absolute paths of the machine they were built on)."""
+    try:
+        import subprocess
+        listed = subprocess.run(["git", "-C", root, "ls-files", "-z"], capture_output=True,
+                                check=True).stdout.decode("utf-8").split("\0")
+        return [f for f in listed if f]
+    except (OSError, subprocess.CalledProcessError):
+        found = []
+        for directory, dirs, files in os.walk(root):
+            dirs[:] = [d for d in dirs if d not in SKIPPED_DIRS and not d.startswith("build")]
+            found += [os.path.relpath(os.path.join(directory, f), root) for f in files]
+        return found
+
+
+def check_outside_references(root, files, problems):
+    this = os.path.relpath(os.path.abspath(__file__), root)
+    for name in files:
+        suffix = os.path.splitext(name)[1]
+        if name == this or suffix not in TEXT_SUFFIXES or not os.path.isfile(os.path.join(root, name)):
+            continue
+        try:
+            with open(os.path.join(root, name), encoding="utf-8") as f:
+                lines = f.read().split("\n")
+        except UnicodeDecodeError:
+            continue  # binary
+        for number, line in enumerate(lines, start=1):
+            match = OUTSIDE_REFERENCE.search(line)
+            if match:
+                problems.append(f"{name}:{number}: '{match.group(0)}' points outside the "
+                                "repository; a clone does not have it")
+
+
+def check_layout(root, files, problems):
+    path = os.path.join(root, "docs", "layout.md")
+    if not os.path.isfile(path):
+        problems.append("docs/layout.md: missing")
+        return
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    rows = {}
+    for line in text.split("\n"):
+        row = re.match(r"^\|\s*`([^`]+/)`\s*\|", line)
+        if row:
+            rows[row.group(1).rstrip("/")] = line
+    folders = sorted({os.path.dirname(f) for f in files if os.path.dirname(f)} |
+                     {d for f in files for d in [os.path.dirname(os.path.dirname(f))] if d})
+    for folder in folders:
+        parts = folder.split("/")
+        if parts[0].startswith("."):
+            continue  # .ci/ and the like have their row by name; hidden tool folders do not
+        if len(parts) <= 2:
+            if folder not in rows:
+                problems.append(f"docs/layout.md: no row for `{folder}/`")
+            continue
+        if parts[0] == "tests" and os.path.isdir(os.path.join(root, *parts[1:])):
+            continue  # mirrors the folder it tests
+        parent = "/".join(parts[:-1])
+        while parent and parent not in rows:
+            parent = "/".join(parent.split("/")[:-1])
+        if not parent or f"`{parts[-1]}/`" not in rows[parent]:
+            problems.append(f"docs/layout.md: `{folder}/` is named in no row "
+                            f"(put `{parts[-1]}/` in the row of `{parent or parts[0]}/`)")
+
+
 def main():
     if len(sys.argv) != 2:
         print(__doc__.strip().split("\n\n")[-1], file=sys.stderr)
@@ -198,6 +277,9 @@ def main():
         check_links(root, page, problems)
     check_quick_start(root, readme, problems)
     check_pages(root, readme, pages, problems)
+    files = repository_files(root)
+    check_outside_references(root, files, problems)
+    check_layout(root, files, problems)
     for problem in problems:
         print(problem)
     print(f"checked README.md and {len(pages)} pages in docs/: "
