@@ -21,6 +21,7 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/dds/topics.h"
 
 namespace {
 
@@ -51,8 +52,8 @@ int main(int argc, char** argv) {
   auto scope = dds::CreateClientScope(domain, security, rig_id);
   if (!scope.ok()) return Fail(scope.status().message());
   const dds_entity_t p = scope->participant.handle();
-  auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors");
-  auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, "mpdrig_pump_command");
+  auto sensors_topic = dds::CreateTopic(p, dds::topics::kSensors);
+  auto pump_topic = dds::CreateTopic(p, dds::topics::kPumpCommand);
   if (!sensors_topic.ok() || !pump_topic.ok()) return Fail("cannot create topics");
   auto sensors = dds::Reader<mpdrig_RigSensors>::Create(scope->sub(), sensors_topic->handle(),
                                                         dds::SensorQos());

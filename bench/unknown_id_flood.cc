@@ -13,6 +13,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 
 int main(int argc, char** argv) {
   CLI::App app("mpdrig_unknown_id_flood - pump commands for many unknown rig ids, then leave");
@@ -45,8 +46,7 @@ int main(int argc, char** argv) {
   if (!created.ok()) return fail(created.status());
   auto participant = dds::CreateParticipant(domain);
   if (!participant.ok()) return fail(participant.status());
-  auto topic =
-      dds::CreateTopic(participant->handle(), &mpdrig_PumpCommand_desc, "mpdrig_pump_command");
+  auto topic = dds::CreateTopic(participant->handle(), dds::topics::kPumpCommand);
   if (!topic.ok()) return fail(topic.status());
   auto writer = dds::Writer<mpdrig_PumpCommand>::Create(participant->handle(), topic->handle(),
                                                         dds::CommandQos(0));

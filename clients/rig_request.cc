@@ -15,6 +15,7 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/dds/topics.h"
 
 namespace {
 
@@ -113,8 +114,8 @@ int main(int argc, char** argv) {
   auto scope = dds::CreateClientScope(args.domain, args.security, args.rig_id);
   if (!scope.ok()) return Fail(scope.status().message());
   const dds_entity_t p = scope->participant.handle();
-  auto request_topic = dds::CreateTopic(p, &mpdrig_RigRequest_desc, "mpdrig_rig_request");
-  auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, "mpdrig_status");
+  auto request_topic = dds::CreateTopic(p, dds::topics::kRigRequest);
+  auto status_topic = dds::CreateTopic(p, dds::topics::kStatus);
   if (!request_topic.ok()) return Fail(request_topic.status().message());
   if (!status_topic.ok()) return Fail(status_topic.status().message());
   auto writer = dds::Writer<mpdrig_RigRequest>::Create(scope->pub(), request_topic->handle(),

@@ -22,6 +22,7 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/dds/topics.h"
 
 namespace {
 
@@ -181,8 +182,8 @@ int main(int argc, char** argv) {
   auto scope = dds::CreateClientScope(args.domain, args.security, args.rig_id);
   if (!scope.ok()) return Fail(scope.status().message());
   const dds_entity_t p = scope->participant.handle();
-  auto command_topic = dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
-  auto status_topic = dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, "mpdrig_shadow_status");
+  auto command_topic = dds::CreateTopic(p, dds::topics::kShadowCommand);
+  auto status_topic = dds::CreateTopic(p, dds::topics::kShadowStatus);
   if (!command_topic.ok()) return Fail(command_topic.status().message());
   if (!status_topic.ok()) return Fail(status_topic.status().message());
   auto status = Reader::Create(scope->sub(), status_topic->handle(), dds::StatusQos());

@@ -11,6 +11,7 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/dds/topics.h"
 
 namespace mpdrig::client {
 namespace {
@@ -41,8 +42,9 @@ constexpr std::size_t kEstimateLimit = 512;
 constexpr dds_duration_t kPoll = DDS_MSECS(100);
 
 enum CommandTopic { kChoke = 0, kPump = 1, kOutlet = 2, kPiston = 3 };
-constexpr const char* kCommandTopicNames[] = {"mpdrig_choke_command", "mpdrig_pump_command",
-                                              "mpdrig_outlet_command", "mpdrig_piston_command"};
+constexpr const dds::TopicSpec* kCommandTopics[] = {
+    &dds::topics::kChokeCommand, &dds::topics::kPumpCommand, &dds::topics::kOutletCommand,
+    &dds::topics::kPistonCommand};
 
 Sensors FromWire(const mpdrig_RigSensors& s) {
   Sensors out;
@@ -125,9 +127,8 @@ Status MakeReader(dds_entity_t subscriber, const dds::Entity& topic, const dds::
   return Status::Ok();
 }
 
-Status MakeTopic(dds_entity_t participant, const dds_topic_descriptor_t* descriptor,
-                 const char* name, dds::Entity* out) {
-  auto created = dds::CreateTopic(participant, descriptor, name);
+Status MakeTopic(dds_entity_t participant, const dds::TopicSpec& spec, dds::Entity* out) {
+  auto created = dds::CreateTopic(participant, spec);
   if (!created.ok()) return created.status();
   *out = std::move(created).value();
   return Status::Ok();
@@ -172,19 +173,13 @@ Status Rig::ClosedOrLost() {
 Status Rig::MakeEndpoints() {
   Dds& d = *dds_;
   const dds_entity_t p = d.scope.participant.handle();
-  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, &mpdrig_RigSensors_desc, "mpdrig_sensors", &d.sensors_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      MakeTopic(p, &mpdrig_RigEstimate_desc, "mpdrig_estimate", &d.estimate_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      MakeTopic(p, &mpdrig_PressureProfile_desc, "mpdrig_pressure_profile", &d.profile_topic));
-  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, &mpdrig_RigStatus_desc, "mpdrig_status", &d.status_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      MakeTopic(p, &mpdrig_StepRequest_desc, "mpdrig_step_request", &d.step_topic));
-  const dds_topic_descriptor_t* commands[] = {&mpdrig_ChokeCommand_desc, &mpdrig_PumpCommand_desc,
-                                              &mpdrig_OutletCommand_desc,
-                                              &mpdrig_PistonCommand_desc};
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kSensors, &d.sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kEstimate, &d.estimate_topic));
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kPressureProfile, &d.profile_topic));
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kStatus, &d.status_topic));
+  MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kStepRequest, &d.step_topic));
   for (int i = 0; i < 4; ++i) {
-    MPDRIG_RETURN_IF_ERROR(MakeTopic(p, commands[i], kCommandTopicNames[i], &d.command_topics[i]));
+    MPDRIG_RETURN_IF_ERROR(MakeTopic(p, *kCommandTopics[i], &d.command_topics[i]));
   }
   // One waitset over every reader, so a wait wakes on whatever arrives first.
   d.waitset = dds::Entity(dds_create_waitset(p));
@@ -533,7 +528,8 @@ Status Rig::SendCommand(int topic_index, const T& sample, const Interrupt& inter
                                        .message());
     }
     writer = std::move(created);
-    const Status matched = AwaitMatch(writer.handle(), kCommandTopicNames[topic_index], interrupt);
+    const Status matched =
+        AwaitMatch(writer.handle(), kCommandTopics[topic_index]->name, interrupt);
     if (!matched.ok()) {
       writer.Reset();
       return matched;
@@ -617,7 +613,7 @@ Status Rig::AwaitCommandAcks(double timeout_s) {
     const dds_return_t acked = dds_wait_for_acks(dds_->command_writers[i].handle(), timeout);
     if (acked == DDS_RETCODE_TIMEOUT) {
       return Fail(Failure::kTimeout, std::string("no acknowledgement of the ") +
-                                         kCommandTopicNames[i] + " within " + Seconds(timeout_s));
+                                         kCommandTopics[i]->name + " within " + Seconds(timeout_s));
     }
     if (acked < 0) return Fail(Failure::kError, dds::Check(acked, "dds_wait_for_acks").message());
     unacknowledged_[i] = false;
@@ -680,7 +676,7 @@ Status Rig::MakeStepWriter(const Interrupt& interrupt) {
     return Fail(Failure::kError, EndpointError(steps.status(), options_, "stepping").message());
   }
   d.steps.emplace(std::move(steps).value());
-  const Status matched = AwaitMatch(d.steps->handle(), "mpdrig_step_request", interrupt);
+  const Status matched = AwaitMatch(d.steps->handle(), dds::topics::kStepRequest.name, interrupt);
   if (!matched.ok()) d.steps.reset();
   return matched;
 }

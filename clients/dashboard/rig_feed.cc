@@ -10,6 +10,7 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/dds/topics.h"
 
 namespace mpdrig::dashboard {
 
@@ -293,11 +294,11 @@ namespace {
 // Creates topic `name` and a reader of it into `*reader`; the topic is kept in `topics`.
 template <typename T>
 Status OpenReader(std::optional<dds::Reader<T>>* reader, const dds::ClientScope& scope,
-                  std::vector<dds::Entity>* topics, const dds_topic_descriptor_t* descriptor,
-                  const char* name, const dds::Qos& qos) {
-  auto topic = dds::CreateTopic(scope.participant.handle(), descriptor, name);
+                  std::vector<dds::Entity>* topics, const dds::TopicSpec& spec) {
+  const char* name = spec.name;
+  auto topic = dds::CreateTopic(scope.participant.handle(), spec);
   if (!topic.ok()) return topic.status().Within(name);
-  auto created = dds::Reader<T>::Create(scope.sub(), topic->handle(), qos);
+  auto created = dds::Reader<T>::Create(scope.sub(), topic->handle(), dds::ReaderQos(spec));
   topics->push_back(std::move(topic).value());
   if (!created.ok()) return created.status().Within(name);
   reader->emplace(std::move(created).value());
@@ -315,22 +316,15 @@ Result<std::unique_ptr<RigFeed::Session>> OpenSession(const FeedOptions& options
   session->scope = std::move(scope).value();
   const dds::ClientScope& p = session->scope;
   auto* topics = &session->topics;
-  const dds::Qos sensor_qos = dds::SensorQos(false);
-  const dds::Qos status_qos = dds::StatusQos();
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->sensors, p, topics, &mpdrig_RigSensors_desc,
-                                    "mpdrig_sensors", sensor_qos));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->estimate, p, topics, &mpdrig_RigEstimate_desc,
-                                    "mpdrig_estimate", sensor_qos));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->profile, p, topics, &mpdrig_PressureProfile_desc,
-                                    "mpdrig_pressure_profile", sensor_qos));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->sensors, p, topics, dds::topics::kSensors));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->estimate, p, topics, dds::topics::kEstimate));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->profile, p, topics, dds::topics::kPressureProfile));
+  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->status, p, topics, dds::topics::kStatus));
   MPDRIG_RETURN_IF_ERROR(
-      OpenReader(&session->status, p, topics, &mpdrig_RigStatus_desc, "mpdrig_status", status_qos));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_sensors, p, topics, &mpdrig_RigSensors_desc,
-                                    "mpdrig_shadow_sensors", sensor_qos));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->shadow_status, p, topics, &mpdrig_ShadowStatus_desc,
-                                    "mpdrig_shadow_status", status_qos));
-  auto command_topic =
-      dds::CreateTopic(p.participant.handle(), &mpdrig_ShadowCommand_desc, "mpdrig_shadow_command");
+      OpenReader(&session->shadow_sensors, p, topics, dds::topics::kShadowSensors));
+  MPDRIG_RETURN_IF_ERROR(
+      OpenReader(&session->shadow_status, p, topics, dds::topics::kShadowStatus));
+  auto command_topic = dds::CreateTopic(p.participant.handle(), dds::topics::kShadowCommand);
   if (!command_topic.ok()) return command_topic.status();
   auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p.pub(), command_topic->handle(),
                                                           dds::RequestQos());

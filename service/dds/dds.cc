@@ -1,4 +1,5 @@
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 
 namespace mpdrig::dds {
 
@@ -125,6 +126,24 @@ Result<Entity> CreateTopic(dds_entity_t participant, const dds_topic_descriptor_
       dds_create_topic(participant, descriptor, name.c_str(), nullptr, nullptr);
   if (handle < 0) return Check(handle, ("dds_create_topic " + name).c_str());
   return Entity(handle);
+}
+
+Result<Entity> CreateTopic(dds_entity_t participant, const TopicSpec& topic) {
+  return CreateTopic(participant, topic.type, topic.name);
+}
+
+Qos ReaderQos(const TopicSpec& topic, bool keep_all) {
+  switch (topic.qos) {
+    case QosClass::kSensor:
+      return SensorQos(keep_all);
+    case QosClass::kCommand:
+      return CommandQos();
+    case QosClass::kStatus:
+      return StatusQos();
+    case QosClass::kRequest:
+      return RequestQos();
+  }
+  return RequestQos();  // unreachable: every class is handled above
 }
 
 }  // namespace mpdrig::dds

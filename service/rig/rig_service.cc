@@ -273,8 +273,8 @@ struct RigService::Impl {
       Endpoints& set = *endpoints[i];
       auto taken =
           set.requests->TakeEach([&](const mpdrig_RigRequest& r, const dds_sample_info_t& info) {
-            if (!FromItsPartition(set, kRigRequestTopic, r.rig_id, set.requests->handle(),
-                                  info.publication_handle))
+            if (!FromItsPartition(set, dds::topics::kRigRequest.name, r.rig_id,
+                                  set.requests->handle(), info.publication_handle))
               return;
             asked.push_back({static_cast<std::size_t>(set.rig), r.private_rigs});
           });
@@ -283,14 +283,14 @@ struct RigService::Impl {
     for (auto [index, count] : asked) {
       const std::string student = rigs[index].rig_id();
       if (student.find('.') != std::string::npos) {
-        (void)rigs[index].Refuse(std::string(kRigRequestTopic) + " refused: " + student +
-                                 " is a private rig itself");
+        (void)rigs[index].Refuse(std::string(dds::topics::kRigRequest.name) +
+                                 " refused: " + student + " is a private rig itself");
         MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
         continue;
       }
       if (count > options.private_rigs) {
-        (void)rigs[index].Refuse(std::string(kRigRequestTopic) + " for " + std::to_string(count) +
-                                 " private rigs refused beyond " +
+        (void)rigs[index].Refuse(std::string(dds::topics::kRigRequest.name) + " for " +
+                                 std::to_string(count) + " private rigs refused beyond " +
                                  std::to_string(options.private_rigs) +
                                  ": this service allows that many per student (--private-rigs)");
         count = options.private_rigs;
@@ -449,35 +449,36 @@ struct RigService::Impl {
     };
     auto taken = choke->TakeEach(
         [&](const mpdrig_ChokeCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, kChokeCommandTopic, c.rig_id, choke->handle(),
-                                info.publication_handle))
+          if (!FromItsPartition(endpoints_set, dds::topics::kChokeCommand.name, c.rig_id,
+                                choke->handle(), info.publication_handle))
             return;
           NoteOwner(c.rig_id, "choke", choke->handle(), info);
-          apply(kChokeCommandTopic, c.rig_id,
+          apply(dds::topics::kChokeCommand.name, c.rig_id,
                 [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
         },
-        choke_lost, kMaxCommandsPerTick, disposed(kChokeCommandTopic));
+        choke_lost, kMaxCommandsPerTick, disposed(dds::topics::kChokeCommand.name));
     if (!taken.ok()) return taken.status();
     taken = pump->TakeEach(
         [&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, kPumpCommandTopic, c.rig_id, pump->handle(),
-                                info.publication_handle))
+          if (!FromItsPartition(endpoints_set, dds::topics::kPumpCommand.name, c.rig_id,
+                                pump->handle(), info.publication_handle))
             return;
           NoteOwner(c.rig_id, "pump", pump->handle(), info);
-          apply(kPumpCommandTopic, c.rig_id, [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
+          apply(dds::topics::kPumpCommand.name, c.rig_id,
+                [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
         },
-        {}, kMaxCommandsPerTick, disposed(kPumpCommandTopic));
+        {}, kMaxCommandsPerTick, disposed(dds::topics::kPumpCommand.name));
     if (!taken.ok()) return taken.status();
     taken = outlet->TakeEach(
         [&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, kOutletCommandTopic, c.rig_id, outlet->handle(),
-                                info.publication_handle))
+          if (!FromItsPartition(endpoints_set, dds::topics::kOutletCommand.name, c.rig_id,
+                                outlet->handle(), info.publication_handle))
             return;
           NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
-          apply(kOutletCommandTopic, c.rig_id,
+          apply(dds::topics::kOutletCommand.name, c.rig_id,
                 [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
         },
-        {}, kMaxCommandsPerTick, disposed(kOutletCommandTopic));
+        {}, kMaxCommandsPerTick, disposed(dds::topics::kOutletCommand.name));
     if (!taken.ok()) return taken.status();
     // No piston controller left: the heave generator stops where it is.
     auto piston_lost = [this, &endpoints_set](const mpdrig_PistonCommand& c) {
@@ -490,14 +491,14 @@ struct RigService::Impl {
     };
     taken = piston->TakeEach(
         [&](const mpdrig_PistonCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, kPistonCommandTopic, c.rig_id, piston->handle(),
-                                info.publication_handle))
+          if (!FromItsPartition(endpoints_set, dds::topics::kPistonCommand.name, c.rig_id,
+                                piston->handle(), info.publication_handle))
             return;
           NoteOwner(c.rig_id, "piston", piston->handle(), info);
-          apply(kPistonCommandTopic, c.rig_id,
+          apply(dds::topics::kPistonCommand.name, c.rig_id,
                 [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
         },
-        piston_lost, kMaxCommandsPerTick, disposed(kPistonCommandTopic));
+        piston_lost, kMaxCommandsPerTick, disposed(dds::topics::kPistonCommand.name));
     return taken.ok() ? Status::Ok() : taken.status();
   }
 
@@ -783,7 +784,7 @@ struct RigService::Impl {
         auto& steps = set->steps;
         auto taken = steps->TakeEach(
             [&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
-              if (!FromItsPartition(*set, kStepRequestTopic, r.rig_id, steps->handle(),
+              if (!FromItsPartition(*set, dds::topics::kStepRequest.name, r.rig_id, steps->handle(),
                                     info.publication_handle)) {
                 refused = true;
                 return;
@@ -795,7 +796,7 @@ struct RigService::Impl {
             // command topics refuse theirs.
             [&](const mpdrig_StepRequest& r) {
               if (Find(r.rig_id) != nullptr) return;
-              RefuseUnknown(kStepRequestTopic, ReportedId(r.rig_id));
+              RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(r.rig_id));
               refused = true;
             });
         if (!taken.ok()) return taken.status();
@@ -805,7 +806,7 @@ struct RigService::Impl {
         RigHost* rig = Find(rig_id.c_str());
         if (rig == nullptr) {  // the topic filter lets none through; kept for safety
           MPDRIG_RETURN_IF_ERROR(TakeCommands());
-          RefuseUnknown(kStepRequestTopic, ReportedId(rig_id.c_str()));
+          RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(rig_id.c_str()));
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
@@ -816,7 +817,7 @@ struct RigService::Impl {
           std::snprintf(reason, sizeof reason,
                         "%s %llu of %llu steps refused: more than %.0f s of rig time (%.0f steps "
                         "at this rate) in one request; send several",
-                        kStepRequestTopic, static_cast<unsigned long long>(request.id),
+                        dds::topics::kStepRequest.name, static_cast<unsigned long long>(request.id),
                         static_cast<unsigned long long>(request.remaining), kMaxStepRequestRigTimeS,
                         max_steps);
           (void)rig->Refuse(reason);
@@ -967,21 +968,18 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   impl->participant = std::move(participant).value();
   const dds_entity_t p = impl->participant.handle();
 
-  auto topic = [p](const dds_topic_descriptor_t* descriptor, const char* name,
-                   dds::Entity* out) -> Status {
-    auto created = dds::CreateTopic(p, descriptor, name);
+  auto topic = [p](const dds::TopicSpec& spec, dds::Entity* out) -> Status {
+    auto created = dds::CreateTopic(p, spec);
     if (!created.ok()) return created.status();
     *out = std::move(created).value();
     return Status::Ok();
   };
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigSensors_desc, kSensorsTopic, &impl->sensors_topic));
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_ChokeCommand_desc, kChokeCommandTopic, &impl->choke_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&mpdrig_PistonCommand_desc, kPistonCommandTopic, &impl->piston_topic));
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_PumpCommand_desc, kPumpCommandTopic, &impl->pump_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&mpdrig_OutletCommand_desc, kOutletCommandTopic, &impl->outlet_topic));
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_StepRequest_desc, kStepRequestTopic, &impl->step_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kSensors, &impl->sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kChokeCommand, &impl->choke_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kPistonCommand, &impl->piston_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kPumpCommand, &impl->pump_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kOutletCommand, &impl->outlet_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kStepRequest, &impl->step_topic));
   // Filters on the command and step topics, set before their readers are created (Cyclone
   // applies a topic's filter to the readers made from it afterwards).
   std::vector<std::string> known;
@@ -992,24 +990,23 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
     return dds::Check(dds_set_topic_filter_and_arg(on.handle(), accept, impl->gates.back().get()),
                       "dds_set_topic_filter_and_arg");
   };
-  MPDRIG_RETURN_IF_ERROR(
-      gate(kChokeCommandTopic, &UnknownRigGate::Accept<mpdrig_ChokeCommand>, impl->choke_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      gate(kPistonCommandTopic, &UnknownRigGate::Accept<mpdrig_PistonCommand>, impl->piston_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      gate(kPumpCommandTopic, &UnknownRigGate::Accept<mpdrig_PumpCommand>, impl->pump_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      gate(kOutletCommandTopic, &UnknownRigGate::Accept<mpdrig_OutletCommand>, impl->outlet_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      gate(kStepRequestTopic, &UnknownRigGate::Accept<mpdrig_StepRequest>, impl->step_topic));
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigStatus_desc, kStatusTopic, &impl->status_topic));
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigEstimate_desc, kEstimateTopic, &impl->estimate_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&mpdrig_PressureProfile_desc, kPressureProfileTopic, &impl->profile_topic));
+  MPDRIG_RETURN_IF_ERROR(gate(dds::topics::kChokeCommand.name,
+                              &UnknownRigGate::Accept<mpdrig_ChokeCommand>, impl->choke_topic));
+  MPDRIG_RETURN_IF_ERROR(gate(dds::topics::kPistonCommand.name,
+                              &UnknownRigGate::Accept<mpdrig_PistonCommand>, impl->piston_topic));
+  MPDRIG_RETURN_IF_ERROR(gate(dds::topics::kPumpCommand.name,
+                              &UnknownRigGate::Accept<mpdrig_PumpCommand>, impl->pump_topic));
+  MPDRIG_RETURN_IF_ERROR(gate(dds::topics::kOutletCommand.name,
+                              &UnknownRigGate::Accept<mpdrig_OutletCommand>, impl->outlet_topic));
+  MPDRIG_RETURN_IF_ERROR(gate(dds::topics::kStepRequest.name,
+                              &UnknownRigGate::Accept<mpdrig_StepRequest>, impl->step_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kStatus, &impl->status_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kEstimate, &impl->estimate_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kPressureProfile, &impl->profile_topic));
 
   // One set of endpoints in the default partition, or with security one per rig in its own.
   if (options.private_rigs > 0) {
-    MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigRequest_desc, kRigRequestTopic, &impl->request_topic));
+    MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kRigRequest, &impl->request_topic));
   }
   dds::Entity step_waitset(dds_create_waitset(p));
   if (step_waitset.handle() < 0) return dds::Check(step_waitset.handle(), "dds_create_waitset");

@@ -11,22 +11,13 @@
 
 #include "model/sim/rig_simulator.h"
 #include "mpdrig.h"
+#include "service/dds/topics.h"
 #include "service/rig/rig_host.h"
 #include "service/rig/rig_observer.h"
 
 namespace mpdrig::service {
 
-// Topic names (Cyclone 0.10 allows [A-Za-z0-9_/] only).
-inline constexpr const char* kSensorsTopic = "mpdrig_sensors";
-inline constexpr const char* kChokeCommandTopic = "mpdrig_choke_command";
-inline constexpr const char* kPistonCommandTopic = "mpdrig_piston_command";
-inline constexpr const char* kPumpCommandTopic = "mpdrig_pump_command";
-inline constexpr const char* kOutletCommandTopic = "mpdrig_outlet_command";
-inline constexpr const char* kStepRequestTopic = "mpdrig_step_request";
-inline constexpr const char* kStatusTopic = "mpdrig_status";
-inline constexpr const char* kEstimateTopic = "mpdrig_estimate";
-inline constexpr const char* kPressureProfileTopic = "mpdrig_pressure_profile";
-inline constexpr const char* kRigRequestTopic = "mpdrig_rig_request";
+// Topic names, types and QoS: service/dds/topics.h.
 
 // A rig id (the key of every topic) is 1 to kMaxRigIdBytes bytes of printable ASCII without
 // spaces ('!' .. '~'): the service serves no other, so a sample whose id is longer is refused

@@ -193,7 +193,8 @@ struct ShadowService::Impl {
         // Nothing changes now: the fit's answer comes later (fit_state, then a change).
         const Status started = StartFit();
         if (!started.ok()) {
-          Refuse(std::string(kShadowCommandTopic) + " refused: fit now: " + started.message());
+          Refuse(std::string(dds::topics::kShadowCommand.name) +
+                 " refused: fit now: " + started.message());
         } else {
           next_status_s = -std::numeric_limits<double>::infinity();
         }
@@ -205,7 +206,7 @@ struct ShadowService::Impl {
     }
     if (status.ok()) status = model->SetParams(params);
     if (!status.ok()) {
-      Refuse(std::string(kShadowCommandTopic) + " refused: " + status.message());
+      Refuse(std::string(dds::topics::kShadowCommand.name) + " refused: " + status.message());
       return;
     }
     if (command.action == mpdrig_SHADOW_RESET) {
@@ -352,18 +353,16 @@ Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
   const dds_entity_t p = impl->participant.handle();
   const dds_entity_t pub = impl->publisher.handle() > 0 ? impl->publisher.handle() : p;
   const dds_entity_t sub = impl->subscriber.handle() > 0 ? impl->subscriber.handle() : p;
-  auto topic = [p](const dds_topic_descriptor_t* d, const char* name, dds::Entity* out) {
-    auto created = dds::CreateTopic(p, d, name);
+  auto topic = [p](const dds::TopicSpec& spec, dds::Entity* out) {
+    auto created = dds::CreateTopic(p, spec);
     if (!created.ok()) return created.status();
     *out = std::move(created).value();
     return Status::Ok();
   };
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_RigSensors_desc, kSensorsTopic, &impl->sensors_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&mpdrig_RigSensors_desc, kShadowSensorsTopic, &impl->shadow_sensors_topic));
-  MPDRIG_RETURN_IF_ERROR(topic(&mpdrig_ShadowStatus_desc, kShadowStatusTopic, &impl->status_topic));
-  MPDRIG_RETURN_IF_ERROR(
-      topic(&mpdrig_ShadowCommand_desc, kShadowCommandTopic, &impl->command_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kSensors, &impl->sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kShadowSensors, &impl->shadow_sensors_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kShadowStatus, &impl->status_topic));
+  MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kShadowCommand, &impl->command_topic));
   // Keep all: the model needs every sample in order (a gap is a hold of the inputs).
   auto sensors = dds::Reader<mpdrig_RigSensors>::Create(sub, impl->sensors_topic.handle(),
                                                         dds::SensorQos(true));

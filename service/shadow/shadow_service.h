@@ -19,12 +19,9 @@
 #include "model/analysis/shadow_model.h"
 #include "model/common/status.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 
 namespace mpdrig::service {
-
-inline constexpr const char* kShadowSensorsTopic = "mpdrig_shadow_sensors";
-inline constexpr const char* kShadowStatusTopic = "mpdrig_shadow_status";
-inline constexpr const char* kShadowCommandTopic = "mpdrig_shadow_command";
 
 struct ShadowServeOptions {
   std::string rig_id = "rig-1";

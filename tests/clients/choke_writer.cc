@@ -10,6 +10,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -29,8 +30,7 @@ int main(int argc, char** argv) {
   auto created = dds::Domain::Create(domain, dds::LoopbackConfig());
   auto participant = dds::CreateParticipant(domain);
   if (!created.ok() || !participant.ok()) return 1;
-  auto topic =
-      dds::CreateTopic(participant->handle(), &mpdrig_ChokeCommand_desc, "mpdrig_choke_command");
+  auto topic = dds::CreateTopic(participant->handle(), dds::topics::kChokeCommand);
   if (!topic.ok()) return 1;
   auto writer = dds::Writer<mpdrig_ChokeCommand>::Create(participant->handle(), topic->handle(),
                                                          dds::CommandQos(strength));

@@ -15,6 +15,7 @@
 #include "clients/dashboard/rig_feed.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 #include "tests/support/test_domain.h"
 
 namespace mpdrig::dashboard {
@@ -96,7 +97,8 @@ TEST(DashboardJson, InvalidUtf8BecomesTheReplacementCharacter) {
 
 TEST_F(RigFeedTest, ReadsOnlyWhileWatched) {
   auto sensors = dds::Writer<mpdrig_RigSensors>::Create(
-      participant_.handle(), Topic(&mpdrig_RigSensors_desc, "mpdrig_sensors"), dds::SensorQos());
+      participant_.handle(), Topic(dds::topics::kSensors.type, dds::topics::kSensors.name),
+      dds::SensorQos());
   ASSERT_TRUE(sensors.ok()) << sensors.status().message();
   auto matched = [&] {
     dds_publication_matched_status_t m{};
@@ -162,7 +164,8 @@ TEST_F(RigFeedTest, ShadowCommandsReachTheWireOrAreRefusedWithAReason) {
   dds_qset_reliability(qos.get(), DDS_RELIABILITY_RELIABLE, DDS_MSECS(100));
   dds_qset_history(qos.get(), DDS_HISTORY_KEEP_ALL, 0);
   auto commands = dds::Reader<mpdrig_ShadowCommand>::Create(
-      participant_.handle(), Topic(&mpdrig_ShadowCommand_desc, "mpdrig_shadow_command"), qos);
+      participant_.handle(),
+      Topic(dds::topics::kShadowCommand.type, dds::topics::kShadowCommand.name), qos);
   ASSERT_TRUE(commands.ok()) << commands.status().message();
   auto sent = feed_->SendShadowCommand("rig-a", "effect_on", "unsteady_friction:k=2");
   ASSERT_TRUE(sent.ok()) << sent.status().message();

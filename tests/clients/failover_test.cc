@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "mpdrig.h"
+#include "service/dds/topics.h"
 #include "service/rig/rig_service.h"
 #include "service/rig/wire.h"
 #include "tests/support/process.h"
@@ -51,10 +52,10 @@ class Failover : public ::testing::Test {
     auto participant = dds::CreateParticipant(options.domain);
     ASSERT_TRUE(participant.ok());
     participant_ = std::move(participant).value();
-    auto sensors_topic =
-        dds::CreateTopic(participant_.handle(), &mpdrig_RigSensors_desc, kSensorsTopic);
-    auto status_topic =
-        dds::CreateTopic(participant_.handle(), &mpdrig_RigStatus_desc, kStatusTopic);
+    auto sensors_topic = dds::CreateTopic(participant_.handle(), dds::topics::kSensors.type,
+                                          dds::topics::kSensors.name);
+    auto status_topic = dds::CreateTopic(participant_.handle(), dds::topics::kStatus.type,
+                                         dds::topics::kStatus.name);
     ASSERT_TRUE(sensors_topic.ok() && status_topic.ok());
     sensors_.emplace(*dds::Reader<mpdrig_RigSensors>::Create(
         participant_.handle(), sensors_topic->handle(), dds::SensorQos()));

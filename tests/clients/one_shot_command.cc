@@ -16,6 +16,7 @@
 #include "clients/client/rig_client.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 
 int main(int argc, char** argv) {
   if (argc != 5) {
@@ -40,8 +41,7 @@ int main(int argc, char** argv) {
   auto created = dds::Domain::Create(domain, dds::LoopbackConfig());
   auto participant = dds::CreateParticipant(domain);
   if (!created.ok() || !participant.ok()) return 1;
-  auto topic =
-      dds::CreateTopic(participant->handle(), &mpdrig_PumpCommand_desc, "mpdrig_pump_command");
+  auto topic = dds::CreateTopic(participant->handle(), dds::topics::kPumpCommand);
   if (!topic.ok()) return 1;
   mpdrig_PumpCommand command{rig_id.data(), flow_lpm};
   if (mode == "reliable") {

@@ -16,6 +16,7 @@
 
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 #include "service/rig/wire.h"
 #include "tests/support/process.h"
 #include "tests/support/test_domain.h"
@@ -45,8 +46,8 @@ TEST_P(OneShotCommands, EveryCommandFromAShortLivedWriterTakesEffect) {
   ASSERT_TRUE(dds_domain.ok());
   auto participant = dds::CreateParticipant(claimed);
   ASSERT_TRUE(participant.ok());
-  auto topic =
-      dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc, service::kSensorsTopic);
+  auto topic = dds::CreateTopic(participant->handle(), dds::topics::kSensors.type,
+                                dds::topics::kSensors.name);
   ASSERT_TRUE(topic.ok());
   auto sensors = dds::Reader<mpdrig_RigSensors>::Create(participant->handle(), topic->handle(),
                                                         dds::SensorQos());

@@ -19,6 +19,7 @@
 #include "model/riglog/rig_log.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 #include "tests/support/process.h"
 #include "tests/support/test_domain.h"
 
@@ -70,8 +71,7 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
   ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
   auto participant = dds::CreateParticipant(claimed);
   ASSERT_TRUE(participant.ok());
-  auto topic =
-      dds::CreateTopic(participant->handle(), &mpdrig_StepRequest_desc, "mpdrig_step_request");
+  auto topic = dds::CreateTopic(participant->handle(), dds::topics::kStepRequest);
   ASSERT_TRUE(topic.ok());
   const dds::Qos qos = dds::RequestQos();  // as the service reads requests
   auto steps = dds::Writer<mpdrig_StepRequest>::Create(participant->handle(), topic->handle(), qos);

@@ -15,6 +15,7 @@
 #include "model/riglog/rig_log.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 #include "tests/support/process.h"
 #include "tests/support/shell.h"
 #include "tests/support/test_domain.h"
@@ -167,7 +168,7 @@ TEST_F(RigLost, AStraySampleOfAnotherWriterIsNoEvidenceOfARestart) {
   ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
   auto participant = dds::CreateParticipant(domain);
   ASSERT_TRUE(participant.ok());
-  auto topic = dds::CreateTopic(participant->handle(), &mpdrig_RigSensors_desc, "mpdrig_sensors");
+  auto topic = dds::CreateTopic(participant->handle(), dds::topics::kSensors);
   ASSERT_TRUE(topic.ok());
   auto forger = dds::Writer<mpdrig_RigSensors>::Create(participant->handle(), topic->handle(),
                                                        dds::SensorQos());

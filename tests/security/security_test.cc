@@ -27,6 +27,7 @@
 #include "mpdrig.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/dds/topics.h"
 #include "tests/support/process.h"
 #include "tests/support/shell.h"
 #include "tests/support/test_domain.h"
@@ -145,12 +146,12 @@ class RigWatch {
  public:
   RigWatch(Peer& peer, const std::string& rig) : rig_(rig) {
     const std::string partition = dds::RigPartition(rig);
-    auto sensors = peer.MakeReader<mpdrig_RigSensors>(partition, &mpdrig_RigSensors_desc,
-                                                      "mpdrig_sensors", dds::SensorQos());
+    auto sensors = peer.MakeReader<mpdrig_RigSensors>(partition, dds::topics::kSensors.type,
+                                                      dds::topics::kSensors.name, dds::SensorQos());
     EXPECT_TRUE(sensors.ok()) << sensors.status().message();
     if (sensors.ok()) sensors_.emplace(std::move(sensors).value());
-    auto status = peer.MakeReader<mpdrig_RigStatus>(partition, &mpdrig_RigStatus_desc,
-                                                    "mpdrig_status", dds::StatusQos());
+    auto status = peer.MakeReader<mpdrig_RigStatus>(partition, dds::topics::kStatus.type,
+                                                    dds::topics::kStatus.name, dds::StatusQos());
     EXPECT_TRUE(status.ok()) << status.status().message();
     if (status.ok()) status_.emplace(std::move(status).value());
   }
@@ -213,8 +214,9 @@ class Choke {
  public:
   Choke(Peer& peer, const std::string& partition_rig, int strength) {
     auto writer = peer.MakeWriter<mpdrig_ChokeCommand>(
-        partition_rig.empty() ? "" : dds::RigPartition(partition_rig), &mpdrig_ChokeCommand_desc,
-        "mpdrig_choke_command", dds::CommandQos(strength));
+        partition_rig.empty() ? "" : dds::RigPartition(partition_rig),
+        dds::topics::kChokeCommand.type, dds::topics::kChokeCommand.name,
+        dds::CommandQos(strength));
     status_ = writer.ok() ? Status::Ok() : writer.status();
     if (writer.ok()) writer_.emplace(std::move(writer).value());
   }
@@ -383,8 +385,8 @@ TEST_F(SecureClass, UnauthenticatedParticipantReadsNothingAndCommandsNothing) {
   ASSERT_NE(intruder, nullptr);
   // Everywhere it could look: alice's partition and the default one.
   RigWatch in_partition(*intruder, "alice");
-  auto in_default = intruder->MakeReader<mpdrig_RigSensors>("", &mpdrig_RigSensors_desc,
-                                                            "mpdrig_sensors", dds::SensorQos());
+  auto in_default = intruder->MakeReader<mpdrig_RigSensors>(
+      "", dds::topics::kSensors.type, dds::topics::kSensors.name, dds::SensorQos());
   ASSERT_TRUE(in_default.ok());
   Choke forged(*intruder, "alice", 1000);
   Choke forged_default(*intruder, "", 1000);
@@ -429,11 +431,13 @@ TEST_F(SecureClass, StudentCannotCommandAnotherStudentsRigAndTheServiceReportsTh
   // nor read bob's rig; bob may read alice's (make-class ... bob:alice).
   Choke into_bobs(*alice, "bob", 50);
   EXPECT_FALSE(into_bobs.created().ok());
-  auto fake_sensors = alice->MakeWriter<mpdrig_RigSensors>(
-      dds::RigPartition("alice"), &mpdrig_RigSensors_desc, "mpdrig_sensors", dds::SensorQos());
+  auto fake_sensors =
+      alice->MakeWriter<mpdrig_RigSensors>(dds::RigPartition("alice"), dds::topics::kSensors.type,
+                                           dds::topics::kSensors.name, dds::SensorQos());
   EXPECT_FALSE(fake_sensors.ok()) << "a student may publish sensor data";
-  auto peek = alice->MakeReader<mpdrig_RigSensors>(
-      dds::RigPartition("bob"), &mpdrig_RigSensors_desc, "mpdrig_sensors", dds::SensorQos());
+  auto peek =
+      alice->MakeReader<mpdrig_RigSensors>(dds::RigPartition("bob"), dds::topics::kSensors.type,
+                                           dds::topics::kSensors.name, dds::SensorQos());
   EXPECT_FALSE(peek.ok()) << "alice may read bob's rig";
   RigWatch bob_watches_alice(*bob, "alice");
   EXPECT_TRUE(bob_watches_alice.WaitFor(10.0, [](double) { return true; }));
@@ -497,7 +501,7 @@ TEST_F(SecureClass, InstructorTakesOverAStudentsRig) {
 void AskForPrivateRigs(Peer& student, const std::string& rig, std::uint32_t how_many) {
   const dds::Qos qos = dds::RequestQos();  // as the service reads requests
   auto writer = student.MakeWriter<mpdrig_RigRequest>(
-      dds::RigPartition(rig), &mpdrig_RigRequest_desc, "mpdrig_rig_request", qos);
+      dds::RigPartition(rig), dds::topics::kRigRequest.type, dds::topics::kRigRequest.name, qos);
   ASSERT_TRUE(writer.ok()) << writer.status().message();
   // The service's reader must have matched (secure discovery) before the request is written.
   dds_publication_matched_status_t matched{};
@@ -531,8 +535,9 @@ TEST_F(SecureClass, StudentGetsAPrivateRigWithinTheServicesLimits) {
   choke.Send("alice.1", 55.0);
   EXPECT_TRUE(alice_on_private.WaitFor(10.0, [](double c) { return std::fabs(c - 55.0) < 0.01; }))
       << "alice.1's choke at " << alice_on_private.choke_deg();
-  auto peek = bob->MakeReader<mpdrig_RigSensors>(
-      dds::RigPartition("alice.1"), &mpdrig_RigSensors_desc, "mpdrig_sensors", dds::SensorQos());
+  auto peek =
+      bob->MakeReader<mpdrig_RigSensors>(dds::RigPartition("alice.1"), dds::topics::kSensors.type,
+                                         dds::topics::kSensors.name, dds::SensorQos());
   EXPECT_FALSE(peek.ok()) << "bob may read alice's private rig";
 
   // The limits: one private rig per student (--private-rigs 1), three rigs in all (--max-rigs 3).
@@ -723,7 +728,7 @@ TEST_F(SecureClass, PayloadsAreNotReadableOnTheWire) {
   ASSERT_NE(plain_writer, nullptr);
   ASSERT_NE(plain_reader, nullptr);
   auto reader = plain_reader->MakeReader<mpdrig_ChokeCommand>(
-      "", &mpdrig_ChokeCommand_desc, "mpdrig_choke_command", dds::CommandQos());
+      "", dds::topics::kChokeCommand.type, dds::topics::kChokeCommand.name, dds::CommandQos());
   ASSERT_TRUE(reader.ok());
   Choke plain(*plain_writer, "", 10);
   const double plain_deg = 38.0123456789;

@@ -16,6 +16,7 @@
 
 #include "model/common/units.h"
 #include "model/sim/sensor_noise.h"
+#include "service/dds/topics.h"
 #include "service/rig/log_playback.h"
 #include "service/rig/rig_service.h"
 #include "tools/cli/commands.h"
@@ -214,19 +215,21 @@ void PrintBanner(const ServeArgs& args, const service::ServeOptions& serve,
   std::string ids;
   for (const std::string& id : args.rigs) ids += (ids.empty() ? "" : ", ") + id;
   const service::RigHost& first = service.rigs().front();
-  std::fprintf(
-      stderr,
-      "mpdrig serve: rigs %s on DDS domain %d (%s), %s clock, sensors at %g Hz\n"
-      "  topics: mpdrig_sensors, mpdrig_estimate, mpdrig_pressure_profile, mpdrig_status (out); "
-      "mpdrig_choke_command, "
-      "mpdrig_piston_command, mpdrig_pump_command, mpdrig_outlet_command, "
-      "mpdrig_step_request (in)\n  sensor noise: %s\n  security: %s\n  stop with Ctrl-C\n",
-      ids.c_str(), args.domain, args.dds_config.empty() ? "loopback only" : "configured network",
-      args.clock.c_str(), args.rate_hz, first.DescribeSensorNoise().c_str(),
-      args.security.empty() ? "none (any participant on the domain may command any rig)"
-                            : ("DDS Security with " + serve.security->dir +
-                               "; each rig's topics in partition rig.<rig id>")
-                                  .c_str());
+  std::fprintf(stderr,
+               "mpdrig serve: rigs %s on DDS domain %d (%s), %s clock, sensors at %g Hz\n"
+               "  topics: %s, %s, %s, %s (out); %s, %s, %s, %s, %s (in)\n"
+               "  sensor noise: %s\n  security: %s\n  stop with Ctrl-C\n",
+               ids.c_str(), args.domain,
+               args.dds_config.empty() ? "loopback only" : "configured network", args.clock.c_str(),
+               args.rate_hz, dds::topics::kSensors.name, dds::topics::kEstimate.name,
+               dds::topics::kPressureProfile.name, dds::topics::kStatus.name,
+               dds::topics::kChokeCommand.name, dds::topics::kPistonCommand.name,
+               dds::topics::kPumpCommand.name, dds::topics::kOutletCommand.name,
+               dds::topics::kStepRequest.name, first.DescribeSensorNoise().c_str(),
+               args.security.empty() ? "none (any participant on the domain may command any rig)"
+                                     : ("DDS Security with " + serve.security->dir +
+                                        "; each rig's topics in partition rig.<rig id>")
+                                           .c_str());
   if (!args.playback.empty()) {
     std::fprintf(stderr, "  playback: %s at %g Hz; commands are refused (a recording)\n",
                  first.playback()->Describe().c_str(), 1.0 / first.sensor_period_s());

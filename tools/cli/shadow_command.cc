@@ -6,6 +6,7 @@
 #include <memory>
 #include <sstream>
 
+#include "service/dds/topics.h"
 #include "service/shadow/shadow_service.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/model_options.h"
@@ -80,10 +81,10 @@ int RunShadow(const ShadowArgs& args) {
       stderr,
       "mpdrig shadow: rig %s on DDS domain %d; %s; window %g s after a %g s warm-up\n"
       "  inputs: %s\n"
-      "  topics: mpdrig_sensors (in), mpdrig_shadow_command (in), "
-      "mpdrig_shadow_sensors, mpdrig_shadow_status (out)\n  security: %s\n",
+      "  topics: %s (in), %s (in), %s, %s (out)\n  security: %s\n",
       args.rig_id.c_str(), args.domain, args.model.Describe(*params).c_str(), args.window_s,
-      args.warmup_s, inputs,
+      args.warmup_s, inputs, dds::topics::kSensors.name, dds::topics::kShadowCommand.name,
+      dds::topics::kShadowSensors.name, dds::topics::kShadowStatus.name,
       args.security.empty()
           ? "none"
           : ("DDS Security with " + args.security + ", partition rig." + args.rig_id).c_str());

@@ -2,6 +2,7 @@
 // command (transient-local), bad names are errors. Every test runs in its own DDS domain with
 // the loopback configuration, so tests never collide or leak onto a network.
 #include "service/dds/dds.h"
+#include "service/dds/topics.h"
 
 #include <unistd.h>
 
@@ -42,7 +43,7 @@ Fixture Open() {
 
 TEST(Dds, SensorSampleRoundTripOverLoopback) {
   Fixture f = Open();
-  auto topic = CreateTopic(f.participant.handle(), &mpdrig_RigSensors_desc, "mpdrig_sensors");
+  auto topic = CreateTopic(f.participant.handle(), dds::topics::kSensors);
   ASSERT_TRUE(topic.ok()) << topic.status().message();
   auto reader =
       Reader<mpdrig_RigSensors>::Create(f.participant.handle(), topic->handle(), SensorQos());
@@ -79,8 +80,7 @@ TEST(Dds, SensorSampleRoundTripOverLoopback) {
 
 TEST(Dds, LateJoinerGetsTheCurrentCommand) {
   Fixture f = Open();
-  auto topic =
-      CreateTopic(f.participant.handle(), &mpdrig_ChokeCommand_desc, "mpdrig_choke_command");
+  auto topic = CreateTopic(f.participant.handle(), dds::topics::kChokeCommand);
   ASSERT_TRUE(topic.ok());
   auto writer =
       Writer<mpdrig_ChokeCommand>::Create(f.participant.handle(), topic->handle(), CommandQos());
@@ -112,7 +112,7 @@ TEST(Dds, LateJoinerGetsTheCurrentCommand) {
 // forever rather than overflowing.
 TEST(Dds, AwaitReaderWaitsForAMatchAndRequestsAreKeptAll) {
   Fixture f = Open();
-  auto topic = CreateTopic(f.participant.handle(), &mpdrig_StepRequest_desc, "mpdrig_step_request");
+  auto topic = CreateTopic(f.participant.handle(), dds::topics::kStepRequest);
   ASSERT_TRUE(topic.ok());
   auto writer =
       Writer<mpdrig_StepRequest>::Create(f.participant.handle(), topic->handle(), RequestQos());
@@ -141,7 +141,7 @@ TEST(Dds, AwaitReaderWaitsForAMatchAndRequestsAreKeptAll) {
                   .ok());
   ASSERT_EQ(received.size(), 20u) << "keep all: no request of the same rig replaces another";
   EXPECT_EQ(DeadlineAfter(std::numeric_limits<double>::infinity()), DDS_NEVER);
-  EXPECT_EQ(DeadlineAfter(1e12), DDS_NEVER);  // 31 700 years: past DDS's int64 nanoseconds
+  EXPECT_EQ(DeadlineAfter(1e12), DDS_NEVER);    // 31 700 years: past DDS's int64 nanoseconds
   const dds_time_t past = DeadlineAfter(-1.0);  // now: a negative wait is none
   EXPECT_LE(past, dds_time());
   EXPECT_EQ(received.front(), 1u);

@@ -1,6 +1,7 @@
 // A recorded log as the rig (`mpdrig serve --playback`), and the mystery rig's status: what a
 // client receives over loopback DDS is the log, row by row; channels the log lacks arrive as NaN
 // (not measured); commands are refused with the reason; a hidden effect is not named.
+#include "service/dds/topics.h"
 #include "service/rig/log_playback.h"
 
 #include <unistd.h>
@@ -231,10 +232,12 @@ class PlaybackServiceTest : public ::testing::Test {
     ASSERT_TRUE(participant.ok());
     participant_ = std::move(participant).value();
     const dds_entity_t p = participant_.handle();
-    sensors_topic_ = *dds::CreateTopic(p, &mpdrig_RigSensors_desc, kSensorsTopic);
-    status_topic_ = *dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
-    choke_topic_ = *dds::CreateTopic(p, &mpdrig_ChokeCommand_desc, kChokeCommandTopic);
-    step_topic_ = *dds::CreateTopic(p, &mpdrig_StepRequest_desc, kStepRequestTopic);
+    sensors_topic_ = *dds::CreateTopic(p, dds::topics::kSensors.type, dds::topics::kSensors.name);
+    status_topic_ = *dds::CreateTopic(p, dds::topics::kStatus.type, dds::topics::kStatus.name);
+    choke_topic_ =
+        *dds::CreateTopic(p, dds::topics::kChokeCommand.type, dds::topics::kChokeCommand.name);
+    step_topic_ =
+        *dds::CreateTopic(p, dds::topics::kStepRequest.type, dds::topics::kStepRequest.name);
     sensors_.emplace(
         *dds::Reader<mpdrig_RigSensors>::Create(p, sensors_topic_.handle(), dds::SensorQos(true)));
     status_.emplace(

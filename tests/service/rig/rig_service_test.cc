@@ -2,6 +2,7 @@
 // rig, asks for steps, and reads sensors and status like a controller would. Each test runs the
 // service in its own DDS domain.
 #include "service/rig/rig_service.h"
+#include "service/dds/topics.h"
 
 #include <signal.h>
 #include <unistd.h>
@@ -76,13 +77,14 @@ class ServiceTest : public ::testing::Test {
       EXPECT_TRUE(t.ok()) << t.status().message();
       return std::move(t).value();
     };
-    sensors_topic_ = make_topic(&mpdrig_RigSensors_desc, kSensorsTopic);
-    status_topic_ = make_topic(&mpdrig_RigStatus_desc, kStatusTopic);
-    choke_topic_ = make_topic(&mpdrig_ChokeCommand_desc, kChokeCommandTopic);
-    piston_topic_ = make_topic(&mpdrig_PistonCommand_desc, kPistonCommandTopic);
-    step_topic_ = make_topic(&mpdrig_StepRequest_desc, kStepRequestTopic);
-    estimate_topic_ = make_topic(&mpdrig_RigEstimate_desc, kEstimateTopic);
-    profile_topic_ = make_topic(&mpdrig_PressureProfile_desc, kPressureProfileTopic);
+    sensors_topic_ = make_topic(dds::topics::kSensors.type, dds::topics::kSensors.name);
+    status_topic_ = make_topic(dds::topics::kStatus.type, dds::topics::kStatus.name);
+    choke_topic_ = make_topic(dds::topics::kChokeCommand.type, dds::topics::kChokeCommand.name);
+    piston_topic_ = make_topic(dds::topics::kPistonCommand.type, dds::topics::kPistonCommand.name);
+    step_topic_ = make_topic(dds::topics::kStepRequest.type, dds::topics::kStepRequest.name);
+    estimate_topic_ = make_topic(dds::topics::kEstimate.type, dds::topics::kEstimate.name);
+    profile_topic_ =
+        make_topic(dds::topics::kPressureProfile.type, dds::topics::kPressureProfile.name);
     estimates_.emplace(*dds::Reader<mpdrig_RigEstimate>::Create(p, estimate_topic_.handle(),
                                                                 dds::SensorQos(true)));
     profiles_.emplace(*dds::Reader<mpdrig_PressureProfile>::Create(p, profile_topic_.handle(),
@@ -407,8 +409,9 @@ TEST_F(ServiceTest, ADisposedStepRequestOfAnUnknownRigIsRefusedAndReported) {
   ASSERT_EQ(dds_dispose(step_->handle(), &stranger), DDS_RETCODE_OK);
   auto [rejected, reason] = Step("rig-1", 5);  // the same writer: the dispose arrives first
   EXPECT_EQ(rejected, 1u);
-  EXPECT_NE(reason.find(std::string(kStepRequestTopic) + " for unknown rig 'rig-9' refused"),
-            std::string::npos)
+  EXPECT_NE(
+      reason.find(std::string(dds::topics::kStepRequest.name) + " for unknown rig 'rig-9' refused"),
+      std::string::npos)
       << reason;
   EXPECT_EQ(TakeSensors()["rig-1"].size(), 5u) << "rig-1 stepped as asked, and only rig-1";
 }
@@ -596,7 +599,8 @@ TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTime
   ASSERT_TRUE(dds_domain.ok()) << dds_domain.status().message();
   auto participant = dds::CreateParticipant(domain);
   ASSERT_TRUE(participant.ok());
-  auto topic = dds::CreateTopic(participant->handle(), &mpdrig_RigStatus_desc, kStatusTopic);
+  auto topic =
+      dds::CreateTopic(participant->handle(), dds::topics::kStatus.type, dds::topics::kStatus.name);
   ASSERT_TRUE(topic.ok());
   auto status = dds::Reader<mpdrig_RigStatus>::Create(participant->handle(), topic->handle(),
                                                       dds::StatusQos());
@@ -697,9 +701,10 @@ void ExpectAFloodOfUnknownRigIdsIsRefused(Stranger stranger) {
   auto participant = dds::CreateParticipant(domain);
   ASSERT_TRUE(participant.ok());
   const dds_entity_t p = participant->handle();
-  auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
-  auto sensors_topic = dds::CreateTopic(p, &mpdrig_RigSensors_desc, kSensorsTopic);
-  auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, kPumpCommandTopic);
+  auto status_topic = dds::CreateTopic(p, dds::topics::kStatus.type, dds::topics::kStatus.name);
+  auto sensors_topic = dds::CreateTopic(p, dds::topics::kSensors.type, dds::topics::kSensors.name);
+  auto pump_topic =
+      dds::CreateTopic(p, dds::topics::kPumpCommand.type, dds::topics::kPumpCommand.name);
   ASSERT_TRUE(status_topic.ok() && sensors_topic.ok() && pump_topic.ok());
   auto status = dds::Reader<mpdrig_RigStatus>::Create(p, status_topic->handle(), dds::StatusQos());
   auto sensors =
@@ -836,8 +841,9 @@ TEST(ServiceProcessTest, HugeRigIdsAreDroppedBeforeTheServiceHoldsThem) {
   auto participant = dds::CreateParticipant(domain);
   ASSERT_TRUE(participant.ok());
   const dds_entity_t p = participant->handle();
-  auto status_topic = dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
-  auto pump_topic = dds::CreateTopic(p, &mpdrig_PumpCommand_desc, kPumpCommandTopic);
+  auto status_topic = dds::CreateTopic(p, dds::topics::kStatus.type, dds::topics::kStatus.name);
+  auto pump_topic =
+      dds::CreateTopic(p, dds::topics::kPumpCommand.type, dds::topics::kPumpCommand.name);
   ASSERT_TRUE(status_topic.ok() && pump_topic.ok());
   auto status = dds::Reader<mpdrig_RigStatus>::Create(p, status_topic->handle(), dds::StatusQos());
   auto flood = dds::Writer<mpdrig_PumpCommand>::Create(p, pump_topic->handle(), dds::CommandQos());

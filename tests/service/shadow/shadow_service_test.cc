@@ -5,6 +5,7 @@
 // refused and counted; fit now, asked with the effect at a wrong strength, brings the strength
 // back and the error down while the shadow runs on, and a second one meanwhile is refused.
 #include "service/shadow/shadow_service.h"
+#include "service/dds/topics.h"
 
 #include <atomic>
 #include <chrono>
@@ -101,10 +102,13 @@ class ShadowServiceTest : public ::testing::Test {
     ASSERT_TRUE(participant.ok());
     participant_ = std::move(participant).value();
     const dds_entity_t p = participant_.handle();
-    rig_status_topic_ = *dds::CreateTopic(p, &mpdrig_RigStatus_desc, kStatusTopic);
-    step_topic_ = *dds::CreateTopic(p, &mpdrig_StepRequest_desc, kStepRequestTopic);
-    shadow_status_topic_ = *dds::CreateTopic(p, &mpdrig_ShadowStatus_desc, kShadowStatusTopic);
-    command_topic_ = *dds::CreateTopic(p, &mpdrig_ShadowCommand_desc, kShadowCommandTopic);
+    rig_status_topic_ = *dds::CreateTopic(p, dds::topics::kStatus.type, dds::topics::kStatus.name);
+    step_topic_ =
+        *dds::CreateTopic(p, dds::topics::kStepRequest.type, dds::topics::kStepRequest.name);
+    shadow_status_topic_ =
+        *dds::CreateTopic(p, dds::topics::kShadowStatus.type, dds::topics::kShadowStatus.name);
+    command_topic_ =
+        *dds::CreateTopic(p, dds::topics::kShadowCommand.type, dds::topics::kShadowCommand.name);
     rig_status_reader_.emplace(
         *dds::Reader<mpdrig_RigStatus>::Create(p, rig_status_topic_.handle(), dds::StatusQos()));
     shadow_reader_.emplace(*dds::Reader<mpdrig_ShadowStatus>::Create(
