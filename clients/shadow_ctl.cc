@@ -32,8 +32,8 @@ int Fail(const std::string& what) {
 }
 
 void Print(const mpdrig_ShadowStatus& s) {
-  std::printf("shadow of %s at t = %.2f s: error %.4f over %.0f s\n", s.rig_id, s.sim_time_s,
-              s.error, s.window_s);
+  std::printf("shadow '%s' of %s at t = %.2f s: error %.4f over %.0f s\n", s.shadow_id, s.rig_id,
+              s.sim_time_s, s.error, s.window_s);
   for (std::uint32_t i = 0; i < s.channels._length && i < s.nrmse._length; ++i) {
     if (!std::isnan(s.nrmse._buffer[i]))
       std::printf("  %-5s NRMSE %.4f\n", s.channels._buffer[i], s.nrmse._buffer[i]);
@@ -58,16 +58,22 @@ void Print(const mpdrig_ShadowStatus& s) {
 
 struct Args {
   std::string rig_id = "rig-1";
+  // `mpdrig shadow --shadow-id`'s default: the one shadow of a rig.
+  std::string shadow_id = "shadow";
   int domain = 0;
   std::string dds_config;
   std::string effect_on, effect_off, set;
-  bool reset = false, fit_now = false;
+  bool reset = false, fit_now = false, cancel_fit = false;
   double timeout_s = 10.0, fit_timeout_s = 600.0;
   std::string security;
 };
 
 void AddOptions(CLI::App& app, Args& args) {
   app.add_option("--rig", args.rig_id, "the rig the shadow follows")->capture_default_str();
+  app.add_option("--shadow", args.shadow_id,
+                 "which shadow of the rig (`mpdrig shadow --shadow-id`): only it takes the "
+                 "command")
+      ->capture_default_str();
   app.add_option("--domain", args.domain, "DDS domain id")
       ->check(CLI::Range(0, 232))
       ->capture_default_str();
@@ -79,10 +85,13 @@ void AddOptions(CLI::App& app, Args& args) {
   auto* fit = app.add_flag("--fit-now", args.fit_now,
                            "fit c, f1 and the active effects' strengths on the shadow's last "
                            "minutes of rows, in the background; waits for the result");
-  on->excludes(off, param, again, fit);
-  off->excludes(param, again, fit);
-  param->excludes(again, fit);
-  again->excludes(fit);
+  auto* cancel = app.add_flag("--cancel-fit", args.cancel_fit,
+                              "stop the shadow's running fit (its result is dropped)");
+  on->excludes(off, param, again, fit, cancel);
+  off->excludes(param, again, fit, cancel);
+  param->excludes(again, fit, cancel);
+  again->excludes(fit, cancel);
+  fit->excludes(cancel);
   app.add_option("--fit-timeout", args.fit_timeout_s,
                  "with --fit-now: wait this long for the fit [s]")
       ->check(CLI::PositiveNumber)
@@ -103,6 +112,7 @@ std::optional<std::pair<mpdrig_ShadowAction, std::string>> RequestedAction(const
   if (!args.set.empty()) return std::pair{mpdrig_SHADOW_SET, args.set};
   if (args.reset) return std::pair{mpdrig_SHADOW_RESET, std::string()};
   if (args.fit_now) return std::pair{mpdrig_SHADOW_FIT_NOW, std::string()};
+  if (args.cancel_fit) return std::pair{mpdrig_SHADOW_FIT_CANCEL, std::string()};
   return std::nullopt;
 }
 
@@ -112,15 +122,14 @@ using Deadline = std::chrono::time_point<Clock, std::chrono::duration<double>>;
 
 // The shadow's current status (transient-local: it arrives once matched), printed; its count of
 // refused commands, or nothing if no shadow of the rig answered before the deadline.
-mpdrig::Result<std::optional<std::uint64_t>> ReadCurrentStatus(Reader& status,
-                                                               const std::string& rig_id,
+mpdrig::Result<std::optional<std::uint64_t>> ReadCurrentStatus(Reader& status, const Args& args,
                                                                Deadline deadline) {
   std::optional<std::uint64_t> rejected;
   while (!rejected && Clock::now() < deadline) {
     auto ready = status.Wait(DDS_MSECS(100));
     if (!ready.ok()) return ready.status();
     (void)status.TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-      if (rig_id != s.rig_id) return;
+      if (args.rig_id != s.rig_id || args.shadow_id != s.shadow_id) return;
       rejected = s.rejected_commands;
       Print(s);
     });
@@ -139,7 +148,9 @@ int AwaitAnswer(Reader& status, const Args& args, const mpdrig_ShadowCommand& co
     if (!ready.ok()) return Fail(ready.status().message());
     int code = -1;
     (void)status.TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-      if (code >= 0 || args.rig_id != s.rig_id || s.last_command_id != command.command_id) return;
+      if (code >= 0 || args.rig_id != s.rig_id || args.shadow_id != s.shadow_id ||
+          s.last_command_id != command.command_id)
+        return;
       const std::string fit_state = s.fit_state;
       if (s.rejected_commands > before_rejected) {
         std::printf("refused: %s\n", s.last_rejection);
@@ -189,10 +200,12 @@ int main(int argc, char** argv) {
   auto status = Reader::Create(scope->sub(), status_topic->handle(), dds::StatusQos());
   if (!status.ok()) return Fail(status.status().message());
   const Deadline deadline = Clock::now() + std::chrono::duration<double>(args.timeout_s);
-  auto before_rejected = ReadCurrentStatus(*status, args.rig_id, deadline);
+  auto before_rejected = ReadCurrentStatus(*status, args, deadline);
   if (!before_rejected.ok()) return Fail(before_rejected.status().message());
   if (!*before_rejected) {
-    return Fail("no shadow of rig '" + args.rig_id + "' answered (is `mpdrig shadow` running?)");
+    return Fail("no shadow '" + args.shadow_id + "' of rig '" + args.rig_id +
+                "' answered (is `mpdrig shadow --rig " + args.rig_id + " --shadow-id " +
+                args.shadow_id + "` running?)");
   }
   auto action = RequestedAction(args);
   if (!action) return 0;
@@ -209,6 +222,7 @@ int main(int argc, char** argv) {
 
   mpdrig_ShadowCommand command{};
   command.rig_id = args.rig_id.data();
+  command.shadow_id = args.shadow_id.data();
   command.command_id =
       static_cast<unsigned long long>(std::chrono::system_clock::now().time_since_epoch().count());
   command.action = action->first;

@@ -41,6 +41,7 @@ struct Args {
   int port = 8080;
   std::string host = "127.0.0.1";
   std::vector<std::string> rigs;
+  std::string shadow_id = "shadow";
   std::vector<std::string> allow_hosts;  // more names of this machine a write may come from
   std::string dds_config;
   std::string security;  // make-class's OUT/NAME; empty: no DDS Security
@@ -172,6 +173,9 @@ int main(int argc, char** argv) {
                  "address to listen on (127.0.0.1: this machine only; 0.0.0.0: the lab's network)")
       ->capture_default_str();
   app.add_option("--rig", args.rigs, "a rig to show (repeatable; default: every rig seen)");
+  app.add_option("--shadow", args.shadow_id,
+                 "which shadow of each rig to show and command (`mpdrig shadow --shadow-id`)")
+      ->capture_default_str();
   app.add_option("--allow-host", args.allow_hosts,
                  "another name of this machine the page may be opened by, for writes (repeatable; "
                  "127.0.0.1, localhost, --host and the host name are always allowed)");
@@ -218,6 +222,7 @@ int main(int argc, char** argv) {
   options.domain = args.domain;
   options.dds_config = args.dds_config;
   options.rigs = args.rigs;
+  options.shadow_id = args.shadow_id;
   options.security_dir = args.security;
   options.idle_s = args.idle_s;
   options.frame_hz = args.frame_hz;

@@ -464,7 +464,7 @@ void RigFeed::Drain() {
     v.fresh_shadow = true;
   }));
   count(s.shadow_status->TakeEach([&](const mpdrig_ShadowStatus& w, const dds_sample_info_t&) {
-    if (!Wanted(w.rig_id)) return;
+    if (!Wanted(w.rig_id) || options_.shadow_id != w.shadow_id) return;
     RigView& v = View(w.rig_id);
     v.shadow_status = ShadowStatusFromWire(w);
     v.fresh_error = true;
@@ -723,8 +723,9 @@ Result<std::uint64_t> RigFeed::SendShadowCommand(const std::string& rig_id,
         if (!got.ok()) return got;
         if (matched.current_count > 0) {
           mpdrig_ShadowCommand command{};
-          std::string id_text = rig_id, argument_text = argument;
+          std::string id_text = rig_id, shadow_text = options_.shadow_id, argument_text = argument;
           command.rig_id = id_text.data();
+          command.shadow_id = shadow_text.data();
           command.command_id = static_cast<std::uint64_t>(
               std::chrono::system_clock::now().time_since_epoch().count());
           command.action = wire_action;
@@ -738,7 +739,7 @@ Result<std::uint64_t> RigFeed::SendShadowCommand(const std::string& rig_id,
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   return Status::Error("no shadow model is listening (start `mpdrig shadow --rig " + rig_id +
-                       "` on this domain)");
+                       " --shadow-id " + options_.shadow_id + "` on this domain)");
 }
 
 }  // namespace mpdrig::dashboard

@@ -40,6 +40,9 @@ struct FeedOptions {
   // The feed then reads, and switches the shadow of, the one rig in `rigs`, in its partition
   // rig.<rig id>, as the other clients do; empty: no security.
   std::string security_dir;
+  // Which shadow of each rig to show and command (`mpdrig shadow --shadow-id`); the others'
+  // statuses are left out. Their model channels share the rig's one shadow-sensors instance.
+  std::string shadow_id = "shadow";
   double idle_s = 5.0;       // close DDS this long after the last request
   double frame_hz = 20.0;    // drains (and history points) per second
   double history_s = 120.0;  // rig time of history kept per rig

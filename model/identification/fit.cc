@@ -277,16 +277,24 @@ class ReplayCost final : public ceres::CostFunction {
 class ProgressCallback final : public ceres::IterationCallback {
  public:
   ProgressCallback(const ReplayResiduals& residuals,
-                   const std::function<void(int, double)>& progress)
-      : residuals_(residuals), progress_(progress) {}
+                   const std::function<void(int, double)>& progress,
+                   const std::function<bool()>& cancelled)
+      : residuals_(residuals), progress_(progress), cancelled_(cancelled) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     if (progress_) progress_(summary.iteration, residuals_.current_error());
+    if (cancelled_ && cancelled_()) {
+      was_cancelled_ = true;
+      return ceres::SOLVER_ABORT;
+    }
     return ceres::SOLVER_CONTINUE;
   }
+  bool was_cancelled() const { return was_cancelled_; }
 
  private:
   const ReplayResiduals& residuals_;
   const std::function<void(int, double)>& progress_;
+  const std::function<bool()>& cancelled_;
+  bool was_cancelled_ = false;
 };
 
 // --- FitParameters's steps ------------------------------------------------------------------
@@ -410,7 +418,7 @@ Status RunSolver(ReplayResiduals* residuals, const FitOptions& options, ScaledPa
     problem.SetParameterUpperBound(x->z.data(), static_cast<int>(j), x->upper[j]);
   }
   ceres::Solver::Options solver = SolverOptions(options);
-  ProgressCallback callback(*residuals, options.progress);
+  ProgressCallback callback(*residuals, options.progress, options.cancelled);
   solver.callbacks.push_back(&callback);
   std::string options_error;
   if (!solver.IsValid(&options_error)) return Status::Error("solver options: " + options_error);
@@ -422,6 +430,7 @@ Status RunSolver(ReplayResiduals* residuals, const FitOptions& options, ScaledPa
     summary.termination_type = ceres::CONVERGENCE;
     result->solver_report = "no parameter moves the residuals: all held at their start values";
   }
+  if (callback.was_cancelled()) return Status::Error(kFitCancelled);
   if (summary.termination_type == ceres::FAILURE) {
     return Status::Error("the solver failed: " + summary.message +
                          (residuals->last_failure().empty()
@@ -623,6 +632,7 @@ Result<FitResult> FitParametersAndInputLevels(MeasuredLog* log, const RigParams&
                                               FitOptions options) {
   auto first = FitParameters(*log, start, parameters, options);
   if (!first.ok()) return first;
+  if (options.cancelled && options.cancelled()) return Status::Error(kFitCancelled);
   // The start chosen at the start values (ChooseReplayStart) may be one that absorbed their error
   // (a measured state fitted under a wrong wave speed): chosen again at the fitted parameters.
   bool start_changed = false;

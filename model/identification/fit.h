@@ -57,6 +57,9 @@ enum class ChannelWeighting {
   kNoise,
 };
 
+// The message of a fit ended by FitOptions::cancelled.
+inline constexpr const char* kFitCancelled = "cancelled";
+
 struct FitOptions {
   SimulationOptions simulation;  // cells etc.; choke input is forced to kMeasured (ReplayModel)
   ReplayOptions replay;
@@ -80,6 +83,10 @@ struct FitOptions {
   bool standard_errors = true;
   // Called after each solver iteration: iteration number and current error (mean NRMSE).
   std::function<void(int iteration, double error)> progress;
+  // Asked after each solver iteration (and between the two fits of FitParametersAndInputLevels):
+  // true ends the fit with the error kFitCancelled, its estimates dropped (the shadow's "cancel
+  // fit": the model holds no thread, its caller decides when to ask).
+  std::function<bool()> cancelled;
   // Prints Ceres's per-iteration table to stdout (trust region ratio, step, radius): the way to
   // see why a fit stops. The command line sets it from MPDRIG_CERES_LOG; the model reads no
   // environment.

@@ -51,12 +51,13 @@ std::string Summary(const FitResult& fit) {
 
 Result<ShadowFitOutcome> FitShadowParameters(MeasuredLog log, const RigParams& start,
                                              const SimulationOptions& simulation,
-                                             int max_iterations) {
+                                             int max_iterations, std::function<bool()> cancelled) {
   auto parameters = ShadowFitParameters(start);
   if (!parameters.ok()) return parameters.status();
   FitOptions options;
   options.simulation = simulation;
   options.max_iterations = max_iterations;
+  options.cancelled = std::move(cancelled);
   // As `mpdrig fit`: the start chosen from the rows (a heave already running), the levels
   // estimated after the first fit.
   MPDRIG_RETURN_IF_ERROR(

@@ -7,6 +7,7 @@
 // (the service on a worker thread, the shadow running on meanwhile).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,8 +31,11 @@ struct ShadowFitOutcome {
 };
 
 // Fits on `log` (the shadow's rows, ShadowModel::HeldLog) from `start`.
+// `cancelled` (optional) is asked after each solver iteration: true ends the fit with the
+// error kFitCancelled (fit.h).
 Result<ShadowFitOutcome> FitShadowParameters(MeasuredLog log, const RigParams& start,
                                              const SimulationOptions& simulation,
-                                             int max_iterations = 15);
+                                             int max_iterations = 15,
+                                             std::function<bool()> cancelled = {});
 
 }  // namespace mpdrig

@@ -1,6 +1,8 @@
 #include "service/shadow/shadow_service.h"
 
 #include <algorithm>
+#include <atomic>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -42,9 +44,11 @@ dds_sequence_string StringSequence(std::vector<std::string>* texts, std::vector<
   return seq;
 }
 
-// A fit on its worker thread: what it computes, shared with it (it owns nothing of the service, so
-// a service that stops while it runs can leave it to finish alone).
+// A fit on its worker thread: what it computes, shared with it (it owns nothing of the service).
+// `cancel` ends it after the solver iteration in progress (a cancel command, or the service
+// stopping).
 struct FitSlot {
+  std::atomic<bool> cancel{false};
   std::mutex mutex;
   bool finished = false;
   Status status = Status::Ok();
@@ -76,8 +80,17 @@ struct ShadowService::Impl {
   double fit_error_at_start = std::numeric_limits<double>::quiet_NaN();
 
   ~Impl() {
-    // A fit cannot be interrupted: it finishes alone, on its own copies.
-    if (fit_thread.joinable()) fit_thread.detach();
+    // A fit stops after its solver iteration in progress (a fraction of a second of replays).
+    if (fit) fit->cancel = true;
+    if (fit_thread.joinable()) fit_thread.join();
+  }
+
+  // Asks the running fit to stop; FinishFit then drops its result.
+  Status CancelFit() {
+    if (!fit) return Status::Error("no fit is running");
+    fit->cancel = true;
+    fit_state = "cancelling: " + fit_state;
+    return Status::Ok();
   }
 
   Status StartFit() {
@@ -98,7 +111,8 @@ struct ShadowService::Impl {
     fit_thread = std::thread([slot = fit, log = std::move(log).value(), start = model->params(),
                               simulation = model->options().simulation,
                               iterations = options.fit_max_iterations]() mutable {
-      auto outcome = FitShadowParameters(std::move(log), start, simulation, iterations);
+      auto outcome = FitShadowParameters(std::move(log), start, simulation, iterations,
+                                         [&slot] { return slot->cancel.load(); });
       std::lock_guard<std::mutex> lock(slot->mutex);
       if (outcome.ok()) {
         slot->outcome = std::move(outcome).value();
@@ -121,6 +135,11 @@ struct ShadowService::Impl {
     fit_thread.join();
     std::shared_ptr<FitSlot> done = std::move(fit);
     fit.reset();
+    if (done->cancel) {
+      fit_state = "cancelled";  // whatever it found is dropped, even a fit that just finished
+      next_status_s = -std::numeric_limits<double>::infinity();
+      return;
+    }
     if (!done->status.ok()) {
       fit_state = "failed: " + done->status.message();
       next_status_s = -std::numeric_limits<double>::infinity();
@@ -157,8 +176,10 @@ struct ShadowService::Impl {
 
   void Apply(const mpdrig_ShadowCommand& command) {
     const std::string argument = command.argument != nullptr ? command.argument : "";
-    if (options.rig_id != command.rig_id) {
-      // Another shadow's command: on a shared domain several shadows may listen.
+    if (options.rig_id != command.rig_id || command.shadow_id == nullptr ||
+        options.shadow_id != command.shadow_id) {
+      // Another shadow's command: on a shared domain several shadows may listen, several of
+      // one rig too, each with its own id.
       return;
     }
     last_command_id = command.command_id;
@@ -200,6 +221,16 @@ struct ShadowService::Impl {
         }
         return;
       }
+      case mpdrig_SHADOW_FIT_CANCEL: {
+        const Status cancelled = CancelFit();
+        if (!cancelled.ok()) {
+          Refuse(std::string(dds::topics::kShadowCommand.name) +
+                 " refused: cancel fit: " + cancelled.message());
+        } else {
+          next_status_s = -std::numeric_limits<double>::infinity();
+        }
+        return;
+      }
       default:
         status =
             Status::Error("unknown action " + std::to_string(static_cast<int>(command.action)));
@@ -223,6 +254,7 @@ struct ShadowService::Impl {
   Status PublishStatus(double time_s) {
     mpdrig_ShadowStatus wire{};
     wire.rig_id = const_cast<char*>(options.rig_id.c_str());
+    wire.shadow_id = const_cast<char*>(options.shadow_id.c_str());
     wire.sim_time_s = time_s;
     wire.window_s = model->options().window_s;
     wire.error = model->error();
@@ -309,10 +341,21 @@ ShadowService::~ShadowService() = default;
 const ShadowModel& ShadowService::model() const { return *impl_->model; }
 std::uint64_t ShadowService::samples() const { return impl_->samples; }
 
+Status CheckShadowId(const std::string& shadow_id) {
+  const bool valid = !shadow_id.empty() && shadow_id.size() <= 64 &&
+                     std::all_of(shadow_id.begin(), shadow_id.end(), [](unsigned char c) {
+                       return std::isalnum(c) || c == '_' || c == '.' || c == '-';
+                     });
+  if (valid) return Status::Ok();
+  return Status::Error("shadow id '" + shadow_id.substr(0, 64) +
+                       "': 1 to 64 characters of letters, digits, '_', '.' and '-'");
+}
+
 Result<std::unique_ptr<ShadowService>> ShadowService::Create(RigParams params,
                                                              ShadowOptions model_options,
                                                              const ShadowServeOptions& options) {
   if (options.rig_id.empty()) return Status::Error("shadow: rig id must not be empty");
+  MPDRIG_RETURN_IF_ERROR(CheckShadowId(options.shadow_id));
   if (!(options.duration_s >= 0.0) || !(options.status_period_s > 0.0)) {
     return Status::Error("shadow: duration must be >= 0 and the status period > 0");
   }

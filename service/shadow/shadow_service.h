@@ -5,9 +5,10 @@
 //                           units, the rig's id; sensor QoS);
 //   mpdrig_shadow_status  - its error over the sliding window, per channel and overall, its
 //                           effects and parameters, the last change (status QoS);
-// and takes mpdrig_shadow_command (effect on/off, set a parameter, reset, fit now; reliable, keep
-// all: a command is not state). Fit now runs on a worker thread (ShadowStatus.fit_state says
-// "running: ...", then "done: ..." or "failed: ..."); a second one while it runs is refused. A bad
+// and takes mpdrig_shadow_command (effect on/off, set a parameter, reset, fit now, cancel the fit;
+// reliable, keep all: a command is not state) addressed to its shadow id. Fit now runs on a
+// worker thread (ShadowStatus.fit_state says "running: ...", then "done: ...", "failed: ..." or
+// "cancelled"); a second one while it runs is refused. A bad
 // command is refused and counted on the shadow's status; the shadow runs on. Optionally writes the
 // error over time as CSV: time_s, error, <channel>_nrmse.
 #pragma once
@@ -23,8 +24,16 @@
 
 namespace mpdrig::service {
 
+// The id of a shadow when none is given: the one shadow of a rig.
+inline constexpr const char* kDefaultShadowId = "shadow";
+// 1-64 characters of [A-Za-z0-9_.-]: it appears in commands, statuses and the dashboard's URLs.
+Status CheckShadowId(const std::string& shadow_id);
+
 struct ShadowServeOptions {
   std::string rig_id = "rig-1";
+  // Which shadow of the rig this is: it takes only the model commands with this id, and its
+  // status carries it (several shadows of one rig, e.g. two students' models).
+  std::string shadow_id = kDefaultShadowId;
   dds_domainid_t domain = 0;
   // Cyclone's configuration of the domain; empty: the domain as this process already has it
   // (a test that runs a rig service beside the shadow).

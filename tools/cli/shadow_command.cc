@@ -20,6 +20,7 @@ void OnSignal(int) { g_stop = true; }
 struct ShadowArgs {
   ModelOptions model;
   std::string rig_id = "rig-1";
+  std::string shadow_id = service::kDefaultShadowId;
   int domain = 0;
   std::string dds_config;
   std::string log_path;
@@ -49,6 +50,7 @@ int RunShadow(const ShadowArgs& args) {
   model.lookahead_s = args.lookahead_s;
   service::ShadowServeOptions serve;
   serve.rig_id = args.rig_id;
+  serve.shadow_id = args.shadow_id;
   serve.domain = static_cast<dds_domainid_t>(args.domain);
   serve.duration_s = args.duration_s;
   serve.status_period_s = args.status_period_s;
@@ -79,11 +81,13 @@ int RunShadow(const ShadowArgs& args) {
   }
   std::fprintf(
       stderr,
-      "mpdrig shadow: rig %s on DDS domain %d; %s; window %g s after a %g s warm-up\n"
+      "mpdrig shadow: rig %s (shadow '%s') on DDS domain %d; %s; window %g s after a %g s "
+      "warm-up\n"
       "  inputs: %s\n"
       "  topics: %s (in), %s (in), %s, %s (out)\n  security: %s\n",
-      args.rig_id.c_str(), args.domain, args.model.Describe(*params).c_str(), args.window_s,
-      args.warmup_s, inputs, dds::topics::kSensors.name, dds::topics::kShadowCommand.name,
+      args.rig_id.c_str(), args.shadow_id.c_str(), args.domain,
+      args.model.Describe(*params).c_str(), args.window_s, args.warmup_s, inputs,
+      dds::topics::kSensors.name, dds::topics::kShadowCommand.name,
       dds::topics::kShadowSensors.name, dds::topics::kShadowStatus.name,
       args.security.empty()
           ? "none"
@@ -118,6 +122,15 @@ void AddShadowCommand(CLI::App* app, int* exit_code) {
       "  mpdrig shadow --rig rig-1 --effect unsteady_friction --duration 120");
   args->model.AddAll(command);
   command->add_option("--rig", args->rig_id, "the rig to shadow")->capture_default_str();
+  command
+      ->add_option("--shadow-id", args->shadow_id,
+                   "this shadow's id: it takes only the model commands sent to it (shadow_ctl "
+                   "--shadow ID), so several shadows of one rig can run side by side")
+      ->check([](const std::string& id) {
+        const Status valid = service::CheckShadowId(id);
+        return valid.ok() ? std::string() : valid.message();
+      })
+      ->capture_default_str();
   command->add_option("--domain", args->domain, "DDS domain id")
       ->check(CLI::Range(0, 232))
       ->capture_default_str();

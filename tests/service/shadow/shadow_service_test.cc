@@ -3,7 +3,8 @@
 // subscribed to its sensors; the shadow's error, read from its status topic, falls by half when
 // the model command switches the right effect on, not with a wrong one, and a bad command is
 // refused and counted; fit now, asked with the effect at a wrong strength, brings the strength
-// back and the error down while the shadow runs on, and a second one meanwhile is refused.
+// back and the error down while the shadow runs on, and a second one meanwhile is refused. A
+// second shadow of the same rig (another id) takes only its own commands; a fit can be cancelled.
 #include "service/shadow/shadow_service.h"
 #include "service/dds/topics.h"
 
@@ -13,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <string>
 #include <thread>
@@ -95,8 +97,15 @@ class ShadowServiceTest : public ::testing::Test {
     auto shadow = ShadowService::Create(RigParams(), model, shadow_options);
     ASSERT_TRUE(shadow.ok()) << shadow.status().message();
     shadow_ = std::move(shadow).value();
+    ShadowServeOptions other_options = shadow_options;
+    other_options.shadow_id = kOtherShadow;
+    other_options.log_path.clear();
+    auto other = ShadowService::Create(RigParams(), model, other_options);
+    ASSERT_TRUE(other.ok()) << other.status().message();
+    other_ = std::move(other).value();
     rig_thread_ = std::thread([this] { rig_status_ = service_->Run(stop_); });
     shadow_thread_ = std::thread([this] { shadow_status_ = shadow_->Run(stop_); });
+    other_thread_ = std::thread([this] { other_status_ = other_->Run(stop_); });
 
     auto participant = dds::CreateParticipant(domain_);
     ASSERT_TRUE(participant.ok());
@@ -132,8 +141,10 @@ class ShadowServiceTest : public ::testing::Test {
     stop_ = true;
     if (rig_thread_.joinable()) rig_thread_.join();
     if (shadow_thread_.joinable()) shadow_thread_.join();
+    if (other_thread_.joinable()) other_thread_.join();
     EXPECT_TRUE(rig_status_.ok()) << rig_status_.message();
     EXPECT_TRUE(shadow_status_.ok()) << shadow_status_.message();
+    EXPECT_TRUE(other_status_.ok()) << other_status_.message();
   }
 
   // Runs the rig `seconds` further and waits until it has stepped.
@@ -155,20 +166,22 @@ class ShadowServiceTest : public ::testing::Test {
   }
 
   // The shadow's status once it has caught up with the rig (and, if given, made `change`).
-  StatusSeen WaitShadow(const std::string& change = "", std::uint64_t rejected = 0) {
-    StatusSeen seen;
+  StatusSeen WaitShadow(const std::string& change = "", std::uint64_t rejected = 0,
+                        const std::string& shadow_id = kDefaultShadowId) {
+    StatusSeen& seen = seen_[shadow_id];
     for (int i = 0; i < 600; ++i) {
       (void)shadow_reader_->Wait(DDS_MSECS(100));
       (void)shadow_reader_->TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-        seen.sim_time_s = s.sim_time_s;
-        seen.error = s.error;
-        seen.last_change = s.last_change;
-        seen.rejected = s.rejected_commands;
-        seen.last_rejection = s.last_rejection;
-        seen.fit_state = s.fit_state;
-        seen.effects.clear();
+        StatusSeen& of = seen_[s.shadow_id];
+        of.sim_time_s = s.sim_time_s;
+        of.error = s.error;
+        of.last_change = s.last_change;
+        of.rejected = s.rejected_commands;
+        of.last_rejection = s.last_rejection;
+        of.fit_state = s.fit_state;
+        of.effects.clear();
         for (std::uint32_t k = 0; k < s.active_effects._length; ++k)
-          seen.effects.push_back(s.active_effects._buffer[k]);
+          of.effects.push_back(s.active_effects._buffer[k]);
       });
       // The rig's last sample is 0.01 s before its clock; the status period is 0.5 s.
       if (seen.sim_time_s >= rig_time_s_ - 0.6 && (change.empty() || seen.last_change == change) &&
@@ -182,31 +195,35 @@ class ShadowServiceTest : public ::testing::Test {
 
   // The shadow's status once its fit has ended (fit_state "done: ..." or "failed: ..."), the rig
   // still, the shadow running on.
-  StatusSeen WaitFit() {
+  StatusSeen WaitFit(bool or_cancelled = false) {
     StatusSeen seen;
     for (int i = 0; i < 1200; ++i) {
       seen = WaitShadow();
-      if (seen.fit_state.rfind("done:", 0) == 0 || seen.fit_state.rfind("failed:", 0) == 0)
+      if (seen.fit_state.rfind("done:", 0) == 0 || seen.fit_state.rfind("failed:", 0) == 0 ||
+          (or_cancelled && seen.fit_state == "cancelled"))
         return seen;
     }
     ADD_FAILURE() << "the fit did not end: '" << seen.fit_state << "'";
     return seen;
   }
 
-  void Command(mpdrig_ShadowAction action, const std::string& argument) {
+  void Command(mpdrig_ShadowAction action, const std::string& argument,
+               std::string shadow_id = kDefaultShadowId) {
     char rig_id[] = "mystery";
     std::string text = argument;
-    mpdrig_ShadowCommand command{rig_id, ++command_id_, action, text.data()};
+    mpdrig_ShadowCommand command{rig_id, shadow_id.data(), ++command_id_, action, text.data()};
     ASSERT_TRUE(command_->Write(command).ok());
   }
 
   dds_domainid_t domain_ = 0;
   std::string log_path_;
-  std::unique_ptr<ShadowService> shadow_;
+  static constexpr const char* kOtherShadow = "other";
+  std::map<std::string, StatusSeen> seen_;  // the newest status of each shadow
+  std::unique_ptr<ShadowService> shadow_, other_;
   std::unique_ptr<RigService> service_;
-  std::thread rig_thread_, shadow_thread_;
+  std::thread rig_thread_, shadow_thread_, other_thread_;
   std::atomic<bool> stop_{false};
-  Status rig_status_ = Status::Ok(), shadow_status_ = Status::Ok();
+  Status rig_status_ = Status::Ok(), shadow_status_ = Status::Ok(), other_status_ = Status::Ok();
   dds::Entity participant_, rig_status_topic_, step_topic_, shadow_status_topic_, command_topic_;
   std::optional<dds::Reader<mpdrig_RigStatus>> rig_status_reader_;
   std::optional<dds::Reader<mpdrig_ShadowStatus>> shadow_reader_;
@@ -276,6 +293,41 @@ TEST_F(ShadowServiceTest, ErrorHalvesWithTheHiddenEffectAndNotWithAWrongOne) {
   int rows = 0;
   while (std::getline(log, row)) ++rows;
   EXPECT_GE(rows, 80);  // 50 s of rig time at one row per 0.5 s, less the first
+}
+
+TEST_F(ShadowServiceTest, EachShadowTakesOnlyItsOwnCommandsAndAFitCanBeCancelled) {
+  for (int i = 0; i < 6; ++i) RunRig(5.0);
+  (void)WaitShadow();
+  (void)WaitShadow("", 0, kOtherShadow);
+
+  // A command for the other shadow changes it, not this one, and this one counts nothing.
+  Command(mpdrig_SHADOW_EFFECT_ON, "choke_inertia", kOtherShadow);
+  const StatusSeen other = WaitShadow("effect on: choke_inertia", 0, kOtherShadow);
+  ASSERT_EQ(other.effects.size(), 1u);
+  RunRig(1.0);
+  const StatusSeen mine = WaitShadow();
+  EXPECT_TRUE(mine.effects.empty());
+  EXPECT_EQ(mine.rejected, 0u);
+  EXPECT_TRUE(mine.last_change.empty()) << mine.last_change;
+
+  // Cancel with no fit running: refused, saying why.
+  Command(mpdrig_SHADOW_FIT_CANCEL, "");
+  const StatusSeen nothing = WaitShadow("", 1);
+  EXPECT_NE(nothing.last_rejection.find("no fit is running"), std::string::npos)
+      << nothing.last_rejection;
+
+  // Fit now, cancelled at once: the fit ends "cancelled" and the model is left as it was.
+  Command(mpdrig_SHADOW_FIT_NOW, "");
+  Command(mpdrig_SHADOW_FIT_CANCEL, "");
+  const StatusSeen cancelled = WaitFit(/*or_cancelled=*/true);
+  EXPECT_EQ(cancelled.fit_state, "cancelled");
+  EXPECT_TRUE(cancelled.last_change.empty()) << cancelled.last_change;
+  EXPECT_EQ(cancelled.rejected, 1u) << cancelled.last_rejection;
+  // And the next fit runs as usual.
+  Command(mpdrig_SHADOW_FIT_NOW, "");
+  RunRig(0.5);
+  const StatusSeen again = WaitFit();
+  EXPECT_EQ(again.fit_state.rfind("done:", 0), 0u) << again.fit_state;
 }
 
 }  // namespace
