@@ -84,6 +84,75 @@ std::string CandidateJson(const CandidateResult& c, const CandidateResult& refer
   return out.str();
 }
 
+// The log's regimes and the split (regimes.h).
+std::string RegimesJson(const Diagnosis& d) {
+  std::ostringstream out;
+  out << ",\"split\":{\"fit_end_s\":" << Num(d.fit_end_s)
+      << ",\"requested_fit_end_s\":" << Num(d.requested_fit_end_s) << ",\"one_sided\":[";
+  for (std::size_t i = 0; i < d.one_sided_regimes.size(); ++i) {
+    out << (i ? "," : "") << Quote(d.one_sided_regimes[i]);
+  }
+  out << "]},\"regimes\":[";
+  for (std::size_t i = 0; i < d.regimes.size(); ++i) {
+    const Regime& r = d.regimes[i];
+    out << (i ? "," : "") << "{\"name\":" << Quote(r.name) << ",\"input\":" << Quote(r.input)
+        << ",\"duration_s\":" << Num(r.duration_s) << ",\"fit_s\":" << Num(r.fit_s)
+        << ",\"score_s\":" << Num(r.score_s) << ",\"intervals\":[";
+    for (std::size_t k = 0; k < r.intervals.size(); ++k) {
+      out << (k ? "," : "") << "[" << Num(r.intervals[k].begin_s) << ","
+          << Num(r.intervals[k].end_s) << "]";
+    }
+    out << "]}";
+  }
+  out << "]";
+  return out.str();
+}
+
+// What the best model leaves (residual_signature.h), lab units for the offsets.
+std::string ResidualJson(const ResidualSignature& r) {
+  std::ostringstream out;
+  out << ",\"residual\":{\"model\":" << Quote(r.model)
+      << ",\"misses\":" << (r.misses ? "true" : "false") << ",\"error\":" << Num(r.error)
+      << ",\"noise_floor\":" << Num(r.noise_floor) << ",\"sensor_floor\":" << Num(r.sensor_floor)
+      << ",\"input_floor\":" << Num(r.input_floor) << ",\"misses_factor\":" << Num(kMissesFactor)
+      << ",\"noise_floor_method\":" << Quote(kNoiseFloorMethod)
+      << ",\"whole_error\":" << Num(r.whole_error) << ",\"whole_floor\":" << Num(r.whole_floor)
+      << ",\"steady_share\":" << Num(r.steady_share)
+      << ",\"quarter_wave_hz\":" << Num(r.quarter_wave_hz) << ",\"summary\":" << Quote(r.Summary())
+      << ",\"reasons\":[";
+  for (std::size_t i = 0; i < r.reasons.size(); ++i) out << (i ? "," : "") << Quote(r.reasons[i]);
+  out << "],\"findings\":[";
+  for (std::size_t i = 0; i < r.findings.size(); ++i) out << (i ? "," : "") << Quote(r.findings[i]);
+  out << "],\"channels\":[";
+  for (std::size_t i = 0; i < r.channels.size(); ++i) {
+    const ChannelResidual& c = r.channels[i];
+    out << (i ? "," : "") << "{\"channel\":" << Quote(std::string(riglog::ChannelName(c.channel)))
+        << ",\"x_m\":" << (c.x_m ? Num(*c.x_m) : std::string("null"))
+        << ",\"nrmse\":" << Num(c.nrmse) << ",\"sensor_floor\":" << Num(c.sensor_floor)
+        << ",\"input_floor\":" << Num(c.input_floor) << ",\"floor\":" << Num(c.floor)
+        << ",\"excess\":" << Num(c.excess) << ",\"bias\":" << Num(c.bias_unit)
+        << ",\"steady_share\":" << Num(c.steady_share) << ",\"score_nrmse\":" << Num(c.score_nrmse)
+        << ",\"score_floor\":" << Num(c.score_floor) << "}";
+  }
+  out << "],\"bands\":[";
+  for (std::size_t i = 0; i < r.bands.size(); ++i) {
+    const BandResidual& b = r.bands[i];
+    out << (i ? "," : "") << "{\"name\":" << Quote(b.name) << ",\"low_hz\":" << Num(b.low_hz)
+        << ",\"high_hz\":" << Num(b.high_hz) << ",\"error\":" << Num(b.error)
+        << ",\"floor\":" << Num(b.floor) << ",\"excess_share\":" << Num(b.excess_share) << "}";
+  }
+  out << "],\"regimes\":[";
+  for (std::size_t i = 0; i < r.regimes.size(); ++i) {
+    const RegimeResidual& g = r.regimes[i];
+    out << (i ? "," : "") << "{\"regime\":" << Quote(g.regime) << ",\"input\":" << Quote(g.input)
+        << ",\"duration_s\":" << Num(g.duration_s) << ",\"error\":" << Num(g.error)
+        << ",\"floor\":" << Num(g.floor) << ",\"steady_share\":" << Num(g.steady_share)
+        << ",\"channels\":" << ChannelsJson(g.channel_errors) << "}";
+  }
+  out << "]}";
+  return out.str();
+}
+
 }  // namespace
 
 std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
@@ -132,6 +201,8 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
         << "}";
   }
   out << "]";
+  out << RegimesJson(d);
+  if (d.residual) out << ResidualJson(*d.residual);
   // Where the fitted base model fails: worst channels, worst bands, lags.
   const Comparison& cmp = d.baseline_comparison;
   std::vector<const ChannelMetrics*> channels;
