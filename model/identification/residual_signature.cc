@@ -253,9 +253,11 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
     // Steady: the mean residual of each part of the log (its inputs' states).
     double part_steady = 0.0;
     for (const auto& [key, sums] : in_part) part_steady += sums.n * sums.bias() * sums.bias();
-    result.steady_share = whole.ee > 0.0 ? part_steady / whole.ee : 0.0;
+    // Its share of what is not noise (the noise's means over parts of seconds are ~0).
+    const double beyond = result.excess * result.excess * ss_tot;
+    result.steady_share = beyond > 0.0 ? std::min(1.0, part_steady / beyond) : 0.0;
     steady += part_steady / ss_tot;
-    energy += whole.ee / ss_tot;
+    energy += beyond / ss_tot;
     whole_sum += result.nrmse;
     whole_floor += result.floor;
     ++whole_used;
@@ -283,7 +285,9 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
       const double noise = white + input_bands[b];
       band_error[b] += std::sqrt(residual_bands[b] / ss_tot);
       band_floor[b] += std::sqrt(noise / ss_tot);
-      band_excess[b] += std::max(0.0, residual_bands[b] - noise) / ss_tot;
+      // Summed over channels before the clip: clipped per channel, the noise's own fluctuations
+      // about its expected energy would add up as excess in the noisiest band.
+      band_excess[b] += (residual_bands[b] - noise) / ss_tot;
     }
     // Regimes: over the whole log's variation per sample, so that they compare.
     for (std::size_t r = 0; r < regimes.size() && r < 32; ++r) {
@@ -297,10 +301,11 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
                                                     DifferenceInUnit(channel.unit, sums.bias()));
       }
       regime_results[r].error += error;
-      regime_floor_sum[r] +=
+      const double floor =
           std::hypot(result.sensor_floor, std::sqrt(sums.dd / (sums.n * variance)));
+      regime_floor_sum[r] += floor;
       regime_steady[r] += sums.n * sums.bias() * sums.bias() / ss_tot;
-      regime_energy[r] += sums.ee / ss_tot;
+      regime_energy[r] += std::max(0.0, sums.ee - sums.n * variance * floor * floor) / ss_tot;
       ++regime_channels[r];
     }
     signature.channels.push_back(result);
@@ -318,9 +323,9 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
   if (whole_used == 0) return signature;
   signature.whole_error = whole_sum / whole_used;
   signature.whole_floor = whole_floor / whole_used;
-  signature.steady_share = energy > 0.0 ? steady / energy : 0.0;
+  signature.steady_share = energy > 0.0 ? std::min(1.0, steady / energy) : 0.0;
   double excess_total = 0.0;
-  for (double x : band_excess) excess_total += x;
+  for (double& x : band_excess) x = std::max(0.0, x), excess_total += x;
   for (std::size_t b = 0; b < 4; ++b) {
     signature.bands.push_back({band_names[b], edges[b], edges[b + 1], band_error[b] / whole_used,
                                band_floor[b] / whole_used,
@@ -334,7 +339,8 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
     if (regime_channels[r] > 0) {
       result.error /= regime_channels[r];
       result.floor = regime_floor_sum[r] / regime_channels[r];
-      result.steady_share = regime_energy[r] > 0.0 ? regime_steady[r] / regime_energy[r] : 0.0;
+      result.steady_share =
+          regime_energy[r] > 0.0 ? std::min(1.0, regime_steady[r] / regime_energy[r]) : 0.0;
     }
     signature.regimes.push_back(std::move(result));
   }
@@ -410,7 +416,7 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
   signature.findings.push_back(AlongThePipe(signature.channels));
   {
     std::string text = signature.steady_share >= kSteadyShare ? "steady: " : "dynamic: ";
-    text += Percent(signature.steady_share) + " of the residual energy is a steady offset" +
+    text += Percent(signature.steady_share) + " of what is not noise is a steady offset" +
             std::string(regimes.empty() ? "" : " (within each regime)");
     if (signature.steady_share >= kSteadyShare) {
       const ChannelResidual& worst = *ranked.front();

@@ -24,7 +24,9 @@
 //
 // Signature, over the whole log (what is left, not a score), per channel:
 //   nrmse, its floor, excess = sqrt(max(0, nrmse^2 - floor^2)) (what is not noise),
-//   bias (mean of e) and steady share = N bias^2 / sum e^2 (a steady offset against dynamics);
+//   bias (mean of e) and steady share: the energy of e's mean over each part of the log (the
+//   parts its regimes make; the whole log without) over the energy beyond the noise,
+//   excess^2 ||y - mean(y)||^2, at most 1 (a steady offset against dynamics);
 // per band of the residual's spectrum (periodogram of e - mean(e), zero-padded DFT, Parseval):
 //   bands relative to the pipe's quarter-wave frequency f_q = c / 4L (the open choke's first
 //   resonance): slow [0, f_q/3) (levels, drifts), heave and first modes [f_q/3, 2 f_q) (c/4L open,
@@ -34,7 +36,7 @@
 // along the pipe: the excess at PT1..PT10 (x = 0..900 m);
 // per regime (regimes.h): the error over its samples, each channel's residual normalised by the
 // channel's variation over the whole log (so regimes compare), its floor the same way, and its
-// steady share (the regime's own mean residual).
+// steady share (the regime's own mean residual over its energy beyond the noise).
 #pragma once
 
 #include <cstdint>
@@ -102,7 +104,7 @@ struct RegimeResidual {
   double duration_s = 0.0;
   double error = 0.0;  // mean over channels, residual over the whole log's variation per sample
   double floor = 0.0;
-  double steady_share = 0.0;  // the regime's own mean residual's share of its energy
+  double steady_share = 0.0;  // its own mean residual over its energy beyond the noise
   std::vector<std::pair<Channel, double>> channel_errors;
   // The pressures' mean residual there (yhat - y), in the log's unit of each (a difference).
   std::vector<std::pair<Channel, double>> channel_bias;
@@ -120,7 +122,7 @@ struct ResidualSignature {
   // Over the whole log.
   double whole_error = 0.0;
   double whole_floor = 0.0;
-  double steady_share = 0.0;  // of the residual energy, over channels
+  double steady_share = 0.0;  // of the energy beyond the noise, summed over channels
   double quarter_wave_hz = 0.0;
   std::vector<ChannelResidual> channels;  // the log's order
   std::vector<BandResidual> bands;

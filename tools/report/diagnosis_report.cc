@@ -246,7 +246,10 @@ void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::
           "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:3px "
           "8px;text-align:right}th{background:#eee}td.l{text-align:left}.yes{color:#080;font-"
           "weight:bold}.no{color:#888}.verdict{font-size:1.3em;padding:0.5em;background:#eef6ee;"
-          "border-left:5px solid #080}.none{background:#f6f6f6;border-left-color:#888}</style>"
+          "border-left:5px solid "
+          "#080}.none{background:#f6f6f6;border-left-color:#888}.misses{background:#fbeee6;border-"
+          "left:5px "
+          "solid #c60}</style>"
           "</head><body>\n<h1>Which effect is missing?</h1>\n<p>Log <code>"
        << EscapeHtml(log_path) << "</code>. Fitted on t &lt; " << FormatValue(d.fit_end_s)
        << " s, scored on the rest. Noise floor (a perfect model's error): "
@@ -272,6 +275,104 @@ void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::
             "beyond noise and extra freedom. Baseline error "
          << FormatValue(100.0 * b.error) << " %.</p>\n";
   }
+  if (d.residual && d.residual->misses) {
+    html << "<p class=\"verdict misses\">The " << EscapeHtml(d.residual->model)
+         << " misses something the catalogue does not hold: error "
+         << FormatValue(100.0 * d.residual->error) << " % on the scoring data against a noise "
+         << "floor of " << FormatValue(100.0 * d.residual->noise_floor)
+         << " %. See <a href=\"#left\">what is left</a>.</p>\n";
+  }
+}
+
+// The regimes of the log and how the split left them (regimes.h).
+void WriteRegimes(const Diagnosis& d, std::ostringstream& html) {
+  html << "<h2>Regimes of the log and the split</h2>\n<p>Fitted on t &lt; "
+       << FormatValue(d.fit_end_s) << " s";
+  if (d.fit_end_s != d.requested_fit_end_s) {
+    html << " (moved from " << FormatValue(d.requested_fit_end_s)
+         << " s so that every regime is in both parts)";
+  }
+  html << ", scored on the rest.";
+  if (d.regimes.empty()) {
+    html << " No regimes: every input keeps one state (the pump running, the choke open, the "
+            "heave running).</p>\n";
+    return;
+  }
+  html << "</p>\n<table><tr><th class=\"l\">regime</th><th class=\"l\">told by</th><th>time "
+          "[s]</th><th>fitted [s]</th><th>scored [s]</th><th class=\"l\">intervals [s]</th></tr>\n";
+  for (const Regime& r : d.regimes) {
+    std::string intervals;
+    for (const TimeInterval& i : r.intervals) {
+      intervals += FormatValue(i.begin_s, 4) + "&ndash;" + FormatValue(i.end_s, 4) + " ";
+    }
+    html << "<tr><td class=\"l\">" << EscapeHtml(r.name) << "</td><td class=\"l\">"
+         << EscapeHtml(r.input) << "</td><td>" << FormatValue(r.duration_s, 3) << "</td><td>"
+         << FormatValue(r.fit_s, 3) << "</td><td>" << FormatValue(r.score_s, 3)
+         << "</td><td class=\"l\">" << intervals << "</td></tr>\n";
+  }
+  html << "</table>\n";
+  for (const std::string& note : d.one_sided_regimes) {
+    html << "<p class=\"misses\">On one side of the split only: " << EscapeHtml(note) << ".</p>\n";
+  }
+}
+
+// What the best model leaves, against the noise floor: per channel, per band, per regime.
+void WriteWhatIsLeft(const Diagnosis& d, std::ostringstream& html) {
+  if (!d.residual) return;
+  const ResidualSignature& r = *d.residual;
+  html << "<h2 id=\"left\">What is left</h2>\n<p>" << EscapeHtml(r.Summary()) << "</p>\n"
+       << "<p><small>Noise floor: " << EscapeHtml(kNoiseFloorMethod)
+       << ". Over the whole log unless said.</small></p>\n";
+  std::vector<double> x, error, floor;
+  for (std::size_t i = 0; i < r.channels.size(); ++i) {
+    x.push_back(static_cast<double>(i));
+    error.push_back(100.0 * r.channels[i].nrmse);
+    floor.push_back(100.0 * r.channels[i].floor);
+  }
+  SvgPlot plot(1000, 240, "channel (table below)", "NRMSE, whole log [%]");
+  plot.Stems(x, error, "#c33");
+  plot.Legend(r.model, "#c33");
+  plot.Markers(x, floor, "#888");
+  plot.Legend("noise floor", "#888");
+  html << plot.Render()
+       << "\n<table><tr><th class=\"l\">channel</th><th>x [m]</th><th>error "
+          "[%]</th><th>floor [%]</th><th>sensor [%]</th><th>inputs [%]</th><th>beyond the noise "
+          "[%]</th><th>mean offset (model - log)</th><th>steady share</th><th>scoring: error / "
+          "floor [%]</th></tr>\n";
+  for (const ChannelResidual& c : r.channels) {
+    html << "<tr><td class=\"l\">" << riglog::ChannelName(c.channel) << "</td><td>"
+         << (c.x_m ? FormatValue(*c.x_m, 3) : std::string()) << "</td><td>"
+         << FormatValue(100.0 * c.nrmse, 3) << "</td><td>" << FormatValue(100.0 * c.floor, 3)
+         << "</td><td>" << FormatValue(100.0 * c.sensor_floor, 3) << "</td><td>"
+         << FormatValue(100.0 * c.input_floor, 3) << "</td><td>" << FormatValue(100.0 * c.excess, 3)
+         << "</td><td>" << FormatValue(c.bias_unit, 3) << "</td><td>"
+         << FormatValue(100.0 * c.steady_share, 2) << " %</td><td>"
+         << FormatValue(100.0 * c.score_nrmse, 3) << " / " << FormatValue(100.0 * c.score_floor, 3)
+         << "</td></tr>\n";
+  }
+  html << "</table>\n<table><tr><th class=\"l\">band</th><th>from [Hz]</th><th>to [Hz]</th>"
+          "<th>error [%]</th><th>floor [%]</th><th>share of what is not noise</th></tr>\n";
+  for (const BandResidual& b : r.bands) {
+    html << "<tr><td class=\"l\">" << EscapeHtml(b.name) << "</td><td>" << FormatValue(b.low_hz, 3)
+         << "</td><td>" << FormatValue(b.high_hz, 3) << "</td><td>"
+         << FormatValue(100.0 * b.error, 3) << "</td><td>" << FormatValue(100.0 * b.floor, 3)
+         << "</td><td>" << FormatValue(100.0 * b.excess_share, 3) << " %</td></tr>\n";
+  }
+  html << "</table>\n";
+  if (!r.regimes.empty()) {
+    html << "<table><tr><th class=\"l\">regime</th><th>time [s]</th><th>error [%]</th>"
+            "<th>floor [%]</th><th>steady share</th></tr>\n";
+    for (const RegimeResidual& g : r.regimes) {
+      html << "<tr><td class=\"l\">" << EscapeHtml(g.regime) << "</td><td>"
+           << FormatValue(g.duration_s, 3) << "</td><td>" << FormatValue(100.0 * g.error, 3)
+           << "</td><td>" << FormatValue(100.0 * g.floor, 3) << "</td><td>"
+           << FormatValue(100.0 * g.steady_share, 2) << " %</td></tr>\n";
+    }
+    html << "</table>\n";
+  }
+  html << "<ul>";
+  for (const std::string& finding : r.findings) html << "<li>" << EscapeHtml(finding) << "</li>";
+  html << "</ul>\n";
 }
 
 // Per channel: the error before and after adding the verdict, side by side.
@@ -459,6 +560,8 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
   }
   WriteVerdict(d, winner, log_path, html);
   WriteSelection(d, html);
+  WriteWhatIsLeft(d, html);
+  WriteRegimes(d, html);
   WriteChannelErrors(d, winner, html);
   WriteCandidates(d, html);
   WriteBaseModelFailures(d, html);
