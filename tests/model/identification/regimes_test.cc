@@ -23,9 +23,10 @@ namespace {
 // the closed-choke thresholds are crossed inside them.
 constexpr double kTransitionS = 0.5;
 
-MeasuredLog Synthetic(SyntheticLogOptions options) {
-  options.duration_s = 40.0;
-  options.rate_hz = 50.0;
+MeasuredLog Synthetic(SyntheticLogOptions options, double duration_s = 40.0,
+                      double rate_hz = 50.0) {
+  options.duration_s = duration_s;
+  options.rate_hz = rate_hz;
   auto made = MakeSyntheticLog(options);
   EXPECT_TRUE(made.ok()) << made.status().message();
   if (!made.ok()) return {};
@@ -42,16 +43,21 @@ const Regime* Find(const std::vector<Regime>& regimes, const std::string& name) 
 }
 
 // The step tests the identification tests were tuned on (quiet and lab noise, the low-pressure
-// runs too): no regime, so the split is fit_fraction's, bit for bit.
+// runs too; diagnose_test's 10 seeds at 40 s and 50 Hz, its 120 s, 100 Hz logs): no regime, so
+// the split is fit_fraction's, bit for bit.
 TEST(Regimes, NoneInTheStepTestLogs) {
-  for (std::uint64_t seed : {1, 2, 3}) {
+  for (int k = 1; k <= 12; ++k) {
+    // Seeds 1-10 at 40 s and 50 Hz, then seeds 1-2 at 120 s and 100 Hz.
+    const bool long_log = k > 10;
+    const std::uint64_t seed = long_log ? k - 10 : k;
     for (bool lab : {false, true}) {
       SyntheticLogOptions options;
       options.seed = seed;
       if (lab) options.sensor_noise = SensorNoise::Lab();
-      options.low_pressure = seed == 3;
-      const MeasuredLog log = Synthetic(options);
-      SCOPED_TRACE("seed " + std::to_string(seed) + (lab ? " lab" : " quiet"));
+      options.low_pressure = !long_log && seed % 3 == 0;
+      const MeasuredLog log = long_log ? Synthetic(options, 120.0, 100.0) : Synthetic(options);
+      SCOPED_TRACE("seed " + std::to_string(seed) + (lab ? " lab" : " quiet") +
+                   (long_log ? " 120 s" : " 40 s"));
       const std::vector<Regime> regimes = DetectRegimes(log, RigParams());
       for (const Regime& regime : regimes) ADD_FAILURE() << regime.name;
       const double t0 = log.time_s().front(), t1 = log.time_s().back();
