@@ -38,6 +38,7 @@ struct DiagnoseArgs {
   std::vector<std::string> base_params;
   std::vector<std::string> candidates;
   double fit_fraction = 0.6;
+  bool no_regime_split = false;
   int max_iterations = 25;
   InputReplayOptions replay;
   bool quiet = false;
@@ -154,6 +155,7 @@ int RunDiagnose(DiagnoseArgs args) {
   if (!args.base_params.empty()) options.base_params = args.base_params;
   options.candidates = args.candidates;
   options.fit_fraction = args.fit_fraction;
+  options.split_by_regimes = !args.no_regime_split;
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
   options.solver_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;  // Ceres's iteration table
@@ -296,8 +298,9 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                                           "effect catalogue on a measured log");
   command->footer(
       "1. fits the base model (wave speed, pipe friction f1, choke leak) on the first part of\n"
-      "   the log, 2. shows where it still fails (compare's metrics), 3. adds each effect of\n"
-      "   `mpdrig effects` in turn, fits it with the base parameters, and scores it on the rest\n"
+      "   the log (moved so that each regime of the log is in both parts), 2. shows where it\n"
+      "   still fails (compare's metrics), 3. adds each effect of `mpdrig effects` in turn,\n"
+      "   fits it with the base parameters, and scores it on the rest\n"
       "   of the log (data it was not fitted on), with a price of 1% per extra parameter,\n"
       "4. ranks them and says what each explains. `significant`: better than the base model by\n"
       "   more than 10% and two standard errors (over 8 blocks of the scoring data); `as good`\n"
@@ -306,6 +309,10 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "   adding the next while it is significant by the same rule (at most 3 effects): the\n"
       "   summary shows the error falling step by step, per channel, and what the log could\n"
       "   show of the next effect.\n"
+      "6. says what the best model leaves against the noise floor (sensor noise and the inputs'\n"
+      "   noise replayed): where it stays far above it, that the model misses something the\n"
+      "   catalogue does not hold, with the channels, bands, place along the pipe, steady or\n"
+      "   dynamic, and the regime (pump stopped, choke closed, heave stopped) it shows in.\n"
       "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
       "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
       "The rig's measured first resonances instead of a log (frequency domain): each effect is\n"
@@ -332,6 +339,11 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                    "share of the log (from its start) used for fitting; the rest scores")
       ->check(CLI::Range(0.2, 0.9))
       ->capture_default_str();
+  command->add_flag("--no-regime-split", args->no_regime_split,
+                    "split at --fit-fraction even where a regime of the log (the pump stopped, "
+                    "the choke closed, the heave stopped) then lies on one side only (it is "
+                    "reported); by default the split moves within 40-80 % of the log to leave "
+                    "each regime in both parts");
   command->add_option("--max-iterations", args->max_iterations, "solver iterations per fit")
       ->check(CLI::Range(1, 500))
       ->capture_default_str();
