@@ -1085,7 +1085,8 @@ void DescribeWhatIsLeft(const DiagnoseRun& run, Diagnosis* diagnosis, StageRuns*
        .score_end_s = run.t_end,
        .regimes = &diagnosis->regimes,
        .quarter_wave_hz = best.fitted.wave_speed_mps / (4.0 * best.fitted.pipe_length_m),
-       .model_name = name});
+       .model_name = name,
+       .selected_effects = diagnosis->selected.size()});
 }
 
 }  // namespace

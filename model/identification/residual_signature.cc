@@ -371,7 +371,8 @@ ResidualSignature DescribeResidual(const ResidualInputs& in) {
                                   " against a floor of " + Percent(r.floor) + " there");
     }
   }
-  signature.misses = !signature.reasons.empty();
+  signature.above_noise = !signature.reasons.empty();
+  signature.misses = signature.above_noise && in.selected_effects == 0;
 
   // The findings.
   // Channels by how far above their floors they are (a noisy flow meter's large error is not
@@ -484,15 +485,16 @@ std::string ResidualSignature::Summary() const {
   const std::string numbers = Percent(error) + " on the scoring data against a noise floor of " +
                               Percent(noise_floor) + " (sensor noise " + Percent(sensor_floor) +
                               ", the inputs' noise replayed " + Percent(input_floor) + ")";
-  if (misses) {
-    text =
-        "the " + model + " misses something the catalogue does not hold: error " + numbers + "; ";
-    for (std::size_t i = 0; i < reasons.size(); ++i) text += (i ? ", " : "") + reasons[i];
-    text += ". What is left:";
-    for (std::size_t i = 0; i < findings.size(); ++i) text += (i ? "; " : " ") + findings[i];
-    return text + ".";
-  }
-  return "what the " + model + " leaves is noise: error " + numbers + ".";
+  if (!above_noise) return "what the " + model + " leaves is noise: error " + numbers + ".";
+  text = misses ? "the " + model + " misses something the catalogue does not hold: error "
+                : "the " + model +
+                      " still leaves more than noise (the selected effects' fits stopping short "
+                      "of their strengths, or something the catalogue does not hold): error ";
+  text += numbers + "; ";
+  for (std::size_t i = 0; i < reasons.size(); ++i) text += (i ? ", " : "") + reasons[i];
+  text += ". What is left:";
+  for (std::size_t i = 0; i < findings.size(); ++i) text += (i ? "; " : " ") + findings[i];
+  return text + ".";
 }
 
 }  // namespace mpdrig

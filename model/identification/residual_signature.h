@@ -15,12 +15,17 @@
 //            another (linear in the noise).
 //   floor_c = sqrt(sensor_c^2 + inputs_c^2); the floor is their mean over the channels, as the
 //   error is (compare's mean NRMSE).
-// The model misses something when, beyond kMissesFactor times the floor, (a) its error on the
+// What is left is above the noise when, beyond kMissesFactor times the floor, (a) its error on the
 // scoring data (the mean over channels), or (b) one channel's error there (a fault of one sensor
 // is diluted in the mean over 16 channels), or (c) its error in one regime over the whole log
 // (a regime may last seconds; its residual normalised per sample, as its floor) is.
 // Effect-free lab-noise logs gave ratios of 0.75-1.25 per channel and 0.99-1.1 for the mean
 // (measured, docs/effects-and-diagnose.md): 2 leaves a margin of 1.6.
+// Then, where no effect was selected (the best model is the fitted base model), the model misses
+// something the catalogue does not hold (`misses`); where effects were selected, what is left may
+// be that, or their fits stopping short of the truth (a pump curve named with its error down from
+// 56 % to 7.7 % against a floor of 1.4 %, on a log with nothing else hidden): the summary says
+// both.
 //
 // Signature, over the whole log (what is left, not a score), per channel:
 //   nrmse, its floor, excess = sqrt(max(0, nrmse^2 - floor^2)) (what is not noise),
@@ -117,7 +122,8 @@ struct ResidualSignature {
   double noise_floor = 0.0;
   double sensor_floor = 0.0;
   double input_floor = 0.0;
-  bool misses = false;               // any of (a)-(c) above
+  bool above_noise = false;          // any of (a)-(c) above
+  bool misses = false;               // above_noise, and no effect selected
   std::vector<std::string> reasons;  // which, with their numbers
   // Over the whole log.
   double whole_error = 0.0;
@@ -130,8 +136,9 @@ struct ResidualSignature {
   // Sentences: "channels: ...", "bands: ...", "along the pipe: ...", "steady or dynamic: ...",
   // "regimes: ...".
   std::vector<std::string> findings;
-  // One paragraph: "the model misses something the catalogue does not hold: ..." where `misses`,
-  // else "what is left is noise: ...".
+  // One paragraph: "the base model misses something the catalogue does not hold: ..." where
+  // `misses`, "the base model + X still leaves more than noise: ..." where above_noise with
+  // effects selected, else "what the ... leaves is noise: ...".
   std::string Summary() const;
 };
 
@@ -144,6 +151,7 @@ struct ResidualInputs {
   const std::vector<Regime>* regimes = nullptr;
   double quarter_wave_hz = 0.0;  // c / 4L of the model
   std::string model_name;
+  std::size_t selected_effects = 0;  // effects of the catalogue in the model
 };
 
 ResidualSignature DescribeResidual(const ResidualInputs& inputs);

@@ -112,7 +112,8 @@ std::string RegimesJson(const Diagnosis& d) {
 std::string ResidualJson(const ResidualSignature& r) {
   std::ostringstream out;
   out << ",\"residual\":{\"model\":" << Quote(r.model)
-      << ",\"misses\":" << (r.misses ? "true" : "false") << ",\"error\":" << Num(r.error)
+      << ",\"misses\":" << (r.misses ? "true" : "false")
+      << ",\"above_noise\":" << (r.above_noise ? "true" : "false") << ",\"error\":" << Num(r.error)
       << ",\"noise_floor\":" << Num(r.noise_floor) << ",\"sensor_floor\":" << Num(r.sensor_floor)
       << ",\"input_floor\":" << Num(r.input_floor) << ",\"misses_factor\":" << Num(kMissesFactor)
       << ",\"noise_floor_method\":" << Quote(kNoiseFloorMethod)
@@ -275,9 +276,11 @@ void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::
             "beyond noise and extra freedom. Baseline error "
          << FormatValue(100.0 * b.error) << " %.</p>\n";
   }
-  if (d.residual && d.residual->misses) {
+  if (d.residual && d.residual->above_noise) {
     html << "<p class=\"verdict misses\">The " << EscapeHtml(d.residual->model)
-         << " misses something the catalogue does not hold: error "
+         << (d.residual->misses ? " misses something the catalogue does not hold: error "
+                                : " still leaves more than noise (its effects' fits stopping "
+                                  "short, or something the catalogue does not hold): error ")
          << FormatValue(100.0 * d.residual->error) << " % on the scoring data against a noise "
          << "floor of " << FormatValue(100.0 * d.residual->noise_floor)
          << " %. See <a href=\"#left\">what is left</a>.</p>\n";

@@ -122,7 +122,7 @@ TEST(DiagnoseWithRegimes, PumpStopInBothPartsNothingSelectedNoiseLeft) {
     EXPECT_TRUE(OnSide(*stopped, stopped->fit_s) && OnSide(*stopped, stopped->score_s));
     EXPECT_TRUE(d.one_sided_regimes.empty());
     EXPECT_TRUE(d.selected.empty()) << d.selected.front().effect;
-    EXPECT_FALSE(d.residual->misses);
+    EXPECT_FALSE(d.residual->above_noise);
     ExpectNeverWorseThanTheBaseModel(d);
   }
 }

@@ -124,7 +124,7 @@ TEST_P(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
     // What the base model leaves is noise: not "misses something" (residual_signature.h).
     ASSERT_TRUE(c.diagnosis.residual.has_value());
     std::printf("  %s\n", c.diagnosis.residual->Summary().c_str());
-    EXPECT_FALSE(c.diagnosis.residual->misses) << c.diagnosis.residual->Summary();
+    EXPECT_FALSE(c.diagnosis.residual->above_noise) << c.diagnosis.residual->Summary();
     if (GetParam() != Noise::kLab) continue;
     EXPECT_TRUE(c.diagnosis.selected.empty());
     ASSERT_TRUE(c.diagnosis.next.has_value());
@@ -191,7 +191,9 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     if (d.residual) {
       std::printf("  left: %s error %.4g%% floor %.4g%%%s\n", d.residual->model.c_str(),
                   100.0 * d.residual->error, 100.0 * d.residual->noise_floor,
-                  d.residual->misses ? " MISSES" : "");
+                  d.residual->misses        ? " MISSES"
+                  : d.residual->above_noise ? " ABOVE NOISE"
+                                            : "");
     }
     const bool ranked_first = RankedFirst(effect, d);
     first += ranked_first;
@@ -273,7 +275,7 @@ TEST(DiagnoseAtLabNoise, NoFalseAlarmAndClearEffectsNamedDownToTheEffectFreeErro
       EXPECT_FALSE(c.strength_key.empty()) << c.effect << ": no detectability estimate";
     }
     ASSERT_TRUE(d.residual.has_value());
-    EXPECT_FALSE(d.residual->misses) << d.residual->Summary();
+    EXPECT_FALSE(d.residual->above_noise) << d.residual->Summary();
     effect_free_error[seed] = d.baseline.error;
   }
   // Clear hidden effects on the same seeds (same excitation, parameters and noise): named, and

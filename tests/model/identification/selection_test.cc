@@ -111,7 +111,7 @@ std::string Describe(const Diagnosed& run) {
   if (d.residual) {
     std::snprintf(text, sizeof text, " | left %.4g%% against a floor of %.4g%%%s",
                   100.0 * d.residual->error, 100.0 * d.residual->noise_floor,
-                  d.residual->misses ? " (misses)" : "");
+                  d.residual->above_noise ? " (above the noise)" : "");
     out += text;
   }
   return out + " | " + d.selection_end;
