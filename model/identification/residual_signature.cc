@@ -112,8 +112,6 @@ std::string AlongThePipe(const std::vector<ChannelResidual>& channels) {
     if (c.x_m) pipe.push_back(&c);
   }
   if (pipe.size() < 3) return "along the pipe: fewer than 3 transmitters PT1..PT10 in the log";
-  std::vector<double> excess;
-  for (const ChannelResidual* c : pipe) excess.push_back(c->excess);
   const auto worst = std::max_element(pipe.begin(), pipe.end(),
                                       [](auto* a, auto* b) { return a->excess < b->excess; });
   std::vector<double> others;
@@ -129,7 +127,7 @@ std::string AlongThePipe(const std::vector<ChannelResidual>& channels) {
   double inlet = 0.0, outlet = 0.0;
   int n_inlet = 0, n_outlet = 0;
   for (const ChannelResidual* c : pipe) {
-    if (*c->x_m < 450.0) {
+    if (*c->x_m < 450.0) {  // PT1..PT5 of the 900 m pipe
       inlet += c->excess, ++n_inlet;
     } else {
       outlet += c->excess, ++n_outlet;
