@@ -336,7 +336,8 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->delimiter(',');
   command
       ->add_option("--fit-fraction", args->fit_fraction,
-                   "share of the log (from its start) used for fitting; the rest scores")
+                   "share of the log (from its start) used for fitting; the rest scores (moved "
+                   "within 40-80 % where the log has regimes, see --no-regime-split)")
       ->check(CLI::Range(0.2, 0.9))
       ->capture_default_str();
   command->add_flag("--no-regime-split", args->no_regime_split,
