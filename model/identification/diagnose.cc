@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -452,14 +453,25 @@ struct DiagnoseRun {
 
 // Splits the log at options.fit_fraction and sets the fits' options; the split and the noise
 // floor into *diagnosis.
-DiagnoseRun SplitLog(const MeasuredLog& measured, const DiagnoseOptions& options,
-                     std::size_t candidate_count, Diagnosis* diagnosis) {
+DiagnoseRun SplitLog(const MeasuredLog& measured, const RigParams& start,
+                     const DiagnoseOptions& options, std::size_t candidate_count,
+                     Diagnosis* diagnosis) {
   DiagnoseRun run{
       .measured = measured, .options = options, .log = measured, .replay = options.replay};
   const std::vector<double>& t = run.log.time_s();
   run.t_begin = t.front();
   run.t_end = t.back();
-  diagnosis->fit_end_s = run.t_begin + options.fit_fraction * (run.t_end - run.t_begin);
+  // At fit_fraction, or moved so that every regime of the log is on both sides (regimes.h).
+  std::vector<Regime> regimes = DetectRegimes(run.log, start);
+  RegimeSplit split =
+      options.split_by_regimes
+          ? SplitByRegimes(std::move(regimes), run.t_begin, run.t_end, options.fit_fraction)
+          : SplitAt(std::move(regimes), run.t_begin, run.t_end,
+                    run.t_begin + options.fit_fraction * (run.t_end - run.t_begin));
+  diagnosis->fit_end_s = split.split_s;
+  diagnosis->requested_fit_end_s = split.requested_s;
+  diagnosis->regimes = std::move(split.regimes);
+  diagnosis->one_sided_regimes = std::move(split.one_sided);
   diagnosis->noise_floor = EstimateNoiseFloor(run.log);
   run.fit_end_s = run.score_begin = diagnosis->fit_end_s;
   run.fit_log = MeasuredLogUntil(run.log, run.fit_end_s);
@@ -1044,6 +1056,39 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
   }
 }
 
+// Step 6 of diagnose.h: what the best model (the base model with the effects selected) leaves,
+// replayed with its own levels, and once more with fresh noise on its inputs for the floor.
+void DescribeWhatIsLeft(const DiagnoseRun& run, Diagnosis* diagnosis, StageRuns* runs) {
+  const CandidateResult& best =
+      diagnosis->selected.empty() ? diagnosis->baseline : diagnosis->selected.back();
+  InputLevelCorrection levels;
+  auto traces = ReplayWithOwnLevels(run.measured, best.fitted, run.simulation, run.options.replay,
+                                    runs, &levels);
+  if (!traces.ok()) return;
+  MeasuredLog log = run.measured;
+  ReplayOptions replay = run.options.replay;
+  if (levels.applied()) {
+    ApplyInputLevels(levels, &log);
+    ApplyInputLevels(levels, &replay);
+  }
+  constexpr std::uint64_t kInputNoiseSeed = 1;
+  auto noisy =
+      ReplayModel(WithFreshInputNoise(log, kInputNoiseSeed), best.fitted, run.simulation, replay);
+  ++runs->scoring;
+  std::string name = "base model";
+  for (const CandidateResult& step : diagnosis->selected) name += " + " + step.effect;
+  diagnosis->residual = DescribeResidual(
+      {.log = &log,
+       .model = &*traces,
+       .input_noise = noisy.ok() ? &*noisy : nullptr,
+       .score_begin_s = run.score_begin,
+       .score_end_s = run.t_end,
+       .regimes = &diagnosis->regimes,
+       .quarter_wave_hz = best.fitted.wave_speed_mps / (4.0 * best.fitted.pipe_length_m),
+       .model_name = name,
+       .selected_effects = diagnosis->selected.size()});
+}
+
 }  // namespace
 
 StageRuns& StageRuns::operator+=(const StageRuns& other) {
@@ -1077,7 +1122,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   }
   const std::vector<const EffectInfo*> candidates = CandidateEffects(options);
   Diagnosis diagnosis;
-  DiagnoseRun run = SplitLog(measured, options, candidates.size(), &diagnosis);
+  DiagnoseRun run = SplitLog(measured, start, options, candidates.size(), &diagnosis);
   if (run.fit_log.time_s().size() < 4) return Status::Error("too few samples to fit on");
 
   StageRuns base_runs{.stage = "baseline"};
@@ -1096,6 +1141,9 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   DecideVerdict(run, &diagnosis, &verdict);
   diagnosis.runs.push_back(verdict);
   MPDRIG_RETURN_IF_ERROR(SelectEffects(run, *baseline, &diagnosis));
+  StageRuns residual{.stage = "residual"};
+  DescribeWhatIsLeft(run, &diagnosis, &residual);
+  diagnosis.runs.push_back(residual);
   run.Report("done", run.progress_steps);
   for (const StageRuns& stage : diagnosis.runs) diagnosis.replays += stage.total();
   return diagnosis;

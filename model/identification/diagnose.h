@@ -3,7 +3,9 @@
 //
 // 1. Split the log in time: the first `fit_fraction` is the fitting data, the rest the scoring
 //    data (the replay always runs over the whole log, so the scoring part starts from the state
-//    the fitting part left).
+//    the fitting part left). Where the log has regimes (regimes.h: the pump stopped, the choke
+//    closed, the heave stopped), the split moves (within 40-80 % of the log) to the nearest point
+//    that leaves each regime on both sides, or the diagnosis names the regimes it cannot.
 // 2. Baseline: fit the base parameters (wave speed, pipe friction f1, choke leak by default) on
 //    the fitting data; its error on the scoring data is the number to beat. The compare metrics
 //    of the fitted baseline over the whole log (channels, bands, profile, lag, residual
@@ -32,6 +34,10 @@
 //    same search) and scored against the reference by the same rule as in step 4; the best is
 //    added while it is significant, up to kMaxSelectedEffects. `selected` lists them in order,
 //    `next` is the best candidate that was not (with what the log could show of it).
+// 6. What is left (residual_signature.h): the best model (the base model with the effects
+//    selected) against the noise floor; where it stays far above it, "the model misses something
+//    the catalogue does not hold", with the signature of its residual: channels, bands, along the
+//    pipe, steady or dynamic, and regimes.
 #pragma once
 
 #include <cstddef>
@@ -47,6 +53,8 @@
 #include "model/analysis/measured_log.h"
 #include "model/common/status.h"
 #include "model/identification/fit.h"
+#include "model/identification/regimes.h"
+#include "model/identification/residual_signature.h"
 #include "model/params/rig_params.h"
 
 namespace mpdrig {
@@ -100,6 +108,9 @@ struct DiagnoseOptions {
   ReplayOptions replay;  // how the log's inputs are fed (reconstructed by default) and started
   std::vector<std::string> base_params = {"wave_speed_mps", "friction_f1_per_s", "choke_leak_m2"};
   double fit_fraction = 0.6;
+  // Move the split so that each regime of the log is on both sides (step 1); false: at
+  // fit_fraction whatever the regimes (they are still detected and reported).
+  bool split_by_regimes = true;
   int max_iterations = 25;       // the baseline's fit
   int candidate_iterations = 8;  // each candidate's (it starts from the fitted baseline)
   // Only the baseline (fit and score), no candidates.
@@ -175,7 +186,11 @@ struct StageRuns {
 };
 
 struct Diagnosis {
-  double fit_end_s = 0.0;    // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
+  double fit_end_s = 0.0;            // fitting data: [start, fit_end_s), scoring: [fit_end_s, end]
+  double requested_fit_end_s = 0.0;  // where fit_fraction puts it (fit_end_s unless regimes)
+  // The log's regimes (regimes.h) with their time in each part, and those left on one side.
+  std::vector<Regime> regimes;
+  std::vector<std::string> one_sided_regimes;
   double noise_floor = 0.0;  // estimated measurement noise as a mean NRMSE (second differences)
   CandidateResult baseline;  // effect ""
   Comparison baseline_comparison;           // fitted baseline over the whole log
@@ -201,7 +216,9 @@ struct Diagnosis {
   // The best candidate of the round that ended the selection (not significant), with its
   // detectability measured against the model selected so far; none where no round tried one.
   std::optional<CandidateResult> next;
-  std::string selection_end;    // why the selection ended ("no candidate significant", ...)
+  std::string selection_end;  // why the selection ended ("no candidate significant", ...)
+  // What the best model (the base model with the effects selected) leaves (step 6).
+  std::optional<ResidualSignature> residual;
   int replays = 0;              // model runs: the sum over `runs`
   std::vector<StageRuns> runs;  // in the order of the stages
 };

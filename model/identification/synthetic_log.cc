@@ -52,6 +52,8 @@ struct Excitation {
   double sweep_lo_hz = 0.05, sweep_hi_hz = 0.8;
   std::vector<std::pair<double, double>> choke_steps;  // (time, deg)
   std::vector<std::pair<double, double>> pump_steps;   // (time, lpm)
+  std::vector<SyntheticInterval> pump_stops;           // FT2 at 0 (SyntheticLogOptions)
+  std::vector<SyntheticInterval> choke_closures;       // choke at 0 deg
 };
 
 // Raised-cosine taper: 0 at distance 0 from a join, 1 from `width` on, smooth in between.
@@ -98,6 +100,17 @@ double Stepped(const std::vector<std::pair<double, double>>& steps, double t, do
     value += (level - value) * Taper(t - time, transition_s);
   }
   return value;
+}
+
+// How far a regime's intervals hold at t: 1 inside one, 0 outside all, a raised-cosine
+// transition over `transition_s` at each end inside the interval (as the steps: smooth).
+double Held(const std::vector<SyntheticInterval>& intervals, double t, double transition_s) {
+  double held = 0.0;
+  for (const SyntheticInterval& interval : intervals) {
+    held = std::max(held, Taper(t - interval.start_s, transition_s) *
+                              Taper(interval.start_s + interval.duration_s - t, transition_s));
+  }
+  return held;
 }
 
 // A hidden effect (`setting`: its name and the values given) with its fitted parameters drawn
@@ -198,8 +211,13 @@ Result<CommandedRun> RunCommanded(const RigParams& truth, Excitation excitation,
     position.clear(), choke.clear(), pump.clear(), outlet.clear();
     for (double t : log.time_s) {
       position.push_back(PistonAt(excitation, duration_s, t));
-      choke.push_back(units::ChokeDegToFrac(Stepped(excitation.choke_steps, t, kChokeTransitionS)));
-      pump.push_back(units::LpmToM3ps(Stepped(excitation.pump_steps, t, kPumpTransitionS)));
+      // A regime holds the step tests' input at 0 (a stopped pump, a closed choke).
+      const double open = 1.0 - Held(excitation.choke_closures, t, kChokeTransitionS);
+      const double running = 1.0 - Held(excitation.pump_stops, t, kPumpTransitionS);
+      choke.push_back(
+          units::ChokeDegToFrac(open * Stepped(excitation.choke_steps, t, kChokeTransitionS)));
+      pump.push_back(
+          units::LpmToM3ps(running * Stepped(excitation.pump_steps, t, kPumpTransitionS)));
       outlet.push_back(log.atmospheric_pressure_pa);
     }
     riglog::RigLog inputs = log;
@@ -257,6 +275,20 @@ Status SyntheticLogOptions::Validate() const {
     return Status::Error(out.str());
   }
   if (sensor_noise) MPDRIG_RETURN_IF_ERROR(sensor_noise->Validate().Within("synthetic log"));
+  for (const auto& [intervals, name] :
+       {std::pair{&pump_stops, "pump stop"}, std::pair{&choke_closures, "choke closure"}}) {
+    for (const SyntheticInterval& interval : *intervals) {
+      // At least its two transitions long, and inside the log.
+      if (!(interval.start_s >= 0.0 && interval.duration_s >= 2.0 * kPumpTransitionS &&
+            interval.start_s + interval.duration_s <= duration_s)) {
+        std::ostringstream out;
+        out << "synthetic log: " << name << " at " << interval.start_s << " s for "
+            << interval.duration_s << " s must lie inside the log (0 to " << duration_s
+            << " s) and last at least " << 2.0 * kPumpTransitionS << " s";
+        return Status::Error(out.str());
+      }
+    }
+  }
   std::vector<std::string> names;
   for (const std::string& spec : hidden_effects) {
     auto setting = ParseHiddenEffect(spec);
@@ -297,7 +329,9 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   // Column separation needs low pressure to show: an open choke and little pump flow, as in the
   // runs where the thesis's model went below zero absolute pressure (11.5).
   const bool low_pressure = options.low_pressure.value_or(HidesColumnSeparation(options));
-  const Excitation excitation = DrawExcitation(low_pressure, options.duration_s, random);
+  Excitation excitation = DrawExcitation(low_pressure, options.duration_s, random);
+  excitation.pump_stops = options.pump_stops;
+  excitation.choke_closures = options.choke_closures;
 
   riglog::RigLog& log = result.log;
   log.metadata.push_back({"source", "mpdrig synthetic log, seed " + std::to_string(options.seed)});

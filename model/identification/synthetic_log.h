@@ -9,6 +9,10 @@
 // replayed on a grid whose time step is about a sample, and a jump would leave the grid's
 // fingerprint in the log (synthetic_log.cc). Noise: white, Gaussian, per channel kind, on the
 // inputs too (the model replays them as measured); the noise-free log comes with it.
+// Regimes, on request: the back-pressure pump stopped for a while (FT2 ramps to 0 and back), the
+// choke closed for a while (to 0 deg, where only its leak passes, and back): a rig's log holds
+// such stops besides its step tests, and they change what the pipe does (no flow through the
+// choke, a closed outlet). Without them the excitation above runs throughout.
 // Deterministic for a seed (std::mt19937_64 with explicit distributions written out here, so the
 // same seed gives the same log with any standard library).
 #pragma once
@@ -30,6 +34,13 @@ constexpr double kMaxSyntheticDurationS = 86400.0;  // one day
 constexpr double kMaxSyntheticRateHz = 10000.0;
 constexpr double kMaxSyntheticSamples = 1.0e7;
 
+// An interval of a regime: from start_s for duration_s (the transitions into and out of it take
+// the actuator's time, 0.5 s, inside the interval).
+struct SyntheticInterval {
+  double start_s = 0.0;
+  double duration_s = 0.0;
+};
+
 struct SyntheticLogOptions {
   std::uint64_t seed = 1;
   double duration_s = 120.0;
@@ -47,6 +58,12 @@ struct SyntheticLogOptions {
   // shows; unset: where column_separation is one of the hidden effects. Set it to compare a log
   // with the same excitation without the effect.
   std::optional<bool> low_pressure;
+  // Regimes: the pump stopped (FT2 at 0) and the choke closed (0 deg) over these intervals, on
+  // top of the step tests (none by default: the logs the identification tests were tuned on).
+  // They draw nothing from the random streams: the same seed gives the same parameters, noise and
+  // excitation elsewhere.
+  std::vector<SyntheticInterval> pump_stops;
+  std::vector<SyntheticInterval> choke_closures;
   // Sensor noise. Unset (the default for callers in C++): the quiet sigmas below, drawn from the
   // excitation's random stream; the identification tests (fit_test, diagnose_test) were tuned on
   // these logs, so the default stays. Set: this spec through SensorNoiseApplier seeded with
@@ -60,7 +77,8 @@ struct SyntheticLogOptions {
                                   // more would swamp C2 with the replay of the noise itself
 
   // Duration and rate within the limits above, the sensor noise valid, every hidden effect one of
-  // the catalogue (once) with known keys and values within bounds; else an error that says which.
+  // the catalogue (once) with known keys and values within bounds, every regime interval inside
+  // the log and at least 1 s long (its two transitions); else an error that says which.
   [[nodiscard]] Status Validate() const;
 };
 

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "model/analysis/log_replay.h"
@@ -37,6 +38,7 @@ struct DiagnoseArgs {
   std::vector<std::string> base_params;
   std::vector<std::string> candidates;
   double fit_fraction = 0.6;
+  bool no_regime_split = false;
   int max_iterations = 25;
   InputReplayOptions replay;
   bool quiet = false;
@@ -67,6 +69,32 @@ void PrintSelection(const Diagnosis& d, FILE* summary) {
     }
     std::fprintf(summary, "\n");
   }
+}
+
+// The log's regimes and how the split left them; what the best model leaves (the signature of
+// its residual) and whether that is more than noise.
+void PrintRegimesAndResidual(const Diagnosis& d, FILE* summary) {
+  if (d.regimes.empty()) {
+    std::fprintf(summary, "regimes: none (every input keeps one state)\n");
+  } else {
+    std::fprintf(summary, "regimes:");
+    for (std::size_t i = 0; i < d.regimes.size(); ++i) {
+      const Regime& r = d.regimes[i];
+      std::fprintf(summary, "%s %s %.1f s (%.1f s fitted, %.1f s scored)", i ? ";" : "",
+                   r.name.c_str(), r.duration_s, r.fit_s, r.score_s);
+    }
+    std::fprintf(summary, "\n");
+    if (d.fit_end_s != d.requested_fit_end_s) {
+      std::fprintf(summary,
+                   "split moved from t = %.1f s to %.1f s so that every regime is on both "
+                   "sides\n",
+                   d.requested_fit_end_s, d.fit_end_s);
+    }
+    for (const std::string& note : d.one_sided_regimes) {
+      std::fprintf(summary, "regime on one side of the split: %s\n", note.c_str());
+    }
+  }
+  if (d.residual) std::fprintf(summary, "what is left: %s\n", d.residual->Summary().c_str());
 }
 
 // The base model's error, the candidates best first, the selection and the verdict.
@@ -105,6 +133,7 @@ void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
     equivalent += (equivalent.empty() ? "" : ", ") + name;
   }
   if (!equivalent.empty()) equivalent = "; as good: " + equivalent;
+  PrintRegimesAndResidual(d, summary);
   std::fprintf(summary, "verdict: %s%s (%d model runs, %.1f s)\n",
                d.verdict ? d.verdict->c_str() : "no effect is significant", equivalent.c_str(),
                d.replays, elapsed_s);
@@ -126,6 +155,7 @@ int RunDiagnose(DiagnoseArgs args) {
   if (!args.base_params.empty()) options.base_params = args.base_params;
   options.candidates = args.candidates;
   options.fit_fraction = args.fit_fraction;
+  options.split_by_regimes = !args.no_regime_split;
   options.max_iterations = args.max_iterations;
   options.replay = args.replay;
   options.solver_log = std::getenv("MPDRIG_CERES_LOG") != nullptr;  // Ceres's iteration table
@@ -171,7 +201,28 @@ struct SynthArgs {
   std::optional<double> pressure_noise_pa, flow_noise_m3ps, piston_noise_m, choke_noise_deg;
   std::string out_path;
   std::string truth_out_path;
+  // Regimes: START:DURATION each, seconds.
+  std::vector<std::string> pump_stops, choke_closures;
 };
+
+// "START:DURATION" (seconds) of --pump-stop / --choke-close; an error naming the flag otherwise.
+Result<SyntheticInterval> ParseInterval(const std::string& text, const std::string& flag) {
+  const std::size_t colon = text.find(':');
+  SyntheticInterval interval;
+  char* end = nullptr;
+  const std::string start = text.substr(0, colon);
+  const std::string duration = colon == std::string::npos ? "" : text.substr(colon + 1);
+  interval.start_s = std::strtod(start.c_str(), &end);
+  const bool start_ok = !start.empty() && *end == '\0';
+  interval.duration_s = std::strtod(duration.c_str(), &end);
+  const bool duration_ok = !duration.empty() && *end == '\0';
+  if (!start_ok || !duration_ok || !std::isfinite(interval.start_s) ||
+      !std::isfinite(interval.duration_s)) {
+    return Status::Error(flag + " '" + text + "': expected START:DURATION in seconds, e.g. " +
+                         flag + " 50:15");
+  }
+  return interval;
+}
 
 int RunSynth(const SynthArgs& args) {
   SyntheticLogOptions options = args.options;
@@ -185,6 +236,15 @@ int RunSynth(const SynthArgs& args) {
   if (args.piston_noise_m) noise->piston_m = *args.piston_noise_m;
   if (args.choke_noise_deg) noise->choke_deg = *args.choke_noise_deg;
   options.sensor_noise = *noise;
+  for (const auto& [texts, intervals, flag] :
+       {std::tuple{&args.pump_stops, &options.pump_stops, std::string("--pump-stop")},
+        std::tuple{&args.choke_closures, &options.choke_closures, std::string("--choke-close")}}) {
+    for (const std::string& text : *texts) {
+      auto interval = ParseInterval(text, flag);
+      if (!interval.ok()) return Fail("synth", interval.status());
+      intervals->push_back(*interval);
+    }
+  }
   // The flags' limits (synthetic_log.h), named as the user wrote them.
   auto format = [](double value) {
     char text[32];
@@ -238,8 +298,9 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
                                           "effect catalogue on a measured log");
   command->footer(
       "1. fits the base model (wave speed, pipe friction f1, choke leak) on the first part of\n"
-      "   the log, 2. shows where it still fails (compare's metrics), 3. adds each effect of\n"
-      "   `mpdrig effects` in turn, fits it with the base parameters, and scores it on the rest\n"
+      "   the log (moved so that each regime of the log is in both parts), 2. shows where it\n"
+      "   still fails (compare's metrics), 3. adds each effect of `mpdrig effects` in turn,\n"
+      "   fits it with the base parameters, and scores it on the rest\n"
       "   of the log (data it was not fitted on), with a price of 1% per extra parameter,\n"
       "4. ranks them and says what each explains. `significant`: better than the base model by\n"
       "   more than 10% and two standard errors (over 8 blocks of the scoring data); `as good`\n"
@@ -248,6 +309,10 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "   adding the next while it is significant by the same rule (at most 3 effects): the\n"
       "   summary shows the error falling step by step, per channel, and what the log could\n"
       "   show of the next effect.\n"
+      "6. says what the best model leaves against the noise floor (sensor noise and the inputs'\n"
+      "   noise replayed): where it stays far above it, that the model misses something the\n"
+      "   catalogue does not hold, with the channels, bands, place along the pipe, steady or\n"
+      "   dynamic, and the regime (pump stopped, choke closed, heave stopped) it shows in.\n"
       "  mpdrig synth --effect choke_inertia --seed 3 --out hidden.csv\n"
       "  mpdrig diagnose hidden.csv --json diag.json --report diag.html\n"
       "The rig's measured first resonances instead of a log (frequency domain): each effect is\n"
@@ -271,9 +336,15 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       ->delimiter(',');
   command
       ->add_option("--fit-fraction", args->fit_fraction,
-                   "share of the log (from its start) used for fitting; the rest scores")
+                   "share of the log (from its start) used for fitting; the rest scores (moved "
+                   "within 40-80 % where the log has regimes, see --no-regime-split)")
       ->check(CLI::Range(0.2, 0.9))
       ->capture_default_str();
+  command->add_flag("--no-regime-split", args->no_regime_split,
+                    "split at --fit-fraction even where a regime of the log (the pump stopped, "
+                    "the choke closed, the heave stopped) then lies on one side only (it is "
+                    "reported); by default the split moves within 40-80 % of the log to leave "
+                    "each regime in both parts");
   command->add_option("--max-iterations", args->max_iterations, "solver iterations per fit")
       ->check(CLI::Range(1, 500))
       ->capture_default_str();
@@ -336,7 +407,9 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "The truth is written into the log's metadata (# hidden: ...). Same seed, same log.\n"
       "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv --truth-out lag_truth.csv\n"
       "  mpdrig synth --effect sensor_lag:time_constant_s=0.1 --effect unsteady_friction --out "
-      "two.csv");
+      "two.csv\n"
+      "Regimes: the pump stopped and the choke closed over given intervals (a connection):\n"
+      "  mpdrig synth --effect choke_inertia --pump-stop 50:20 --choke-close 52:16 --out stop.csv");
   synth_command->add_option("--effect", synth->effects,
                             "hidden effect NAME[:KEY=VALUE,...] (strengths not given are drawn), "
                             "repeatable for several at once; none: the base model");
@@ -365,6 +438,13 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
             "flow meters, the part independent of the reading", "m^3/s");
   add_noise("--piston-noise-m", &synth->piston_noise_m, "piston position", "m");
   add_noise("--choke-noise-deg", &synth->choke_noise_deg, "choke position", "deg");
+  synth_command->add_option("--pump-stop", synth->pump_stops,
+                            "START:DURATION [s]: the back-pressure pump stopped (FT2 ramps to 0 "
+                            "and back over 0.5 s), repeatable");
+  synth_command->add_option("--choke-close", synth->choke_closures,
+                            "START:DURATION [s]: the choke closed (to 0 deg, only its leak "
+                            "passes, and back over 0.5 s), repeatable; with the pump running "
+                            "the pressure rises fast");
   synth_command->add_option("--truth-out", synth->truth_out_path,
                             "also write the same run without sensor noise (same seed, excitation "
                             "and parameters): what a perfect model would say");

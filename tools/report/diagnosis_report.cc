@@ -84,6 +84,76 @@ std::string CandidateJson(const CandidateResult& c, const CandidateResult& refer
   return out.str();
 }
 
+// The log's regimes and the split (regimes.h).
+std::string RegimesJson(const Diagnosis& d) {
+  std::ostringstream out;
+  out << ",\"split\":{\"fit_end_s\":" << Num(d.fit_end_s)
+      << ",\"requested_fit_end_s\":" << Num(d.requested_fit_end_s) << ",\"one_sided\":[";
+  for (std::size_t i = 0; i < d.one_sided_regimes.size(); ++i) {
+    out << (i ? "," : "") << Quote(d.one_sided_regimes[i]);
+  }
+  out << "]},\"regimes\":[";
+  for (std::size_t i = 0; i < d.regimes.size(); ++i) {
+    const Regime& r = d.regimes[i];
+    out << (i ? "," : "") << "{\"name\":" << Quote(r.name) << ",\"input\":" << Quote(r.input)
+        << ",\"duration_s\":" << Num(r.duration_s) << ",\"fit_s\":" << Num(r.fit_s)
+        << ",\"score_s\":" << Num(r.score_s) << ",\"intervals\":[";
+    for (std::size_t k = 0; k < r.intervals.size(); ++k) {
+      out << (k ? "," : "") << "[" << Num(r.intervals[k].begin_s) << ","
+          << Num(r.intervals[k].end_s) << "]";
+    }
+    out << "]}";
+  }
+  out << "]";
+  return out.str();
+}
+
+// What the best model leaves (residual_signature.h), lab units for the offsets.
+std::string ResidualJson(const ResidualSignature& r) {
+  std::ostringstream out;
+  out << ",\"residual\":{\"model\":" << Quote(r.model)
+      << ",\"misses\":" << (r.misses ? "true" : "false")
+      << ",\"above_noise\":" << (r.above_noise ? "true" : "false") << ",\"error\":" << Num(r.error)
+      << ",\"noise_floor\":" << Num(r.noise_floor) << ",\"sensor_floor\":" << Num(r.sensor_floor)
+      << ",\"input_floor\":" << Num(r.input_floor) << ",\"misses_factor\":" << Num(kMissesFactor)
+      << ",\"noise_floor_method\":" << Quote(kNoiseFloorMethod)
+      << ",\"whole_error\":" << Num(r.whole_error) << ",\"whole_floor\":" << Num(r.whole_floor)
+      << ",\"steady_share\":" << Num(r.steady_share)
+      << ",\"quarter_wave_hz\":" << Num(r.quarter_wave_hz) << ",\"summary\":" << Quote(r.Summary())
+      << ",\"reasons\":[";
+  for (std::size_t i = 0; i < r.reasons.size(); ++i) out << (i ? "," : "") << Quote(r.reasons[i]);
+  out << "],\"findings\":[";
+  for (std::size_t i = 0; i < r.findings.size(); ++i) out << (i ? "," : "") << Quote(r.findings[i]);
+  out << "],\"channels\":[";
+  for (std::size_t i = 0; i < r.channels.size(); ++i) {
+    const ChannelResidual& c = r.channels[i];
+    out << (i ? "," : "") << "{\"channel\":" << Quote(std::string(riglog::ChannelName(c.channel)))
+        << ",\"x_m\":" << (c.x_m ? Num(*c.x_m) : std::string("null"))
+        << ",\"nrmse\":" << Num(c.nrmse) << ",\"sensor_floor\":" << Num(c.sensor_floor)
+        << ",\"input_floor\":" << Num(c.input_floor) << ",\"floor\":" << Num(c.floor)
+        << ",\"excess\":" << Num(c.excess) << ",\"bias\":" << Num(c.bias_unit)
+        << ",\"steady_share\":" << Num(c.steady_share) << ",\"score_nrmse\":" << Num(c.score_nrmse)
+        << ",\"score_floor\":" << Num(c.score_floor) << "}";
+  }
+  out << "],\"bands\":[";
+  for (std::size_t i = 0; i < r.bands.size(); ++i) {
+    const BandResidual& b = r.bands[i];
+    out << (i ? "," : "") << "{\"name\":" << Quote(b.name) << ",\"low_hz\":" << Num(b.low_hz)
+        << ",\"high_hz\":" << Num(b.high_hz) << ",\"error\":" << Num(b.error)
+        << ",\"floor\":" << Num(b.floor) << ",\"excess_share\":" << Num(b.excess_share) << "}";
+  }
+  out << "],\"regimes\":[";
+  for (std::size_t i = 0; i < r.regimes.size(); ++i) {
+    const RegimeResidual& g = r.regimes[i];
+    out << (i ? "," : "") << "{\"regime\":" << Quote(g.regime) << ",\"input\":" << Quote(g.input)
+        << ",\"duration_s\":" << Num(g.duration_s) << ",\"error\":" << Num(g.error)
+        << ",\"floor\":" << Num(g.floor) << ",\"steady_share\":" << Num(g.steady_share)
+        << ",\"channels\":" << ChannelsJson(g.channel_errors) << "}";
+  }
+  out << "]}";
+  return out.str();
+}
+
 }  // namespace
 
 std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
@@ -132,6 +202,8 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
         << "}";
   }
   out << "]";
+  out << RegimesJson(d);
+  if (d.residual) out << ResidualJson(*d.residual);
   // Where the fitted base model fails: worst channels, worst bands, lags.
   const Comparison& cmp = d.baseline_comparison;
   std::vector<const ChannelMetrics*> channels;
@@ -175,7 +247,10 @@ void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::
           "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:3px "
           "8px;text-align:right}th{background:#eee}td.l{text-align:left}.yes{color:#080;font-"
           "weight:bold}.no{color:#888}.verdict{font-size:1.3em;padding:0.5em;background:#eef6ee;"
-          "border-left:5px solid #080}.none{background:#f6f6f6;border-left-color:#888}</style>"
+          "border-left:5px solid "
+          "#080}.none{background:#f6f6f6;border-left-color:#888}.misses{background:#fbeee6;border-"
+          "left:5px "
+          "solid #c60}</style>"
           "</head><body>\n<h1>Which effect is missing?</h1>\n<p>Log <code>"
        << EscapeHtml(log_path) << "</code>. Fitted on t &lt; " << FormatValue(d.fit_end_s)
        << " s, scored on the rest. Noise floor (a perfect model's error): "
@@ -201,6 +276,106 @@ void WriteVerdict(const Diagnosis& d, const CandidateResult* winner, const std::
             "beyond noise and extra freedom. Baseline error "
          << FormatValue(100.0 * b.error) << " %.</p>\n";
   }
+  if (d.residual && d.residual->above_noise) {
+    html << "<p class=\"verdict misses\">The " << EscapeHtml(d.residual->model)
+         << (d.residual->misses ? " misses something the catalogue does not hold: error "
+                                : " still leaves more than noise (its effects' fits stopping "
+                                  "short, or something the catalogue does not hold): error ")
+         << FormatValue(100.0 * d.residual->error) << " % on the scoring data against a noise "
+         << "floor of " << FormatValue(100.0 * d.residual->noise_floor)
+         << " %. See <a href=\"#left\">what is left</a>.</p>\n";
+  }
+}
+
+// The regimes of the log and how the split left them (regimes.h).
+void WriteRegimes(const Diagnosis& d, std::ostringstream& html) {
+  html << "<h2>Regimes of the log and the split</h2>\n<p>Fitted on t &lt; "
+       << FormatValue(d.fit_end_s) << " s";
+  if (d.fit_end_s != d.requested_fit_end_s) {
+    html << " (moved from " << FormatValue(d.requested_fit_end_s)
+         << " s so that every regime is in both parts)";
+  }
+  html << ", scored on the rest.";
+  if (d.regimes.empty()) {
+    html << " No regimes: every input keeps one state (the pump running, the choke open, the "
+            "heave running).</p>\n";
+    return;
+  }
+  html << "</p>\n<table><tr><th class=\"l\">regime</th><th class=\"l\">told by</th><th>time "
+          "[s]</th><th>fitted [s]</th><th>scored [s]</th><th class=\"l\">intervals [s]</th></tr>\n";
+  for (const Regime& r : d.regimes) {
+    std::string intervals;
+    for (const TimeInterval& i : r.intervals) {
+      intervals += FormatValue(i.begin_s, 4) + "&ndash;" + FormatValue(i.end_s, 4) + " ";
+    }
+    html << "<tr><td class=\"l\">" << EscapeHtml(r.name) << "</td><td class=\"l\">"
+         << EscapeHtml(r.input) << "</td><td>" << FormatValue(r.duration_s, 3) << "</td><td>"
+         << FormatValue(r.fit_s, 3) << "</td><td>" << FormatValue(r.score_s, 3)
+         << "</td><td class=\"l\">" << intervals << "</td></tr>\n";
+  }
+  html << "</table>\n";
+  for (const std::string& note : d.one_sided_regimes) {
+    html << "<p class=\"misses\">On one side of the split only: " << EscapeHtml(note) << ".</p>\n";
+  }
+}
+
+// What the best model leaves, against the noise floor: per channel, per band, per regime.
+void WriteWhatIsLeft(const Diagnosis& d, std::ostringstream& html) {
+  if (!d.residual) return;
+  const ResidualSignature& r = *d.residual;
+  html << "<h2 id=\"left\">What is left</h2>\n<p>" << EscapeHtml(r.Summary()) << "</p>\n"
+       << "<p><small>Noise floor: " << EscapeHtml(kNoiseFloorMethod)
+       << ". Over the whole log unless said.</small></p>\n";
+  std::vector<double> x, error, floor;
+  for (std::size_t i = 0; i < r.channels.size(); ++i) {
+    x.push_back(static_cast<double>(i));
+    error.push_back(100.0 * r.channels[i].nrmse);
+    floor.push_back(100.0 * r.channels[i].floor);
+  }
+  SvgPlot plot(1000, 240, "channel (table below)", "NRMSE, whole log [%]");
+  plot.Stems(x, error, "#c33");
+  plot.Legend(r.model, "#c33");
+  plot.Markers(x, floor, "#888");
+  plot.Legend("noise floor", "#888");
+  html << plot.Render()
+       << "\n<table><tr><th class=\"l\">channel</th><th>x [m]</th><th>error "
+          "[%]</th><th>floor [%]</th><th>sensor [%]</th><th>inputs [%]</th><th>beyond the noise "
+          "[%]</th><th>mean offset (model - log)</th><th>steady share</th><th>scoring: error / "
+          "floor [%]</th></tr>\n";
+  for (const ChannelResidual& c : r.channels) {
+    html << "<tr><td class=\"l\">" << riglog::ChannelName(c.channel) << "</td><td>"
+         << (c.x_m ? FormatValue(*c.x_m, 3) : std::string()) << "</td><td>"
+         << FormatValue(100.0 * c.nrmse, 3) << "</td><td>" << FormatValue(100.0 * c.floor, 3)
+         << "</td><td>" << FormatValue(100.0 * c.sensor_floor, 3) << "</td><td>"
+         << FormatValue(100.0 * c.input_floor, 3) << "</td><td>" << FormatValue(100.0 * c.excess, 3)
+         << "</td><td>" << FormatValue(c.bias_unit, 3) << "</td><td>"
+         << FormatValue(100.0 * c.steady_share, 2) << " %</td><td>"
+         << FormatValue(100.0 * c.score_nrmse, 3) << " / " << FormatValue(100.0 * c.score_floor, 3)
+         << "</td></tr>\n";
+  }
+  html << "</table>\n<table><tr><th class=\"l\">band</th><th>from [Hz]</th><th>to [Hz]</th>"
+          "<th>error [%]</th><th>floor [%]</th><th>share of what is not noise</th></tr>\n";
+  for (const BandResidual& b : r.bands) {
+    html << "<tr><td class=\"l\">" << EscapeHtml(b.name) << "</td><td>" << FormatValue(b.low_hz, 3)
+         << "</td><td>" << FormatValue(b.high_hz, 3) << "</td><td>"
+         << FormatValue(100.0 * b.error, 3) << "</td><td>" << FormatValue(100.0 * b.floor, 3)
+         << "</td><td>" << FormatValue(100.0 * b.excess_share, 3) << " %</td></tr>\n";
+  }
+  html << "</table>\n";
+  if (!r.regimes.empty()) {
+    html << "<table><tr><th class=\"l\">regime</th><th>time [s]</th><th>error [%]</th>"
+            "<th>floor [%]</th><th>steady share</th></tr>\n";
+    for (const RegimeResidual& g : r.regimes) {
+      html << "<tr><td class=\"l\">" << EscapeHtml(g.regime) << "</td><td>"
+           << FormatValue(g.duration_s, 3) << "</td><td>" << FormatValue(100.0 * g.error, 3)
+           << "</td><td>" << FormatValue(100.0 * g.floor, 3) << "</td><td>"
+           << FormatValue(100.0 * g.steady_share, 2) << " %</td></tr>\n";
+    }
+    html << "</table>\n";
+  }
+  html << "<ul>";
+  for (const std::string& finding : r.findings) html << "<li>" << EscapeHtml(finding) << "</li>";
+  html << "</ul>\n";
 }
 
 // Per channel: the error before and after adding the verdict, side by side.
@@ -388,6 +563,8 @@ std::string DiagnosisHtml(const Diagnosis& d, const std::string& log_path) {
   }
   WriteVerdict(d, winner, log_path, html);
   WriteSelection(d, html);
+  WriteWhatIsLeft(d, html);
+  WriteRegimes(d, html);
   WriteChannelErrors(d, winner, html);
   WriteCandidates(d, html);
   WriteBaseModelFailures(d, html);

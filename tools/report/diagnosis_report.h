@@ -8,6 +8,11 @@
 //   next       the candidate that ended the selection (not significant), or null
 //   selection_end  why the selection ended; failed [{effect, round, failure}]: not ranked
 //   noise_floor, fit_end_s, replays, where_baseline_fails {worst_channels, bands, lag}
+//   split      {fit_end_s, requested_fit_end_s, one_sided}; regimes [{name, input, duration_s,
+//               fit_s, score_s, intervals}] (regimes.h)
+//   residual   what the best model leaves (residual_signature.h): {model, misses, reasons, error,
+//               noise_floor, sensor_floor, input_floor, summary, findings, channels, bands,
+//               regimes, ...}
 // `error` is compare's error (mean NRMSE over the compared channels) on the scoring data.
 #pragma once
 
@@ -18,9 +23,10 @@
 namespace mpdrig::report {
 
 std::string DiagnosisJson(const Diagnosis& diagnosis, const std::string& log_path);
-// Error step by step as the selected effects are added, before and after the winning effect side
-// by side per channel, the ranking, and where
-// the fitted base model fails (inline SVG, no script, opens offline).
+// Error step by step as the selected effects are added, what the best model leaves against the
+// noise floor, the regimes and the split, before and after the winning effect side by side per
+// channel, the ranking, and where the fitted base model fails (inline SVG, no script, opens
+// offline).
 std::string DiagnosisHtml(const Diagnosis& diagnosis, const std::string& log_path);
 
 }  // namespace mpdrig::report

@@ -6,7 +6,8 @@
 //
 // Required: the hidden effect ranked first in at least 9 of 10 cases per effect where
 // it changes the signals clearly beyond the noise; the error falls by at least half or to the
-// noise floor; on logs without a hidden effect no candidate is significant.
+// noise floor; on logs without a hidden effect no candidate is significant, and what the base
+// model leaves is noise (not "misses something the catalogue does not hold").
 //
 // "Changes the signals clearly beyond the noise" is judged the way the data allow: the same seed
 // without the hidden effect gives the same log but for the effect (MakeSyntheticLog draws the
@@ -120,6 +121,10 @@ TEST_P(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
     for (const CandidateResult& candidate : c.diagnosis.candidates) {
       EXPECT_FALSE(candidate.significant) << candidate.effect;
     }
+    // What the base model leaves is noise: not "misses something" (residual_signature.h).
+    ASSERT_TRUE(c.diagnosis.residual.has_value());
+    std::printf("  %s\n", c.diagnosis.residual->Summary().c_str());
+    EXPECT_FALSE(c.diagnosis.residual->above_noise) << c.diagnosis.residual->Summary();
     if (GetParam() != Noise::kLab) continue;
     EXPECT_TRUE(c.diagnosis.selected.empty());
     ASSERT_TRUE(c.diagnosis.next.has_value());
@@ -182,6 +187,14 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
     std::printf("%s seed %d: %s | base %.4g%% (without the effect %.4g%%)%s |%s\n", effect.c_str(),
                 seed, c.synthetic.description.c_str(), 100.0 * d.baseline.error, 100.0 * without,
                 is_detectable ? "" : " not detectable", Ranking(d).c_str());
+    // What the best model leaves against the noise floor (residual_signature.h): reported.
+    if (d.residual) {
+      std::printf("  left: %s error %.4g%% floor %.4g%%%s\n", d.residual->model.c_str(),
+                  100.0 * d.residual->error, 100.0 * d.residual->noise_floor,
+                  d.residual->misses        ? " MISSES"
+                  : d.residual->above_noise ? " ABOVE NOISE"
+                                            : "");
+    }
     const bool ranked_first = RankedFirst(effect, d);
     first += ranked_first;
     alone += d.verdict && *d.verdict == effect;
@@ -261,6 +274,8 @@ TEST(DiagnoseAtLabNoise, NoFalseAlarmAndClearEffectsNamedDownToTheEffectFreeErro
       EXPECT_FALSE(c.significant) << c.effect;
       EXPECT_FALSE(c.strength_key.empty()) << c.effect << ": no detectability estimate";
     }
+    ASSERT_TRUE(d.residual.has_value());
+    EXPECT_FALSE(d.residual->above_noise) << d.residual->Summary();
     effect_free_error[seed] = d.baseline.error;
   }
   // Clear hidden effects on the same seeds (same excitation, parameters and noise): named, and

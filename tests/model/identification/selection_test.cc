@@ -108,6 +108,12 @@ std::string Describe(const Diagnosed& run) {
     out += " | failed in round " + std::to_string(failed.round) + ": " + failed.effect + " (" +
            failed.failure + ")";
   }
+  if (d.residual) {
+    std::snprintf(text, sizeof text, " | left %.4g%% against a floor of %.4g%%%s",
+                  100.0 * d.residual->error, 100.0 * d.residual->noise_floor,
+                  d.residual->above_noise ? " (above the noise)" : "");
+    out += text;
+  }
   return out + " | " + d.selection_end;
 }
 

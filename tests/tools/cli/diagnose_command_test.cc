@@ -55,7 +55,11 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
         "\"equivalent\":[", "\"held\":", "\"noise_floor\":",
         // Forward selection: the verdict first, then what ended it.
         "\"selected\":[{\"effect\":\"sensor_lag\"",
-        "\"selection_end\":", "\"next\":", "\"failed\":[", "\"round\":1"}) {
+        "\"selection_end\":", "\"next\":", "\"failed\":[", "\"round\":1",
+        // What the best model leaves, against the noise floor; the regimes and the split.
+        "\"residual\":{\"model\":\"base model + sensor_lag\"",
+        "\"misses\":", "\"noise_floor_method\":", "\"findings\":[", "\"bands\":[",
+        "\"split\":{\"fit_end_s\":", "\"regimes\":["}) {
     EXPECT_NE(text.find(field), std::string::npos) << field << " in " << text.substr(0, 400);
   }
   // Ranked best first: the first candidate is the verdict.
@@ -69,6 +73,10 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
   EXPECT_NE(page.find("before and after adding sensor_lag"), std::string::npos);
   EXPECT_NE(page.find("Effects added one after the other"), std::string::npos);
   EXPECT_NE(page.find("Selection ended: "), std::string::npos);
+  EXPECT_NE(page.find("What is left"), std::string::npos);
+  EXPECT_NE(page.find("Regimes of the log and the split"), std::string::npos);
+  EXPECT_NE(output.find("what is left: "), std::string::npos) << output;
+  EXPECT_NE(output.find("regimes: none"), std::string::npos) << output;
 
   std::string found;
   if (RunShell("command -v chromium", &found) != 0) {
@@ -98,6 +106,11 @@ TEST(DiagnoseCommandTest, RefusesBadInput) {
   EXPECT_NE(output.find("unknown effect 'gremlins'; valid effects:"), std::string::npos) << output;
   EXPECT_NE(RunShell(kExe + " synth --pressure-noise-pa -1 --out " + log, &output), 0);
   EXPECT_NE(output.find("--pressure-noise-pa"), std::string::npos) << output;
+  EXPECT_NE(RunShell(kExe + " synth --pump-stop 5 --out " + log, &output), 0);
+  EXPECT_NE(output.find("--pump-stop '5': expected START:DURATION"), std::string::npos) << output;
+  EXPECT_NE(RunShell(kExe + " synth --duration 12 --choke-close 10:8 --out " + log, &output), 0);
+  EXPECT_NE(output.find("choke closure at 10 s for 8 s must lie inside the log"), std::string::npos)
+      << output;
   EXPECT_NE(RunShell(kExe + " synth --effect gremlins --out " + log, &output), 0);
   EXPECT_NE(output.find("valid effects"), std::string::npos) << output;
   {
