@@ -54,6 +54,8 @@ struct Excitation {
   std::vector<std::pair<double, double>> pump_steps;   // (time, lpm)
   std::vector<SyntheticInterval> pump_stops;           // FT2 at 0 (SyntheticLogOptions)
   std::vector<SyntheticInterval> choke_closures;       // choke at 0 deg
+  // SyntheticHeave::kIrregularSea: the tones (empty: the lab series).
+  std::vector<double> sea_hz, sea_amplitude, sea_phase_rad;
 };
 
 // Raised-cosine taper: 0 at distance 0 from a join, 1 from `width` on, smooth in between.
@@ -63,7 +65,37 @@ double Taper(double distance, double width) {
   return 0.5 * (1.0 - std::cos(std::numbers::pi * distance / width));
 }
 
+// The irregular sea's tones (SyntheticHeave::kIrregularSea), from their own stream.
+void DrawSea(std::uint64_t seed, Excitation* e) {
+  Random random(seed ^ 0x5eaULL * 0x2545f4914f6cdd1dULL);
+  constexpr double kLowHz = 0.04, kHighHz = 0.5;
+  const double peak_hz = random.Uniform(0.08, 0.15);
+  const double bin_hz = (kHighHz - kLowHz) / kSeaTones;
+  double variance = 0.0;
+  for (int k = 0; k < kSeaTones; ++k) {
+    const double f = kLowHz + bin_hz * (k + random.Uniform(0.0, 1.0));
+    const double spectrum = std::pow(f, -5.0) * std::exp(-1.25 * std::pow(peak_hz / f, 4.0));
+    e->sea_hz.push_back(f);
+    e->sea_amplitude.push_back(std::sqrt(2.0 * spectrum * bin_hz));
+    e->sea_phase_rad.push_back(random.Uniform(0.0, 2.0 * std::numbers::pi));
+    variance += 0.5 * e->sea_amplitude.back() * e->sea_amplitude.back();
+  }
+  // The lab series' standard deviation at the same amplitude: about 0.5 piston_amp_m.
+  const double scale = 0.5 * e->piston_amp_m / std::sqrt(variance);
+  for (double& a : e->sea_amplitude) a *= scale;
+}
+
 double PistonAt(const Excitation& e, double duration, double t) {
+  if (!e.sea_hz.empty()) {
+    // The sea from rest: faded in over the first kPistonTaperS (the position and its velocity
+    // continuous), and out over the last.
+    double x = 0.0;
+    for (std::size_t k = 0; k < e.sea_hz.size(); ++k) {
+      x += e.sea_amplitude[k] *
+           std::sin(2.0 * std::numbers::pi * e.sea_hz[k] * t + e.sea_phase_rad[k]);
+    }
+    return Taper(t, kPistonTaperS) * Taper(duration - t, kPistonTaperS) * x;
+  }
   // First third: two sines; second third: a linear sweep; last third: the sines again, so the
   // scoring part of a diagnosis sees what the fitting part saw. Every part fades in and out over
   // kPistonTaperS, so the position and its velocity are continuous (a heave generator cannot
@@ -233,6 +265,7 @@ Result<CommandedRun> RunCommanded(const RigParams& truth, Excitation excitation,
     run = Simulate(truth, simulation, *signals, log.time_s);
     if (run.ok() || run.status().code() != Status::Code::kModelRange) break;
     excitation.piston_amp_m *= 0.6;
+    for (double& a : excitation.sea_amplitude) a *= 0.6;
   }
   if (!run.ok()) return run.status();
   return CommandedRun{{{Channel::kPistonPosition, std::move(position)},
@@ -330,6 +363,7 @@ Result<SyntheticLog> MakeSyntheticLog(const SyntheticLogOptions& options) {
   // runs where the thesis's model went below zero absolute pressure (11.5).
   const bool low_pressure = options.low_pressure.value_or(HidesColumnSeparation(options));
   Excitation excitation = DrawExcitation(low_pressure, options.duration_s, random);
+  if (options.heave == SyntheticHeave::kIrregularSea) DrawSea(options.seed, &excitation);
   excitation.pump_stops = options.pump_stops;
   excitation.choke_closures = options.choke_closures;
 

@@ -9,6 +9,7 @@
 // replayed on a grid whose time step is about a sample, and a jump would leave the grid's
 // fingerprint in the log (synthetic_log.cc). Noise: white, Gaussian, per channel kind, on the
 // inputs too (the model replays them as measured); the noise-free log comes with it.
+// Heave, on request: an irregular sea instead of the sines and the sweep (SyntheticHeave).
 // Regimes, on request: the back-pressure pump stopped for a while (FT2 ramps to 0 and back), the
 // choke closed for a while (to 0 deg, where only its leak passes, and back): a rig's log holds
 // such stops besides its step tests, and they change what the pipe does (no flow through the
@@ -41,6 +42,22 @@ struct SyntheticInterval {
   double duration_s = 0.0;
 };
 
+// The piston's motion.
+enum class SyntheticHeave {
+  // The lab's series: two sines at a full and a lower amplitude, a sweep, the sines again.
+  kLabSeries,
+  // A floating rig's heave in an irregular sea: a random-phase sum of kSeaTones tones over
+  // 0.04-0.5 Hz, their amplitudes from a Pierson-Moskowitz spectrum (S(f) ~ f^-5 exp(-1.25
+  // (f_p / f)^4), a_k = sqrt(2 S(f_k) df); Pierson & Moskowitz, J. Geophys. Res. 69(24), 1964)
+  // with the peak f_p drawn in 0.08-0.15 Hz (wave periods of 7-12 s), each tone's frequency
+  // jittered within its bin so the sum never repeats over the log. Its standard deviation is
+  // that of the lab series at the same amplitude (0.5 of piston_amp_m, drawn as there). Phases
+  // and frequencies come from a stream of their own: the same seed gives the same parameters,
+  // noise and choke and pump steps as the lab series.
+  kIrregularSea,
+};
+inline constexpr int kSeaTones = 24;
+
 struct SyntheticLogOptions {
   std::uint64_t seed = 1;
   double duration_s = 120.0;
@@ -64,6 +81,7 @@ struct SyntheticLogOptions {
   // excitation elsewhere.
   std::vector<SyntheticInterval> pump_stops;
   std::vector<SyntheticInterval> choke_closures;
+  SyntheticHeave heave = SyntheticHeave::kLabSeries;
   // Sensor noise. Unset (the default for callers in C++): the quiet sigmas below, drawn from the
   // excitation's random stream; the identification tests (fit_test, diagnose_test) were tuned on
   // these logs, so the default stays. Set: this spec through SensorNoiseApplier seeded with

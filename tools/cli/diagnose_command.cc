@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -408,6 +409,8 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
       "  mpdrig synth --effect sensor_lag --seed 7 --out lag.csv --truth-out lag_truth.csv\n"
       "  mpdrig synth --effect sensor_lag:time_constant_s=0.1 --effect unsteady_friction --out "
       "two.csv\n"
+      "A floating rig's heave in an irregular sea instead of the lab's sines and sweep:\n"
+      "  mpdrig synth --effect hose_compliance --heave sea --out sea.csv\n"
       "Regimes: the pump stopped and the choke closed over given intervals (a connection):\n"
       "  mpdrig synth --effect choke_inertia --pump-stop 50:20 --choke-close 52:16 --out stop.csv");
   synth_command->add_option("--effect", synth->effects,
@@ -438,6 +441,15 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
             "flow meters, the part independent of the reading", "m^3/s");
   add_noise("--piston-noise-m", &synth->piston_noise_m, "piston position", "m");
   add_noise("--choke-noise-deg", &synth->choke_noise_deg, "choke position", "deg");
+  synth_command
+      ->add_option("--heave", synth->options.heave,
+                   "the piston's motion: lab (two sines at two amplitudes, a sweep, the sines "
+                   "again) or sea (an irregular sea: 24 tones of a Pierson-Moskowitz spectrum "
+                   "peaking at 0.08-0.15 Hz, random phases, never periodic); default lab")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, SyntheticHeave>{{"lab", SyntheticHeave::kLabSeries},
+                                                {"sea", SyntheticHeave::kIrregularSea}},
+          CLI::ignore_case));
   synth_command->add_option("--pump-stop", synth->pump_stops,
                             "START:DURATION [s]: the back-pressure pump stopped (FT2 ramps to 0 "
                             "and back over 0.5 s), repeatable");

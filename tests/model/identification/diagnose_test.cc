@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <optional>
 #include <string>
 #include <tuple>
 
@@ -261,6 +262,45 @@ Diagnosis DiagnoseAtLabNoise(std::optional<std::string> effect, std::uint64_t se
   auto diagnosis = Diagnose(*log, RigParams(), diagnose);
   EXPECT_TRUE(diagnosis.ok()) << diagnosis.status().message();
   return diagnosis.ok() ? *diagnosis : Diagnosis{};
+}
+
+// A floating rig's heave in an irregular sea (SyntheticHeave::kIrregularSea: 24 tones of a
+// Pierson-Moskowitz spectrum, random phases, never periodic) instead of the lab's sines and sweep,
+// 40 s at 50 Hz at the lab's noise: a clear sensor lag named, and nothing on the same log without
+// it, with what is left at the noise floor on both (measured: 6.37 % against a floor of 6.41 %,
+// and 6.64 % against 6.52 %; `mpdrig synth --heave sea`).
+TEST(DiagnoseIrregularSea, NamesAClearEffectAndNothingWithoutIt) {
+  for (const std::optional<std::string>& effect :
+       {std::optional<std::string>("sensor_lag:time_constant_s=0.1"),
+        std::optional<std::string>()}) {
+    SCOPED_TRACE(effect.value_or("no hidden effect"));
+    SyntheticLogOptions options;
+    options.seed = 1;
+    options.duration_s = 40.0;
+    options.rate_hz = 50.0;
+    options.heave = SyntheticHeave::kIrregularSea;
+    options.sensor_noise = SensorNoise::Lab();
+    if (effect) options.hidden_effects = {*effect};
+    auto synthetic = MakeSyntheticLog(options);
+    ASSERT_TRUE(synthetic.ok()) << synthetic.status().message();
+    auto log = MeasuredLogFromRigLog(synthetic->log, "irregular sea");
+    ASSERT_TRUE(log.ok()) << log.status().message();
+    DiagnoseOptions diagnose;
+    diagnose.simulation.cells = kDiagnoseCells;
+    ASSERT_TRUE(PrepareLogReplay(&*log, RigParams(), diagnose.simulation, &diagnose.replay,
+                                 InputLevels::kAfterTheFit)
+                    .ok());
+    auto d = Diagnose(*log, RigParams(), diagnose);
+    ASSERT_TRUE(d.ok()) << d.status().message();
+    if (effect) {
+      ASSERT_EQ(d->selected.size(), 1u) << Ranking(*d);
+      EXPECT_EQ(d->selected.front().effect, "sensor_lag") << Ranking(*d);
+    } else {
+      EXPECT_TRUE(d->selected.empty()) << Ranking(*d);
+    }
+    ASSERT_TRUE(d->residual.has_value());
+    EXPECT_FALSE(d->residual->above_noise) << d->residual->Summary();
+  }
 }
 
 TEST(DiagnoseAtLabNoise, NoFalseAlarmAndClearEffectsNamedDownToTheEffectFreeError) {
