@@ -171,12 +171,14 @@ class Rig(_Rig):
         rig is lost and ``TimeoutError`` if no sample comes for ``timeout`` seconds. The client
         library's control loop (``ticks(every_sample=True)``) runs it.
         """
+        if max_samples is not None and max_samples <= 0:
+            return
         n = 0
         for tick in self.ticks(every_sample=True):
-            if max_samples is not None and n >= max_samples:
-                return
             yield tick.sensors
             n += 1
+            if max_samples is not None and n >= max_samples:
+                return  # before the next tick: a lockstep rig is not stepped once more
 
     def ticks(self, duration_s: Optional[float] = None, *, estimates: Optional[str] = None,
               every_sample: bool = False) -> Iterator[Tick]:

@@ -150,3 +150,28 @@ def test_a_stopped_rig_is_lost(serve):
         rig.step(1)
     assert rig.lost
     rig.close()
+
+
+def test_ticks_run_the_client_librarys_control_loop(serve):
+    """Rig.ticks() and Rig.stream() iterate the C++ control loop (clients/client/control_loop.h):
+    in lockstep one step per tick, each with the estimate of its own sample, ending after the
+    tick at the duration; stream() first hands out what a step of one's own brought, in order;
+    a rig that stops under the loop raises RigLost."""
+    service = serve(*RIG_ARGS)
+    with mpdrig.Rig("r1", domain=service.domain, timeout=20) as rig:
+        ticks = list(rig.ticks(0.5, estimates="paired"))
+        assert len(ticks) == 50 and abs(ticks[-1].sensors.time_s - 0.5) < 1e-9
+        assert all(t.estimate.sample_counter == t.sensors.sample_counter for t in ticks)
+        assert ticks[0].dt_s == 0.0 and all(abs(t.dt_s - 0.01) < 1e-9 for t in ticks[1:])
+        assert [t.index for t in ticks] == list(range(50))
+        assert all(t.estimate is None for t in rig.ticks(0.6))
+        rig.step(5)
+        counters = [s.sample_counter for s in rig.stream(max_samples=8)]
+        assert counters == list(range(counters[0], counters[0] + 8))
+        assert abs(rig.status().sim_time_s - 0.68) < 1e-9  # 5 steps, then 3 of the stream
+        with pytest.raises(ValueError):
+            next(rig.ticks(estimates="all"))
+        service.stop()
+        with pytest.raises(mpdrig.RigLost):
+            for _ in rig.ticks():
+                pass
