@@ -201,10 +201,11 @@ TEST_P(HelloControllerLockstep, HoldsTheBhpSwingFiveTimesBelowTheFixedChokes) {
 
 // The demo's heave (deploy/demo.sh), and a slower one at a higher flow whose 10 s learning window
 // is not a whole number of periods (0.12 Hz: one period of 8.3 s, after 16.7 s). There the set
-// point is learnt while the pipe still rings from the start (PT1's one-period means of the
-// uncontrolled rig: 3.91, 3.87, 3.91 barg over 10-17, 17-25, 25-33 s): the held mean came out
-// 0.050 bar below the fixed rig's, as bhp_controller's does (set point 3.8643 against 3.9166
-// barg, the same service and seed), so that case allows 0.08 bar. The swing is the point.
+// point is learnt while the rig has not settled: the fixed rig's own PT1 mean still drifts (3.8926
+// barg over 45-65 s, 3.9165 over 60-80 s; one-period means of 3.91, 3.87, 3.91 barg over 10-17,
+// 17-25, 25-33 s), and the held mean came out 0.026 bar below the fixed rig's over 45-65 s
+// (bhp_controller's the same: set point 3.8643 barg on that service and seed), so that case
+// allows 0.08 bar. The swing is the point.
 INSTANTIATE_TEST_SUITE_P(
     LabNoise, HelloControllerLockstep,
     ::testing::Values(Heave{"demo_0p2Hz", "0.2", "5", "31", "11", 0.02},
