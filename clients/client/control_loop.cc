@@ -57,6 +57,12 @@ int LoopResult::ExitCode() const {
 }
 
 ControlLoop::ControlLoop(Rig& rig, LoopOptions options) : rig_(rig), options_(std::move(options)) {
+  if (!(options_.duration_s >= 0.0 && options_.duration_s <= 1e9)) {
+    result_.failure = Failure::kError;
+    End(LoopEnd::kError,
+        "the loop's duration must be a rig time in seconds, >= 0 (0: no end), not " +
+            std::to_string(options_.duration_s));
+  }
   if (options_.interrupt) return;
   std::lock_guard<std::mutex> lock(g_signal_mutex);
   if (g_signal_depth++ == 0) g_signalled.store(false);

@@ -1,12 +1,11 @@
 // hello_controller: the smallest controller of a rig's bottom-hole pressure (BHP) against heave,
 // with the choke, on the observer's estimate BHP_est (no downhole sensor, as on a real well). The
 // client library's loop runs it (real time or lockstep, the lost-rig rule, Ctrl-C); this file
-// writes only the update: a PI on BHP_est plus the library's heave canceller.
-//
-// Why not a PI alone: the choke acts on the bottom through 1.06 s of pipe (l/c), 40-90 degrees of
-// phase at a 0.1-0.2 Hz heave. Measured at 0.1 Hz, lab noise (docs/service.md): PT1's periodic
-// swing 0.259 bar with the choke fixed, 0.263 bar under a PI. The canceller adapts a feed-forward
-// on the observer's heave phasor until the swing is gone (clients/client/heave_control.h).
+// writes only the update: a PI on BHP_est plus the library's heave canceller. Why not a PI alone:
+// the choke acts on the bottom through 1.06 s of pipe (l/c), 40-90 degrees of phase at a 0.1-0.2 Hz
+// heave. Measured at 0.1 Hz, lab noise (docs/service.md): PT1's periodic swing 0.259 bar with the
+// choke fixed, 0.263 bar under a PI. The canceller adapts a feed-forward on the observer's heave
+// phasor until the swing is gone (clients/client/heave_control.h).
 //   mpdrig serve --heave-amp-m 0.1 --heave-hz 0.2 --pump-lpm 5 --choke-deg 31 &
 //   hello_controller --rig rig-1 --duration 80     # watches 20 s, then holds the mean BHP
 #include <algorithm>
@@ -20,7 +19,7 @@
 using namespace mpdrig::client;
 
 int main(int argc, char** argv) {
-  CLI::App app("hello_controller - hold a rig's bottom-hole pressure against heave with the choke");
+  CLI::App app("hello_controller - hold a rig's BHP against heave: a PI + the heave canceller");
   RigOptions rig_options;
   LoopOptions loop;
   loop.estimates = LoopOptions::Estimates::kPaired;  // each tick with its sample's BHP_est

@@ -74,6 +74,14 @@ TEST(ControlLoop, EndsAtItsDurationAStopOrASignalAfterTheTickInProgress) {
   EXPECT_EQ(steady, 100);
   EXPECT_EQ(result.ExitCode(), 0);
 
+  // A duration that is no rig time: an error at once, never a crash or a run without end.
+  LoopOptions bad;
+  bad.duration_s = -1.0;
+  result = client::RunController(*rig, bad, [](const Tick&) { return Commands(); });
+  EXPECT_EQ(result.end, LoopEnd::kError);
+  EXPECT_EQ(result.ticks, 0u);
+  EXPECT_NE(result.message.find("duration"), std::string::npos) << result.message;
+
   // The update's stop: its tick is the last.
   options.duration_s = 0.0;
   result = client::RunController(
