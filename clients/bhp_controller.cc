@@ -5,7 +5,7 @@
 // and never links model/, so it runs unchanged against the virtual rig or the lab's rig behind
 // a bridge. Its loop is the library's (clients/client/control_loop.h: real time or lockstep, the
 // end of the run, Ctrl-C); this file holds the control law's options, its log, its summary and
-// the ownership check. clients/examples/hello_controller.cc is the same control in 60 lines.
+// the ownership check. clients/examples/hello_controller.cc is the same control in under 60 lines.
 //
 // Control law, choke reference u [deg] (opening the choke lowers the pressure):
 // clang-format off
