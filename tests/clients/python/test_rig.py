@@ -4,6 +4,9 @@ commands, ownership strength, and the errors a student meets first."""
 from __future__ import annotations
 
 import math
+import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -175,3 +178,29 @@ def test_ticks_run_the_client_librarys_control_loop(serve):
         with pytest.raises(mpdrig.RigLost):
             for _ in rig.ticks():
                 pass
+
+
+def test_ctrl_c_stops_the_loop_with_keyboard_interrupt(serve):
+    """Ctrl-C while rig.ticks() waits in the C++ loop (without the GIL): the loop checks for it
+    every 100 ms at most and Python gets its KeyboardInterrupt, as from any wait of the module."""
+    service = serve("--clock", "realtime", "--rate-hz", "100", "--rig", "rt",
+                    "--sensor-noise", "none")
+    script = ("import sys, mpdrig\n"
+              f"rig = mpdrig.Rig('rt', domain={service.domain}, timeout=20)\n"
+              "try:\n"
+              "    for tick in rig.ticks():\n"
+              "        if tick.index == 10: print('ticking', flush=True)\n"
+              "except KeyboardInterrupt:\n"
+              "    print('interrupted at', tick.sensors.time_s, flush=True)\n"
+              "    sys.exit(5)\n")
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "ticking"
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=20)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    assert child.returncode == 5, out
+    assert out.startswith("interrupted at"), out
