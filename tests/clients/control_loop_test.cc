@@ -191,8 +191,8 @@ TEST(ControlLoop, ALockstepRunIsTheSameTwice) {
 }
 
 // A real-time rig killed under the loop (SIGKILL: no goodbye): lost after its timeout, exit 3.
-// Stopped as asked (its --duration): the rig's clean end, exit 3 too for a controller, whose run
-// did not end as it asked.
+// Stopped as asked (its --duration, 4 s: time to connect on a loaded machine): the rig's clean
+// end, exit 3 too for a controller, whose run did not end as it asked.
 TEST(ControlLoop, ARigLostOrEndedUnderTheLoopEndsTheRun) {
   const int domain = testing::ClaimTestDomain();
   ASSERT_GT(domain, 0);
@@ -210,7 +210,7 @@ TEST(ControlLoop, ARigLostOrEndedUnderTheLoopEndsTheRun) {
 
   const int domain2 = testing::ClaimTestDomain();
   ASSERT_GT(domain2, 0);
-  auto ending = Serve(domain2, {"--clock", "realtime", "--rig", "r1", "--duration", "1"});
+  auto ending = Serve(domain2, {"--clock", "realtime", "--rig", "r1", "--duration", "4"});
   ASSERT_TRUE(ending->started()) << ending->error();
   auto rig2 = Connect(domain2, "r1", 5.0);
   ASSERT_NE(rig2, nullptr);
