@@ -104,8 +104,8 @@ TEST_P(BhpController, AttenuatesTheHeaveInducedBottomHolePressureOscillation) {
       std::stod(controlled["PT1_mean_barg"]));
   EXPECT_GT(a_fixed, 0.2) << "the heave must move the BHP by tenths of a bar";
   // Measured: 22.7x, 22.4x, 18.3x (25.4x, 23.0x, 20.8x over the last 20 s of 80 s; 20-27x over
-  // 40 s windows of 120 s, docs/service.md). A factor of 5
-  // leaves room for tuning changes, not for a controller that merely does no harm.
+  // 40 s windows of 120 s, docs/service.md). A factor of 5 leaves room for tuning changes, not
+  // for a controller that merely does no harm.
   EXPECT_GT(a_fixed / a_controlled, 5.0);
   // It holds the mean too: the set point learnt over whole periods after the settling, from the
   // choke as the rig had it (measured: within 0.0035, 0.0034 and 0.0034 bar; over 40 s windows
