@@ -3,7 +3,9 @@
 // mpdrig_estimate, mpdrig_choke_command, mpdrig_step_request) through the client library
 // (clients/client/rig_client.h: QoS, ownership, lockstep acknowledgements, the lost-rig rule)
 // and never links model/, so it runs unchanged against the virtual rig or the lab's rig behind
-// a bridge.
+// a bridge. Its loop is the library's (clients/client/control_loop.h: real time or lockstep, the
+// end of the run, Ctrl-C); this file holds the control law's options, its log, its summary and
+// the ownership check. clients/examples/hello_controller.cc is the same control in under 60 lines.
 //
 // Control law, choke reference u [deg] (opening the choke lowers the pressure):
 // clang-format off
@@ -14,20 +16,14 @@
 // clang-format on
 // PI feedback alone cannot reject a 0.1-0.2 Hz heave: the choke acts on the bottom through the
 // 900 m pipe, l/c = 1.06 s of transport delay plus the 0.1 s actuator lag, which is 40-90 degrees
-// of phase at the heave frequency, before the pipe's own resonance at c/4l = 0.24 Hz (thesis 9.3).
-// The feed-forward does that part. The observer (thesis 10) publishes the heave as a rotating
-// phasor: X = (X1, X2) of the disturbance model (10.2.8)-(10.2.11) with v_d = X2 and
-// x_d = -X1/omega, so
-//   z = v_d^ + j omega x_d^ = |z| exp(j (omega t + phi))       [m/s]
-// and the heave's effect on the bottom-hole pressure in steady state is Re{D z} for some complex
-// D [bar/(m/s)], while a choke motion Re{theta z} adds Re{G(j omega) theta z}. The feed-forward
-// gain theta is adapted until the oscillation at omega vanishes (adaptive feed-forward
-// cancellation, a gradient step on the demodulated error W = 2 e conj(z)/|z|^2 = D + G theta):
-//   theta' = -gamma W / G^,   G^ = -g exp(-j omega tau)
-// with a rough plant model G^: g the static choke gain [bar/deg] and tau the delay from the choke
-// to the bottom (l/c plus the actuator lag plus the pipe's phase). It converges while the phase
-// of G^ is within 90 degrees of the true G(j omega); the defaults are within about 20 degrees on
-// the lab rig at 0.1-0.2 Hz for 5-20 L/min of pump flow and a 30-45 degree choke.
+// of phase at the heave frequency, before the pipe's own resonance at c/4l = 0.24 Hz (thesis 9.3);
+// measured at 0.1 Hz and the lab's noise, PT1's periodic RMS is 0.259 bar with the choke fixed and
+// 0.263 bar under PI alone. The feed-forward Re{theta z} does that part: adaptive cancellation on
+// the observer's heave phasor z = v_d^ + j omega x_d^ (thesis 10, (10.2.8)-(10.2.11)),
+//   theta' = -gamma W / G^,   W = 2 e conj(z)/|z|^2,   G^ = -g exp(-j omega tau),
+// client::HeaveCanceller (clients/client/heave_control.h, with the derivation). Without a set
+// point it learns one with the choke left alone (client::SetpointLearner), and measures PT1's
+// periodic swing with client::HeaveFit.
 //
 //   bhp_controller --rig rig-1                # after 10 s, hold the mean BHP of the next 10 s
 //   bhp_controller --rig rig-1 --setpoint-barg 4 --use-estimate
@@ -41,12 +37,13 @@
 #include <fstream>
 #include <limits>
 #include <memory>
-#include <numbers>
 #include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "clients/client/control_loop.h"
+#include "clients/client/heave_control.h"
 #include "clients/client/rig_client.h"
 #include "clients/rig_watch.h"
 
@@ -57,6 +54,7 @@ namespace {
 constexpr int kExitNotOwner = 4;
 
 using Complex = std::complex<double>;
+// Ctrl-C while connecting (exit 1); during the run the library's loop handles it.
 std::atomic<bool> g_stop{false};
 void OnSignal(int) { g_stop = true; }
 
@@ -81,7 +79,12 @@ struct ControllerOptions {
 // The control law above; time and signals are arguments, the transport is elsewhere.
 class BhpController {
  public:
-  explicit BhpController(const ControllerOptions& options) : o_(options) {}
+  explicit BhpController(const ControllerOptions& options)
+      : o_(options),
+        learner_({.settle_s = options.settle_s, .learn_s = options.learn_s}),
+        canceller_({.adapt_per_s = options.adapt_per_s,
+                    .choke_gain_bar_per_deg = options.choke_gain_bar_per_deg,
+                    .delay_s = options.delay_s}) {}
 
   // One sample: the BHP [barg] at time t [s], the choke's measured position [deg], the heave
   // phasor z [m/s] and its frequency [Hz] (z = 0 or frequency <= 0: no feed-forward this
@@ -91,21 +94,17 @@ class BhpController {
     const double dt = last_t_s_ ? std::clamp(t_s - *last_t_s_, 0.0, 1.0) : 0.0;
     last_t_s_ = t_s;
     if (std::isnan(o_.setpoint_barg)) {
-      if (!Learn(t_s, bhp_barg, choke_deg, frequency_hz)) return std::nullopt;
+      // No set point given: watch with the choke held, then hold the mean BHP seen, from the
+      // mean opening seen.
+      if (!learner_.Add(t_s, bhp_barg, choke_deg, frequency_hz)) return std::nullopt;
+      o_.setpoint_barg = learner_.setpoint_barg();
+      integral_deg_ = learner_.choke_deg();
     }
     // A set point given: the integrator starts at the choke's first reading (its noise, 0.1 deg
     // at the lab, is what the integral action then corrects).
     if (std::isnan(integral_deg_)) integral_deg_ = choke_deg;
     const double e = bhp_barg - o_.setpoint_barg;
-    const bool heave_known = o_.feedforward && frequency_hz > 0.0 && std::abs(z) > 1e-4;
-    if (heave_known) {
-      const double omega = 2.0 * std::numbers::pi * frequency_hz;
-      const Complex plant =
-          -o_.choke_gain_bar_per_deg * std::exp(Complex(0.0, -omega * o_.delay_s));
-      const Complex demodulated = 2.0 * e * std::conj(z) / std::norm(z);
-      theta_ -= o_.adapt_per_s * dt * demodulated / plant;
-    }
-    const double feedforward = heave_known ? (theta_ * z).real() : 0.0;
+    const double feedforward = o_.feedforward ? canceller_.Update(e, z, frequency_hz, dt) : 0.0;
     const double wanted = integral_deg_ + o_.kp_deg_per_bar * e + feedforward;
     const double command = std::clamp(wanted, o_.choke_min_deg, o_.choke_max_deg);
     // Anti-windup: integrate unless clamped with the error pushing further into the limit.
@@ -116,52 +115,14 @@ class BhpController {
   }
 
   double setpoint_barg() const { return o_.setpoint_barg; }
-  Complex theta() const { return theta_; }
+  Complex theta() const { return canceller_.theta(); }
 
  private:
-  static constexpr double kSettlePeriods = 2.0;
-
-  // No set point given: watch with the choke held; true once the set point is the mean BHP seen.
-  // A mean over whole heave periods is where the bottom-hole pressure sits without the heave.
-  bool Learn(double t_s, double bhp_barg, double choke_deg, double frequency_hz) {
-    if (!first_t_s_) first_t_s_ = t_s;
-    // The observer's disturbance model converges over about two heave periods (measured at the
-    // lab's noise, 0.1 Hz: BHP_est - PT1 averaged -0.027 bar over 10-20 s, -0.002 over 20-30 s).
-    const double settle_s =
-        std::max(o_.settle_s, frequency_hz > 0.0 ? kSettlePeriods / frequency_hz : 0.0);
-    if (!learn_start_s_ && t_s - *first_t_s_ < settle_s) return false;
-    if (!learn_start_s_) {
-      // The window: learn_s rounded to whole periods of the heave's frequency as it is now (the
-      // estimate's: a commanded sine, or the tracker's lock after the settling), at least one;
-      // the frequency unknown: learn_s as it is.
-      learn_start_s_ = t_s;
-      learn_end_s_ =
-          t_s + (frequency_hz > 0.0
-                     ? std::max(1.0, std::round(o_.learn_s * frequency_hz)) / frequency_hz
-                     : o_.learn_s);
-    }
-    // The samples in [start, end): the sample at the end belongs to the next period.
-    if (t_s >= *learn_end_s_ - 1e-9) {
-      const double n = static_cast<double>(learn_n_);
-      o_.setpoint_barg = learn_n_ > 0 ? learn_sum_ / n : bhp_barg;
-      integral_deg_ = learn_n_ > 0 ? learn_choke_sum_ / n : choke_deg;
-      return true;
-    }
-    learn_sum_ += bhp_barg;
-    learn_choke_sum_ += choke_deg;
-    ++learn_n_;
-    return false;
-  }
-
   ControllerOptions o_;
+  mpdrig::client::SetpointLearner learner_;
+  mpdrig::client::HeaveCanceller canceller_;
   double integral_deg_ = std::numeric_limits<double>::quiet_NaN();
-  Complex theta_{0.0, 0.0};
   std::optional<double> last_t_s_;
-  std::optional<double> first_t_s_;
-  std::optional<double> learn_start_s_;
-  std::optional<double> learn_end_s_;
-  double learn_sum_ = 0.0, learn_choke_sum_ = 0.0;
-  long learn_n_ = 0;
 };
 
 struct Args {
@@ -203,8 +164,7 @@ Reading FromSample(const mpdrig::client::Sensors& s,
     // The heave phasor z = v_d + j omega x_d (top of this file).
     r.has_estimate = true;
     r.bhp_est_barg = e->BHP_est_barg;
-    r.z = Complex(e->piston_velocity_est_mps,
-                  2.0 * std::numbers::pi * e->disturbance_frequency_hz * e->piston_position_est_m);
+    r.z = mpdrig::client::HeaveCanceller::Phasor(*e);
     r.frequency_hz = e->disturbance_frequency_hz;
   }
   return r;
@@ -228,89 +188,6 @@ struct Swing {
     sum += pt1;
     ++n;
   }
-};
-
-// PT1's periodic part at the heave frequency f over the measured window, robust to the sensors'
-// noise (half the peak-to-peak swing is not: the lab's 0.024 bar of PT1 noise alone reads about
-// 0.07 bar). Least squares of y(t) = c0 + sum_k (a_k cos(k w t) + b_k sin(k w t)), k = 1..3,
-// w = 2 pi f, over the window's samples: the fundamental's amplitude |a_1 + j b_1| and the RMS
-// of the fitted periodic part, sqrt(sum_k (a_k^2 + b_k^2) / 2), which counts the harmonics the
-// choke's and the friction's quadratic terms make. White noise of sigma adds about
-// sigma sqrt(2 / N) to an amplitude (0.0008 bar over 20 s at 100 Hz at the lab's noise).
-class HeaveFit {
- public:
-  static constexpr int kHarmonics = 3;
-  static constexpr int kTerms = 1 + 2 * kHarmonics;
-
-  void Add(double t_s, double y, double frequency_hz) {
-    if (!(frequency_hz > 0.0)) return;
-    if (frequency_hz_ == 0.0) frequency_hz_ = frequency_hz;  // the window's first: a sine's own
-    double basis[kTerms];
-    Basis(t_s, basis);
-    for (int i = 0; i < kTerms; ++i) {
-      for (int j = 0; j < kTerms; ++j) normal_[i][j] += basis[i] * basis[j];
-      right_[i] += basis[i] * y;
-    }
-    ++n_;
-  }
-
-  // {fundamental amplitude, RMS of the periodic part}; NaN without a frequency or enough samples.
-  std::pair<double, double> Amplitudes() const {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    if (n_ < 4 * kTerms) return {nan, nan};
-    double coefficients[kTerms];
-    if (!Solve(coefficients)) return {nan, nan};
-    double power = 0.0;
-    for (int k = 1; k <= kHarmonics; ++k) {
-      power += coefficients[2 * k - 1] * coefficients[2 * k - 1] +
-               coefficients[2 * k] * coefficients[2 * k];
-    }
-    return {std::hypot(coefficients[1], coefficients[2]), std::sqrt(power / 2.0)};
-  }
-
- private:
-  void Basis(double t_s, double* basis) const {
-    const double omega = 2.0 * std::numbers::pi * frequency_hz_;
-    basis[0] = 1.0;
-    for (int k = 1; k <= kHarmonics; ++k) {
-      basis[2 * k - 1] = std::cos(k * omega * t_s);
-      basis[2 * k] = std::sin(k * omega * t_s);
-    }
-  }
-
-  // Gaussian elimination with partial pivoting on the normal equations (7 x 7, well conditioned
-  // over a window of a period or more); false if singular (a window much shorter than a period).
-  // Written out so that an example a student copies needs nothing but the client library.
-  bool Solve(double* x) const {
-    double a[kTerms][kTerms + 1];
-    for (int i = 0; i < kTerms; ++i) {
-      for (int j = 0; j < kTerms; ++j) a[i][j] = normal_[i][j];
-      a[i][kTerms] = right_[i];
-    }
-    for (int col = 0; col < kTerms; ++col) {
-      int pivot = col;
-      for (int row = col + 1; row < kTerms; ++row) {
-        if (std::abs(a[row][col]) > std::abs(a[pivot][col])) pivot = row;
-      }
-      if (!(std::abs(a[pivot][col]) > 1e-9 * static_cast<double>(n_))) return false;
-      std::swap(a[col], a[pivot]);
-      for (int row = col + 1; row < kTerms; ++row) {
-        const double factor = a[row][col] / a[col][col];
-        for (int j = col; j <= kTerms; ++j) a[row][j] -= factor * a[col][j];
-      }
-    }
-    for (int i = kTerms - 1; i >= 0; --i) {
-      double sum = a[i][kTerms];
-      for (int j = i + 1; j < kTerms; ++j) sum -= a[i][j] * x[j];
-      x[i] = sum / a[i][i];
-    }
-    return true;
-  }
-
-  double frequency_hz_ = 0.0;
-  double normal_[kTerms][kTerms] = {};
-  double right_[kTerms] = {};
-  long n_ = 0;
 };
 
 // The rig through the client library, as this controller's options ask.
@@ -351,65 +228,41 @@ class Session {
     return mpdrig::Status::Ok();
   }
 
-  // Runs until --duration, Ctrl-C or a failure: the exit code.
+  // Runs until --duration, Ctrl-C or a failure (the library's loop: real time, the newest sample
+  // and the newest estimate; lockstep, one step per sample, and the estimate of that very
+  // sample when the control uses it): the exit code.
   int Loop() {
-    while (!g_stop && !finished_) {
-      auto reading = args_.lockstep ? ReadLockstep() : ReadRealTime();
-      if (!reading.ok()) return Stopped(reading.status());
-      if (!*reading) continue;  // real time, --use-estimate: no estimate yet
-      const mpdrig::Status acted = Act(**reading);
-      if (!acted.ok()) return Stopped(acted);
-    }
-    PrintSummary();
-    return Ended();
+    using Estimates = mpdrig::client::LoopOptions::Estimates;
+    mpdrig::client::LoopOptions options;
+    options.duration_s = args_.duration_s;
+    // Real time, --use-estimate: no control before the first estimate.
+    const bool paired =
+        args_.lockstep ? args_.use_estimate || args_.control.feedforward : args_.use_estimate;
+    options.estimates = paired ? Estimates::kPaired : Estimates::kNewest;
+    const mpdrig::client::LoopResult result =
+        mpdrig::client::RunController(rig_, options, [&](const mpdrig::client::Tick& tick) {
+          return Act(FromSample(tick.sensors, tick.estimate));
+        });
+    return Finish(result);
   }
 
  private:
-  // Real time: the newest sample (a real-time controller does not catch up) and the newest
-  // estimate (published right after its sample). Nothing when the control needs an estimate
-  // and none has come yet.
-  mpdrig::Result<std::optional<Reading>> ReadRealTime() {
-    auto sample = rig_.Latest(/*fresh=*/true, Interrupt());
-    if (!sample.ok()) return sample.status();
-    const Reading r = FromSample(*sample, rig_.NewestEstimate());
-    if (args_.use_estimate && !r.has_estimate) return std::optional<Reading>();
-    return std::optional<Reading>(r);
-  }
-
-  // Lockstep: one step (the library sees the last choke command acknowledged first), its sample
-  // and, when the control uses it, the estimate for that very sample.
-  mpdrig::Result<std::optional<Reading>> ReadLockstep() {
-    auto sample = rig_.Step(1, Interrupt());
-    if (!sample.ok()) return sample.status();
-    (void)rig_.TakeArrived();  // the step's one sample is `sample`; keep no backlog
-    if (!next_counter_) next_counter_ = sample->sample_counter;  // the rig may have run before
-    if (sample->sample_counter != *next_counter_) {
-      return mpdrig::Status::Error("lockstep sample " + std::to_string(sample->sample_counter) +
-                                   " instead of " + std::to_string(*next_counter_) +
-                                   " (another client steps this rig?)");
-    }
-    ++*next_counter_;
-    const bool wants_estimate = args_.use_estimate || args_.control.feedforward;
-    std::optional<mpdrig::client::Estimate> estimate = rig_.NewestEstimate();
-    if (wants_estimate) {
-      auto paired = rig_.EstimateFor(sample->sample_counter, Interrupt());
-      if (!paired.ok()) return paired.status();
-      estimate = *paired;
-    }
-    return std::optional<Reading>(FromSample(*sample, estimate));
-  }
-
-  // Handles one complete reading: control, command, log, measurement.
-  mpdrig::Status Act(const Reading& r) {
+  // Handles one complete reading: control, log, measurement; the choke command to send.
+  mpdrig::client::Commands Act(const Reading& r) {
     if (!controller_) controller_.emplace(args_.control);
+    // Whether the commands sent so far are the ones in force (the status reflects them).
+    if (commands_ > 0) {
+      const mpdrig::Status owner = CheckOwnership(r.time_s);
+      if (!owner.ok()) return mpdrig::client::Commands::Failed(owner);
+    }
     const double bhp = args_.use_estimate ? r.bhp_est_barg : r.pt1_barg;
     const std::optional<double> command =
         controller_->Update(r.time_s, bhp, r.choke_deg, r.has_estimate ? r.z : Complex{},
                             r.has_estimate ? r.frequency_hz : 0.0);
+    mpdrig::client::Commands commands;
     if (command && !args_.open_loop) {
-      MPDRIG_RETURN_IF_ERROR(rig_.Choke(*command, Interrupt()));
+      commands.choke_deg = *command;
       ++commands_;
-      MPDRIG_RETURN_IF_ERROR(CheckOwnership(r.time_s));
     }
     if (log_.is_open()) {
       log_ << r.time_s << ',' << r.pt1_barg << ','
@@ -421,8 +274,7 @@ class Session {
       swing_.Add(r.pt1_barg, r.choke_deg);
       heave_.Add(r.time_s, r.pt1_barg, r.has_estimate ? r.frequency_hz : 0.0);
     }
-    if (args_.duration_s > 0.0 && r.time_s >= args_.duration_s - 1e-9) finished_ = true;
-    return mpdrig::Status::Ok();
+    return commands;
   }
 
   // Whether this controller's choke commands are the ones in force, once a second of rig time:
@@ -472,23 +324,30 @@ class Session {
     return kExitNotOwner;
   }
 
-  // A failed call: a lost rig (clients/rig_watch.h) says why and exits with kExitRigLost,
-  // without the summary (the run did not end as asked); Ctrl-C ends the run normally.
-  int Stopped(const mpdrig::Status& why) {
-    using mpdrig::client::Failure;
-    if (rig_.last_failure() == Failure::kInterrupted) {
-      PrintSummary();
-      return Ended();
+  // How the run ended: as asked (--duration, Ctrl-C) prints the summary; a lost rig
+  // (clients/rig_watch.h) says why and exits with kExitRigLost, without the summary (the run did
+  // not end as asked).
+  int Finish(const mpdrig::client::LoopResult& result) {
+    using mpdrig::client::LoopEnd;
+    switch (result.end) {
+      case LoopEnd::kDuration:
+      case LoopEnd::kSignal:
+      case LoopEnd::kStopped:
+        PrintSummary();
+        return Ended();
+      case LoopEnd::kRigEnded:
+      case LoopEnd::kRigLost:
+        std::fprintf(stderr, "bhp_controller: rig %s lost: %s; stopping after %ld choke commands\n",
+                     args_.rig_id.c_str(), result.message.c_str(), commands_);
+        return result.ExitCode();
+      case LoopEnd::kRunning:
+      case LoopEnd::kError:
+        break;
     }
-    if (rig_.lost()) {
-      std::fprintf(stderr, "bhp_controller: rig %s lost: %s; stopping after %ld choke commands\n",
-                   args_.rig_id.c_str(), rig_.lost()->c_str(), commands_);
-      return mpdrig::clients::kExitRigLost;
+    if (result.failure == mpdrig::client::Failure::kTimeout && !controller_) {
+      return Fail("no sensor samples from " + args_.rig_id + ": " + result.message);
     }
-    if (rig_.last_failure() == Failure::kTimeout && !controller_) {
-      return Fail("no sensor samples from " + args_.rig_id + ": " + why.message());
-    }
-    return Fail(why.message());
+    return Fail(result.message);
   }
 
   void PrintSummary() const {
@@ -510,18 +369,12 @@ class Session {
         fundamental, periodic_rms, swing_.choke_lo, swing_.choke_hi);
   }
 
-  static mpdrig::client::Rig::Interrupt Interrupt() {
-    return [] { return g_stop.load(); };
-  }
-
   const Args& args_;
   mpdrig::client::Rig& rig_;
   std::ofstream log_;
   std::optional<BhpController> controller_;
   Swing swing_;
-  HeaveFit heave_;
-  std::optional<std::uint64_t> next_counter_;  // lockstep: the sample the next step brings
-  bool finished_ = false;
+  mpdrig::client::HeaveFit heave_;  // PT1 at the heave frequency: its periodic part
   long commands_ = 0;
   double next_ownership_check_s_ = -1e300;
   std::optional<double> other_seen_s_;       // another owner at the last check, since then

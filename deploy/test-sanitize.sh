@@ -29,8 +29,9 @@ export MPDRIG_DIAGNOSE_CASES="${MPDRIG_DIAGNOSE_CASES:-1}"
 # 120 s diagnose at lab noise, the fit at lab noise and the characteristics scheme's frequency
 # responses run in the Release suite only (their paths are those of the cases that do run here,
 # and of the fit and characteristics tests that are not excluded). MPDRIG_SANITIZE_ALL=1 runs
-# them all.
-repeats='HiddenResonanceEffects|DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|SelectionOf|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise'
+# them all. hello_controller's real-time run (65 s of wall time) and its second lockstep heave
+# take the paths of its lockstep demo run and its signal test, which do run here.
+repeats='HiddenResonanceEffects|DiagnoseHiddenEffect|DiagnoseWithoutHiddenEffect|DiagnoseAtLabNoise|SelectionOf|SimulatedVsAnalytic|ShadowAtLabNoise|WaveSpeedAndFrictionAtLabNoise|HelloControllerRealTime|HelloControllerLockstep.*/high_flow'
 # (ctest's names of parameterised tests go on with "  # GetParam() = ...": no $ anchors)
 one_each='HiddenResonanceEffects.*/tubes_and_gas_sweep |DiagnoseHiddenEffect.*/sensor_lag_lab |DiagnoseWithoutHiddenEffect.*/lab |SelectionOfTwoHiddenEffects.*/sensor_lag_gas_entrainment_seed1 |SimulatedVsAnalytic.*MethodOfLinesOpen |ShadowAtLabNoise.*/fast_0p8Hz '
 if [[ "${MPDRIG_SANITIZE_ALL:-0}" == 1 ]]; then repeats='^$'; fi

@@ -1,5 +1,6 @@
-// The Python binding of clients/client/rig_client.h: module mpdrig._mpdrig, wrapped by the
-// package mpdrig (clients/python/mpdrig/__init__.py), which adds stream() and the context manager.
+// The Python binding of clients/client/rig_client.h and its control loop (control_loop.h):
+// module mpdrig._mpdrig, wrapped by the package mpdrig (clients/python/mpdrig/__init__.py), which
+// adds stream() and ticks() on the loop, and the context manager.
 // Failures become exceptions here and only here: TimeoutError, mpdrig.RigLost (the rig restarted,
 // left or went silent) and mpdrig.RigError for the rest. Blocking calls release the GIL and
 // check for Ctrl-C every 100 ms.
@@ -13,10 +14,13 @@
 #include <deque>
 #include <string>
 
+#include "clients/client/control_loop.h"
 #include "clients/client/rig_client.h"
 
 namespace py = pybind11;
+using mpdrig::client::ControlLoop;
 using mpdrig::client::Failure;
+using mpdrig::client::LoopEnd;
 using mpdrig::client::Rig;
 
 namespace {
@@ -373,6 +377,67 @@ void BindRig(py::module_& m) {
   BindRigCommands(rig);
 }
 
+// mpdrig._Loop: the client library's control loop (clients/client/control_loop.h) over a _Rig;
+// mpdrig.Rig.stream() and ticks() iterate it. next() returns the next Tick, None when the run is
+// over as asked (its duration), and raises for the rest: KeyboardInterrupt (Ctrl-C, checked
+// every 100 ms while it waits), RigLost (lost, or the service ended its run), TimeoutError (no
+// sample within the timeout) and RigError.
+void BindLoop(py::module_& m) {
+  using mpdrig::client::LoopOptions;
+  using mpdrig::client::Tick;
+  py::class_<Tick>(m, "Tick",
+                   "One tick of a control loop: the sample, the observer's estimate that goes "
+                   "with it (or None) and the rig time since the last tick.")
+      .def_readonly("sensors", &Tick::sensors)
+      .def_readonly("estimate", &Tick::estimate)
+      .def_readonly("dt_s", &Tick::dt_s, "rig time since the last tick [s] (0 at the first)")
+      .def_readonly("index", &Tick::index, "0, 1, 2, ... ticks of this loop")
+      .def("__repr__", [](const Tick& t) {
+        return "<mpdrig.Tick #" + std::to_string(t.index) +
+               " t=" + std::to_string(t.sensors.time_s) +
+               " s estimate=" + (t.estimate ? "yes" : "no") + ">";
+      });
+  py::class_<ControlLoop>(m, "_Loop")
+      .def(py::init([](Rig& rig, double duration_s, bool every_sample, int estimates) {
+             if (estimates < 0 || estimates > 2) {
+               Raise(&rig, Failure::kError, "estimates must be 0 (none), 1 (newest), 2 (paired)");
+             }
+             if (!(duration_s >= 0.0)) {
+               Raise(&rig, Failure::kError, "the duration must be a number of seconds >= 0");
+             }
+             LoopOptions options;
+             options.duration_s = duration_s;
+             options.samples =
+                 every_sample ? LoopOptions::Samples::kEvery : LoopOptions::Samples::kNewest;
+             options.estimates = static_cast<LoopOptions::Estimates>(estimates);
+             options.interrupt = Interrupted;  // Ctrl-C, not the loop's own signal handlers
+             return std::make_unique<ControlLoop>(rig, std::move(options));
+           }),
+           py::arg("rig"), py::arg("duration_s") = 0.0, py::arg("every_sample") = false,
+           py::arg("estimates") = 0, py::keep_alive<1, 2>())
+      .def("next", [](ControlLoop& loop, Rig& rig) -> std::optional<Tick> {
+        std::optional<Tick> tick;
+        {
+          py::gil_scoped_release release;
+          tick = loop.Next();
+        }
+        if (tick) return tick;
+        const auto& result = loop.result();
+        switch (result.end) {
+          case LoopEnd::kSignal:
+            Raise(&rig, Failure::kInterrupted, "");
+          case LoopEnd::kRigEnded:
+          case LoopEnd::kRigLost:
+            Raise(&rig, Failure::kLost, "rig " + rig.options().rig_id + " lost: " + result.message);
+          case LoopEnd::kError:
+            Raise(&rig, result.failure == Failure::kTimeout ? Failure::kTimeout : Failure::kError,
+                  result.message);
+          default:
+            return std::nullopt;
+        }
+      });
+}
+
 }  // namespace
 
 PYBIND11_MODULE(_mpdrig, m) {
@@ -383,4 +448,5 @@ PYBIND11_MODULE(_mpdrig, m) {
   BindProfile(m);
   BindStatus(m);
   BindRig(m);
+  BindLoop(m);
 }

@@ -64,9 +64,9 @@ TEST_P(BhpController, AttenuatesTheHeaveInducedBottomHolePressureOscillation) {
   ASSERT_GT(claimed, 0);
   const std::string domain = std::to_string(claimed);
   // 0.1 m heave, about 0.38 bar of BHP amplitude with the choke fixed at 5 L/min and 31 deg
-  // (3.4 bar on it), 0.97 bar at 20 L/min and 45 deg. 80 s: 20-30 s to settle and learn the set
+  // (3.4 bar on it), 0.97 bar at 20 L/min and 45 deg. 65 s: 20-30 s to settle and learn the set
   // point (two heave periods, then whole periods of at least 10 s), about 20 s to converge, the
-  // last 20 s measured.
+  // last 20 s measured (80 s before: the same bounds held, at 15% more CPU).
   testing::ChildProcess serve(
       {MPDRIG_EXE,      "serve",      "--clock",      "lockstep",   "--rate-hz",  "100",
        "--heave-amp-m", "0.1",        "--heave-hz",   x.heave_hz,   "--pump-lpm", x.pump_lpm,
@@ -81,7 +81,7 @@ TEST_P(BhpController, AttenuatesTheHeaveInducedBottomHolePressureOscillation) {
   auto controller = [&](const std::string& rig, const std::string& mode) {
     return std::make_unique<testing::ChildProcess>(
         std::vector<std::string>{BHP_CONTROLLER_EXE, "--lockstep", "--domain", domain, "--duration",
-                                 "80", "--measure-last", "20", "--timeout", "30", "--rig", rig,
+                                 "65", "--measure-last", "20", "--timeout", "30", "--rig", rig,
                                  mode},
         captured);
   };
@@ -103,11 +103,12 @@ TEST_P(BhpController, AttenuatesTheHeaveInducedBottomHolePressureOscillation) {
       a_fixed, a_controlled, a_fixed / a_controlled, std::stod(fixed["PT1_mean_barg"]),
       std::stod(controlled["PT1_mean_barg"]));
   EXPECT_GT(a_fixed, 0.2) << "the heave must move the BHP by tenths of a bar";
-  // Measured: 25.4x, 23.0x, 20.8x (and 20-27x over 40 s windows, docs/service.md). A factor of 5
-  // leaves room for tuning changes, not for a controller that merely does no harm.
+  // Measured: 22.7x, 22.4x, 18.3x (25.4x, 23.0x, 20.8x over the last 20 s of 80 s; 20-27x over
+  // 40 s windows of 120 s, docs/service.md). A factor of 5 leaves room for tuning changes, not
+  // for a controller that merely does no harm.
   EXPECT_GT(a_fixed / a_controlled, 5.0);
   // It holds the mean too: the set point learnt over whole periods after the settling, from the
-  // choke as the rig had it (measured: within 0.0005, 0.0006 and 0.0028 bar; over 40 s windows
+  // choke as the rig had it (measured: within 0.0035, 0.0034 and 0.0034 bar; over 40 s windows
   // 0.002-0.007 bar, docs/service.md). Both means are over the same 20 s; the noise moves each by
   // 0.0005 bar (0.024 bar / sqrt(2000)).
   EXPECT_NEAR(std::stod(controlled["PT1_mean_barg"]), std::stod(fixed["PT1_mean_barg"]), 0.02);

@@ -181,8 +181,9 @@ def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop:
         setpoint_barg: Optional[float] = None) -> Swing:
     """Controls (or, open loop, only watches) `rig` until rig time `duration_s`.
 
-    Returns PT1's swing over the last `measure_last_s` seconds. In lockstep every sample is
-    controlled before the next step; in real time the controller acts on each sample it gets.
+    Returns PT1's swing over the last `measure_last_s` seconds. The loop is the client library's
+    (``rig.ticks``, as the C++ controllers run it): in lockstep every sample is controlled before
+    the next step; in real time the controller acts on the newest sample.
     """
     gains = gains or Gains()
     wants_estimate = not open_loop and (use_estimate or gains.feedforward)
@@ -207,11 +208,13 @@ def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop:
                     swing.add(s.time_s, s.PT1_barg)
                 if s.time_s >= duration_s - 1e-9:
                     return swing
-    for s in rig.stream():
+    # The client library's control loop: in lockstep one step per tick, with the estimate of
+    # that very sample; in real time the newest sample and the newest estimate.
+    for tick in rig.ticks(duration_s, estimates="paired" if wants_estimate else None):
+        s = tick.sensors
         z, frequency_hz, bhp = 0j, 0.0, s.PT1_barg
         if wants_estimate:
-            # Lockstep: the estimate of this very sample; real time: the newest one.
-            est = rig.estimate(s.sample_counter if rig.lockstep else None)
+            est = tick.estimate
             z = complex(est.piston_velocity_est_mps,
                         2.0 * math.pi * est.disturbance_frequency_hz * est.piston_position_est_m)
             frequency_hz = est.disturbance_frequency_hz
@@ -225,8 +228,6 @@ def run(rig: mpdrig.Rig, duration_s: float, measure_last_s: float, *, open_loop:
             if swing.n == 0:  # the window's first frequency, as the C++ controller takes it
                 swing.frequency_hz = frequency_hz if wants_estimate else heave_frequency_hz()
             swing.add(s.time_s, s.PT1_barg)
-        if s.time_s >= duration_s - 1e-9:
-            break
     return swing
 
 

@@ -25,12 +25,13 @@ from __future__ import annotations
 import os
 from typing import Iterator, Optional, Union
 
-from ._mpdrig import Estimate, Profile, RigError, RigLost, Sensors, Status
-from ._mpdrig import _Rig
+from ._mpdrig import Estimate, Profile, RigError, RigLost, Sensors, Status, Tick
+from ._mpdrig import _Loop, _Rig
 
-__all__ = ["Rig", "Sensors", "Estimate", "Profile", "Status", "RigError", "RigLost"]
+__all__ = ["Rig", "Sensors", "Estimate", "Tick", "Profile", "Status", "RigError", "RigLost"]
 
 _PISTON_HOLD, _PISTON_POSITION, _PISTON_SINE, _PISTON_SWEEP = 0, 1, 2, 3
+_ESTIMATES = {None: 0, "newest": 1, "paired": 2}
 
 
 class Rig(_Rig):
@@ -52,6 +53,7 @@ class Rig(_Rig):
       service runs ``mpdrig serve --security OUT/service``.
 
     Reading: ``sensors()`` (newest sample), ``next_sensors()`` (next in order), ``stream()``,
+    ``ticks()`` (a controller's loop: a sample and its estimate per tick, lockstep stepped),
     ``estimate()`` (the observer's BHP estimate and heave), ``profile()`` (pressure along the
     pipe, numpy arrays), ``status()``, ``rejections()``.
     Commands: ``choke(deg)``, ``pump(lpm)``, ``outlet(barg)``, ``piston_hold()``,
@@ -166,23 +168,46 @@ class Rig(_Rig):
         On a lockstep rig each iteration first steps the rig once, so the same loop
         ``for s in rig.stream(): rig.choke(...)`` controls a real-time and a lockstep rig (in
         lockstep each command applies from the next sample on). Ends with ``RigLost`` if the
-        rig is lost and ``TimeoutError`` if no sample comes for ``timeout`` seconds.
+        rig is lost and ``TimeoutError`` if no sample comes for ``timeout`` seconds. The client
+        library's control loop (``ticks(every_sample=True)``) runs it.
         """
+        if max_samples is not None and max_samples <= 0:
+            return
         n = 0
-        while max_samples is None or n < max_samples:
-            if self.lockstep:
-                arrived = self.pending()
-                if not arrived:
-                    self.step(1)
-                    arrived = self.pending()
-                for s in arrived:
-                    if max_samples is not None and n >= max_samples:
-                        return
-                    yield s
-                    n += 1
-            else:
-                yield self.next_sensors()
-                n += 1
+        for tick in self.ticks(every_sample=True):
+            yield tick.sensors
+            n += 1
+            if max_samples is not None and n >= max_samples:
+                return  # before the next tick: a lockstep rig is not stepped once more
+
+    def ticks(self, duration_s: Optional[float] = None, *, estimates: Optional[str] = None,
+              every_sample: bool = False) -> Iterator[Tick]:
+        """The ticks of a controller: the client library's control loop, as the C++ clients run it.
+
+        Each tick is ``tick.sensors``, ``tick.estimate`` and ``tick.dt_s`` (rig time since the
+        last tick). On a lockstep rig each tick steps the rig once, after the commands of the
+        last tick are acknowledged (deterministic); on a real-time rig each tick is the newest
+        sample (a controller that falls behind skips samples), or every sample in order with
+        ``every_sample=True`` (what ``stream()`` does).
+
+        - ``duration_s``: the rig time at which the run ends, after the tick at or past it
+          (None: no end).
+        - ``estimates``: None; ``"newest"``, the newest estimate that has arrived (or None);
+          ``"paired"``, the estimate of the tick's own sample in lockstep (waiting for it), the
+          newest in real time, ticks before the first skipped.
+
+        Ends with ``RigLost`` if the rig is lost (or its service ends its run), ``TimeoutError``
+        if no sample comes for ``timeout`` seconds, ``KeyboardInterrupt`` at Ctrl-C.
+        """
+        if estimates not in _ESTIMATES:
+            raise ValueError("estimates must be None, 'newest' or 'paired'")
+        loop = _Loop(self, 0.0 if duration_s is None else float(duration_s),
+                     every_sample=every_sample, estimates=_ESTIMATES[estimates])
+        while True:
+            tick = loop.next(self)
+            if tick is None:
+                return
+            yield tick
 
     def __enter__(self) -> "Rig":
         return self

@@ -4,6 +4,9 @@ commands, ownership strength, and the errors a student meets first."""
 from __future__ import annotations
 
 import math
+import signal
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -150,3 +153,54 @@ def test_a_stopped_rig_is_lost(serve):
         rig.step(1)
     assert rig.lost
     rig.close()
+
+
+def test_ticks_run_the_client_librarys_control_loop(serve):
+    """Rig.ticks() and Rig.stream() iterate the C++ control loop (clients/client/control_loop.h):
+    in lockstep one step per tick, each with the estimate of its own sample, ending after the
+    tick at the duration; stream() first hands out what a step of one's own brought, in order;
+    a rig that stops under the loop raises RigLost."""
+    service = serve(*RIG_ARGS)
+    with mpdrig.Rig("r1", domain=service.domain, timeout=20) as rig:
+        ticks = list(rig.ticks(0.5, estimates="paired"))
+        assert len(ticks) == 50 and abs(ticks[-1].sensors.time_s - 0.5) < 1e-9
+        assert all(t.estimate.sample_counter == t.sensors.sample_counter for t in ticks)
+        assert ticks[0].dt_s == 0.0 and all(abs(t.dt_s - 0.01) < 1e-9 for t in ticks[1:])
+        assert [t.index for t in ticks] == list(range(50))
+        assert all(t.estimate is None for t in rig.ticks(0.6))
+        rig.step(5)
+        counters = [s.sample_counter for s in rig.stream(max_samples=8)]
+        assert counters == list(range(counters[0], counters[0] + 8))
+        assert abs(rig.status().sim_time_s - 0.68) < 1e-9  # 5 steps, then 3 of the stream
+        with pytest.raises(ValueError):
+            next(rig.ticks(estimates="all"))
+        service.stop()
+        with pytest.raises(mpdrig.RigLost):
+            for _ in rig.ticks():
+                pass
+
+
+def test_ctrl_c_stops_the_loop_with_keyboard_interrupt(serve):
+    """Ctrl-C while rig.ticks() waits in the C++ loop (without the GIL): the loop checks for it
+    every 100 ms at most and Python gets its KeyboardInterrupt, as from any wait of the module."""
+    service = serve("--clock", "realtime", "--rate-hz", "100", "--rig", "rt",
+                    "--sensor-noise", "none")
+    script = ("import sys, mpdrig\n"
+              f"rig = mpdrig.Rig('rt', domain={service.domain}, timeout=20)\n"
+              "try:\n"
+              "    for tick in rig.ticks():\n"
+              "        if tick.index == 10: print('ticking', flush=True)\n"
+              "except KeyboardInterrupt:\n"
+              "    print('interrupted at', tick.sensors.time_s, flush=True)\n"
+              "    sys.exit(5)\n")
+    child = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout.readline().strip() == "ticking"
+        child.send_signal(signal.SIGINT)
+        out, _ = child.communicate(timeout=20)
+    finally:
+        if child.poll() is None:
+            child.kill()
+            child.wait()
+    assert child.returncode == 5, out
+    assert out.startswith("interrupted at"), out
