@@ -26,8 +26,8 @@ export MPDRIG_DIAGNOSE_CASES="${MPDRIG_DIAGNOSE_CASES:-1}"
 # the Release suite checks, and it is most of this suite's time under the sanitizers (3-5x slower
 # each). Here one case of most runs, so the sanitizers still see their paths: diagnose with and
 # without a hidden effect, its forward selection of two, the simulated frequency response, the
-# shadow. The frequency response's case is the characteristics scheme's (about 5 s in Release
-# against the method of lines' 65 s): the SUNDIALS scheme's own path (mol_solver.cc, ARKODE) runs
+# shadow. The frequency response's case is the characteristics scheme's (2 s of CPU here against
+# the method of lines' 14.5 s): the SUNDIALS scheme's own path (mol_solver.cc, ARKODE) runs
 # here in pipe_solver_test's and rig_validation_test's method-of-lines cases, which are not
 # excluded. The 120 s diagnose at lab noise, the fit at lab noise and the method of lines'
 # frequency responses run in the Release suite only (their paths are those of the cases that do
