@@ -48,24 +48,27 @@ namespace {
 // The interior nodes of the default path, as two loops over arrays without a branch per node
 // (structure of arrays; they vectorise at the machine's width).
 //
-// At an interior node i the two characteristic equations, closed by the trapezoidal rule with
-// the new point's friction linearised as lambda_i u_P (lambda = f1 + f2 |u_old|, see the
-// header), read
-//   alpha_P = A - h lambda_i u_P / 2,  beta_P = B - h lambda_i u_P / 2,  u_P = (A + B) / (2 + h
-//   lambda_i), A = alpha_foot - h f(u_(i-1)) / 2 - h g sin(gamma),  B = beta_foot - h f(u_(i+1)) /
-//   2 - h g sin(gamma),
-// so alpha_P = A - K_i (A + B), beta_P = B - K_i (A + B), K_i = (h lambda_i / 2) / (2 + h
-// lambda_i). A depends only on node i-1 (the foot of the alpha characteristic lies next to it, the
-// friction there uses its velocity: |u|/c ~ 3e-4 of a cell away, far below the scheme's O(dt^2)
-// error) and B only on node i+1: the first loop computes, per node j, what leaves it along each
-// characteristic (leaving_alpha_j = A of node j+1, leaving_beta_j = B of node j-1) and K_j; the
-// second combines them per node. The foot (quasi-linear model): theta = u_j / c, the alpha foot
-// at x_(j) - theta dx, linear between the nodes on the upwind side,
+// At an interior node i the two characteristic equations (6.1.16)-(6.1.17), closed by the
+// trapezoidal rule with the new point's friction linearised as lambda_i u_P (lambda_i = f1 +
+// f2 |u_i| at the old level, see the header), read
+//   alpha_P = A - h lambda_i u_P / 2,    beta_P = B - h lambda_i u_P / 2,
+//   u_P = (A + B) / (2 + h lambda_i),
+//   A = alpha_foot - h f(u_(i-1)) / 2 - h g sin(gamma),
+//   B = beta_foot - h f(u_(i+1)) / 2 - h g sin(gamma),
+// so alpha_P = A - K_i (A + B) and beta_P = B - K_i (A + B), K_i = (h lambda_i / 2) /
+// (2 + h lambda_i). A depends only on node i-1 (the foot of the alpha characteristic lies next
+// to it, and the friction there uses its velocity: |u|/c ~ 3e-4 of a cell away, far below the
+// scheme's O(dt^2) error) and B only on node i+1: the first loop computes, per node j, what
+// leaves it along each characteristic (leaving_alpha_j = A of node j+1, leaving_beta_j = B of
+// node j-1) and K_j; the second combines them per node. The foot (quasi-linear model):
+// theta = u_j / c, the foot at x_j - theta dx, linear between the nodes on the upwind side,
 //   alpha_foot = alpha_j - theta (theta >= 0 ? alpha_j - alpha_(j-1) : alpha_(j+1) - alpha_j),
-// a select rather than a branch; beta's mirrored (at x_j - theta dx too: beta moves at u - c).
-// Next to an end the foot is clamped to the end node (its outer difference is taken as 0). The
-// linear model's feet are the nodes themselves (theta = 0).
-// Per node and step: 22 arithmetic operations in the first loop (one division), 4 in the second.
+// a select rather than a branch; beta's likewise (its foot is at x_j - theta dx too). Next to an
+// end the foot is clamped to the end node (its outer difference is taken as 0). The linear
+// model's feet are the nodes themselves (theta = 0).
+// Per node and step: 23 vector operations in the first loop (one division), 6 in the second
+// (with the range check's difference and minimum); bench/simulator_benchmark.cc counts them for
+// the arithmetic limit.
 struct InteriorArgs {
   const double* __restrict alpha;
   const double* __restrict beta;
