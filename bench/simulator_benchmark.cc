@@ -9,13 +9,18 @@
 //   BM_Simulate20s/<model>/<scheme>/N:<cells>  one Simulate() call over [0, 20] s, wall time.
 //     counters: steps (pipe solver steps), cells, rtf (real-time factor = 20 s / wall time).
 //   BM_Step/<model>/<scheme>/N:<cells>          RigSimulator::Step alone, no sampling.
-//     counters: cells, ns_per_cell_step (wall time / (steps * cells)).
+//     counters: cells, ns_per_cell_step (wall time / (steps * cells)) and, for the
+//     characteristics scheme, limit_ns_per_cell_step: the arithmetic limit of its cell loops on
+//     this CPU (ArithmeticLimitNsPerCellStep). N = 10000 too, where the per-step work at the ends
+//     (the choke's Newton iteration, the inputs) is spread over more cells.
 //
 // Frequency-response accuracy is reported by bench/accuracy_report.cc (bench/README.md).
 #include <benchmark/benchmark.h>
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
+#include <fstream>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -110,6 +115,40 @@ void BM_Simulate20s(benchmark::State& state, Case c) {
   state.counters["rtf"] = kSimulatedTimeS * static_cast<double>(state.iterations()) / wall_s;
 }
 
+// The characteristics scheme's interior (model/pipe/characteristics_solver.cc, StepInterior) per
+// node and step: 23 vector operations in the first loop (u, |u|, lambda, the friction and
+// gravity term (2), theta, four differences, the upwind compare, two selects, two shifts, the two
+// leaving values (4), K (3, one of them a division)) and 6 in the second (A + B, K (A + B), the
+// two new invariants, their difference and the running minimum of the range check): 29. The
+// limit: 29 / (lanes x 2 vector instructions a cycle) cycles per cell-step, lanes the width the
+// solver runs at on this CPU (8 doubles with AVX-512, 4 with AVX2, 2 without), 2 the FMA/multiply
+// pipes of current x86 cores, at the clock /proc/cpuinfo states ("cpu MHz"; under a hypervisor
+// the TSC's, which a boost may exceed). 0 if the clock is unknown.
+constexpr double kOperationsPerCellStep = 29.0;
+
+double ArithmeticLimitNsPerCellStep() {
+  double lanes = 2.0;
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+  if (__builtin_cpu_supports("x86-64-v4")) {
+    lanes = 8.0;
+  } else if (__builtin_cpu_supports("x86-64-v3")) {
+    lanes = 4.0;
+  }
+#endif
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  double mhz = 0.0;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("cpu MHz", 0) == 0) {
+      mhz = std::atof(line.substr(line.find(':') + 1).c_str());
+      break;
+    }
+  }
+  if (!(mhz > 0.0)) return 0.0;
+  const double cycles = kOperationsPerCellStep / (lanes * 2.0);
+  return cycles / (mhz * 1e-3);
+}
+
 void BM_Step(benchmark::State& state, Case c) {
   const RigParams params;
   auto created = RigSimulator::Create(params, OptionsFor(c), HeldInputs());
@@ -138,6 +177,9 @@ void BM_Step(benchmark::State& state, Case c) {
   state.counters["cells"] = c.cells;
   state.counters["ns_per_cell_step"] =
       1e9 * wall_s / (static_cast<double>(state.iterations()) * c.cells);
+  if (c.scheme == PipeScheme::kCharacteristics) {
+    state.counters["limit_ns_per_cell_step"] = ArithmeticLimitNsPerCellStep();
+  }
 }
 
 void RegisterAll() {
@@ -162,6 +204,11 @@ void RegisterAll() {
         step->Unit(benchmark::kMicrosecond)->UseRealTime()->MinTime(0.2);
       }
     }
+    const Case wide{model, PipeScheme::kCharacteristics, 10000};
+    benchmark::RegisterBenchmark(("BM_Step/" + CaseName(wide)).c_str(), BM_Step, wide)
+        ->Unit(benchmark::kMicrosecond)
+        ->UseRealTime()
+        ->MinTime(0.2);
   }
 }
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 namespace mpdrig {
 
@@ -10,7 +12,10 @@ CharacteristicsSolver::CharacteristicsSolver(const PipeConfig& config, double p_
       dt_s_(config.dx_m() / config.wave_speed_mps),
       alpha_next_(config.cells + 1, 0.0),
       beta_next_(config.cells + 1, 0.0),
-      velocity_(config.cells + 1, 0.0) {}
+      velocity_(config.cells + 1, 0.0),
+      leaving_alpha_(config.cells + 1, 0.0),
+      leaving_beta_(config.cells + 1, 0.0),
+      friction_share_(config.cells + 1, 0.0) {}
 
 CharacteristicsSolver::Foot CharacteristicsSolver::AlphaFoot(int i) const {
   // Linear model: the foot is node i - 1. Quasi-linear: it is shifted by u dt = (u/c) dx.
@@ -40,88 +45,156 @@ CharacteristicsSolver::Foot CharacteristicsSolver::BetaFoot(int i) const {
 
 namespace {
 
-// One interior node: the two characteristic equations closed by the trapezoidal rule with the
-// new point's friction linearised as lambda u_P (see the header). Straight-line code, so the
-// loops below vectorise.
-struct NodeUpdate {
-  double h, gs, f1, f2;
-  inline void operator()(double alpha_foot, double u_alpha_foot, double beta_foot,
-                         double u_beta_foot, double u_old, double* __restrict alpha_new,
-                         double* __restrict beta_new) const {
-    const double f_a = f1 * u_alpha_foot + f2 * u_alpha_foot * std::fabs(u_alpha_foot);
-    const double f_b = f1 * u_beta_foot + f2 * u_beta_foot * std::fabs(u_beta_foot);
-    const double lambda = f1 + f2 * std::fabs(u_old);
-    const double u_p =
-        (alpha_foot + beta_foot - 0.5 * h * (f_a + f_b) - 2.0 * h * gs) / (2.0 + h * lambda);
-    *alpha_new = alpha_foot - 0.5 * h * (f_a + lambda * u_p) - h * gs;
-    *beta_new = beta_foot - 0.5 * h * (f_b + lambda * u_p) - h * gs;
-  }
+// The interior nodes of the default path, as two loops over arrays without a branch per node
+// (structure of arrays; they vectorise at the machine's width).
+//
+// At an interior node i the two characteristic equations (6.1.16)-(6.1.17), closed by the
+// trapezoidal rule with the new point's friction linearised as lambda_i u_P (lambda_i = f1 +
+// f2 |u_i| at the old level, see the header), read
+//   alpha_P = A - h lambda_i u_P / 2,    beta_P = B - h lambda_i u_P / 2,
+//   u_P = (A + B) / (2 + h lambda_i),
+//   A = alpha_foot - h f(u_(i-1)) / 2 - h g sin(gamma),
+//   B = beta_foot - h f(u_(i+1)) / 2 - h g sin(gamma),
+// so alpha_P = A - K_i (A + B) and beta_P = B - K_i (A + B), K_i = (h lambda_i / 2) /
+// (2 + h lambda_i). A depends only on node i-1 (the foot of the alpha characteristic lies next
+// to it, and the friction there uses its velocity: |u|/c ~ 3e-4 of a cell away, far below the
+// scheme's O(dt^2) error) and B only on node i+1: the first loop computes, per node j, what
+// leaves it along each characteristic (leaving_alpha_j = A of node j+1, leaving_beta_j = B of
+// node j-1) and K_j; the second combines them per node. The foot (quasi-linear model):
+// theta = u_j / c, the foot at x_j - theta dx, linear between the nodes on the upwind side,
+//   alpha_foot = alpha_j - theta (theta >= 0 ? alpha_j - alpha_(j-1) : alpha_(j+1) - alpha_j),
+// a select rather than a branch; beta's likewise (its foot is at x_j - theta dx too). Next to an
+// end the foot is clamped to the end node (its outer difference is taken as 0). The linear
+// model's feet are the nodes themselves (theta = 0).
+// Per node and step: 23 vector operations in the first loop (one division), 6 in the second
+// (with the range check's difference and minimum); bench/simulator_benchmark.cc counts them for
+// the arithmetic limit.
+struct InteriorArgs {
+  const double* __restrict alpha;
+  const double* __restrict beta;
+  double* __restrict leaving_alpha;
+  double* __restrict leaving_beta;
+  double* __restrict friction_share;
+  double* __restrict alpha_next;
+  double* __restrict beta_next;
+  int n;
+  double h, h_gs, f1, f2, inv_c;
 };
+
+template <bool kQuasiLinear>
+inline __attribute__((always_inline)) double InteriorLoops(const InteriorArgs& k) {
+  // Everything in locals: the stores below cannot then alias the parameters, and both loops
+  // vectorise.
+  const int n = k.n;
+  const double h = k.h, half_h = 0.5 * k.h, h_gs = k.h_gs, f1 = k.f1, f2 = k.f2, inv_c = k.inv_c;
+  const double* __restrict a = k.alpha;
+  const double* __restrict b = k.beta;
+  double* __restrict leaving_a = k.leaving_alpha;
+  double* __restrict leaving_b = k.leaving_beta;
+  double* __restrict share = k.friction_share;
+  const auto leaving = [&](int j, double da_left, double da_right, double db_left, double db_right)
+      __attribute__((always_inline)) {
+    const double u = 0.5 * (a[j] + b[j]);
+    const double lambda = f1 + f2 * std::fabs(u);
+    const double g = half_h * (u * lambda) + h_gs;  // h f(u) / 2 + h g sin(gamma)
+    double shift_a = 0.0, shift_b = 0.0;
+    if constexpr (kQuasiLinear) {
+      const double theta = u * inv_c;
+      const bool up = theta >= 0.0;
+      shift_a = theta * (up ? da_left : da_right);
+      shift_b = theta * (up ? db_left : db_right);
+    }
+    leaving_a[j] = a[j] - shift_a - g;
+    leaving_b[j] = b[j] - shift_b - g;
+    share[j] = half_h * lambda / (2.0 + h * lambda);
+  };
+  for (int j = 1; j < n; ++j) {
+    leaving(j, a[j] - a[j - 1], a[j + 1] - a[j], b[j] - b[j - 1], b[j + 1] - b[j]);
+  }
+  // The end nodes: only what leaves them inwards, the foot clamped at the end.
+  leaving(0, 0.0, a[1] - a[0], 0.0, b[1] - b[0]);
+  leaving(n, a[n] - a[n - 1], 0.0, b[n] - b[n - 1], 0.0);
+  // The new level, and its smallest alpha - beta (the range check, PipeSolver::CheckRange): a
+  // running minimum of eight lanes in a vector of the compiler's (GCC and Clang), because a
+  // scalar floating-point minimum is not reassociated into one by the vectoriser.
+  double* __restrict a_next = k.alpha_next;
+  double* __restrict b_next = k.beta_next;
+  const auto update = [&](int i) __attribute__((always_inline)) {
+    const double big_a = leaving_a[i - 1];
+    const double big_b = leaving_b[i + 1];
+    const double m = share[i] * (big_a + big_b);
+    a_next[i] = big_a - m;
+    b_next[i] = big_b - m;
+    return a_next[i] - b_next[i];
+  };
+  using Lanes = double __attribute__((vector_size(8 * sizeof(double))));
+  Lanes smallest_lanes;
+  for (int l = 0; l < 8; ++l) smallest_lanes[l] = std::numeric_limits<double>::infinity();
+  int i = 1;
+  for (; i + 8 <= n; i += 8) {
+    Lanes big_a, big_b, share_i;
+    std::memcpy(&big_a, leaving_a + i - 1, sizeof(Lanes));
+    std::memcpy(&big_b, leaving_b + i + 1, sizeof(Lanes));
+    std::memcpy(&share_i, share + i, sizeof(Lanes));
+    const Lanes m = share_i * (big_a + big_b);
+    const Lanes new_a = big_a - m;
+    const Lanes new_b = big_b - m;
+    std::memcpy(a_next + i, &new_a, sizeof(Lanes));
+    std::memcpy(b_next + i, &new_b, sizeof(Lanes));
+    const Lanes difference = new_a - new_b;
+    smallest_lanes = difference < smallest_lanes ? difference : smallest_lanes;
+  }
+  double smallest = std::numeric_limits<double>::infinity();
+  for (; i < n; ++i) smallest = std::min(smallest, update(i));
+  for (int l = 0; l < 8; ++l) smallest = std::min(smallest, smallest_lanes[l]);
+  return smallest;
+}
+
+// Built for AVX-512 (8 doubles a vector), AVX2 (4) and baseline x86-64 (2); the first the CPU
+// has is chosen once: one portable binary.
+double InteriorBaseline(const InteriorArgs& k, bool quasi_linear) {
+  return quasi_linear ? InteriorLoops<true>(k) : InteriorLoops<false>(k);
+}
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target("arch=x86-64-v3"))) double InteriorAvx2(const InteriorArgs& k,
+                                                              bool quasi_linear) {
+  return quasi_linear ? InteriorLoops<true>(k) : InteriorLoops<false>(k);
+}
+__attribute__((target("arch=x86-64-v4,prefer-vector-width=512"))) double InteriorAvx512(
+    const InteriorArgs& k, bool quasi_linear) {
+  return quasi_linear ? InteriorLoops<true>(k) : InteriorLoops<false>(k);
+}
+#endif
+
+using InteriorFunction = double (*)(const InteriorArgs&, bool);
+
+InteriorFunction ChooseInterior() {
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("x86-64-v4")) return InteriorAvx512;
+  if (__builtin_cpu_supports("x86-64-v3")) return InteriorAvx2;
+#endif
+  return InteriorBaseline;
+}
 
 }  // namespace
 
-// The two interior loops are most of the run time. They are built twice, for AVX2 (4 doubles a
-// vector) and for baseline x86-64 (2), and the loader picks what the CPU has: one portable binary.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define MPDRIG_HOT_LOOP __attribute__((target_clones("avx2", "default")))
-#else
-#define MPDRIG_HOT_LOOP
-#endif
-
-MPDRIG_HOT_LOOP void CharacteristicsSolver::StepInteriorLinear() {
-  // The feet are the neighbouring nodes.
-  const int n = config_.cells;
-  const NodeUpdate update{dt_s_, config_.gravity_slope_mps2, config_.friction_f1_per_s,
-                          config_.friction_f2_per_m};
-  const double* __restrict a = alpha_.data();
-  const double* __restrict b = beta_.data();
-  double* __restrict a_next = alpha_next_.data();
-  double* __restrict b_next = beta_next_.data();
-  for (int i = 1; i < n; ++i) {
-    update(a[i - 1], 0.5 * (a[i - 1] + b[i - 1]), b[i + 1], 0.5 * (a[i + 1] + b[i + 1]),
-           0.5 * (a[i] + b[i]), &a_next[i], &b_next[i]);
-  }
-}
-
-MPDRIG_HOT_LOOP void CharacteristicsSolver::StepInteriorQuasiLinear() {
-  const int n = config_.cells;
-  const NodeUpdate update{dt_s_, config_.gravity_slope_mps2, config_.friction_f1_per_s,
-                          config_.friction_f2_per_m};
-  const double inv_c = 1.0 / config_.wave_speed_mps;
-  const double* __restrict a = alpha_.data();
-  const double* __restrict b = beta_.data();
-  double* __restrict a_next = alpha_next_.data();
-  double* __restrict b_next = beta_next_.data();
-  auto at_boundary = [&](int i) {
-    const Foot fa = AlphaFoot(i);
-    const Foot fb = BetaFoot(i);
-    update(fa.invariant, fa.velocity, fb.invariant, fb.velocity, 0.5 * (a[i] + b[i]), &a_next[i],
-           &b_next[i]);
-  };
-  // Nodes next to the boundaries may need a clamped foot: the general functions handle them.
-  at_boundary(1);
-  if (n - 1 > 1) at_boundary(n - 1);
-  // Interior: the interpolation of AlphaFoot/BetaFoot without branches, so it vectorises. The
-  // far neighbour's weight is max(theta, 0) = (theta + |theta|)/2 on one side and
-  // max(-theta, 0) = (|theta| - theta)/2 on the other, theta = u/c. The friction at the foot
-  // uses the neighbouring node's velocity: the foot is |u|/c ~ 3e-4 of a cell from that node, so
-  // f(u) differs by f'(u) du 3e-4, far below the scheme's O(dt^2) error, and it saves two
-  // interpolations per node (a fifth of the run time).
-  double* __restrict u = velocity_.data();
-  for (int i = 0; i <= n; ++i) u[i] = 0.5 * (a[i] + b[i]);
-  for (int i = 2; i <= n - 2; ++i) {
-    const double theta_a = u[i - 1] * inv_c;
-    const double wa_left = 0.5 * (theta_a + std::fabs(theta_a));
-    const double wa_right = 0.5 * (std::fabs(theta_a) - theta_a);
-    const double wa = 1.0 - std::fabs(theta_a);
-    const double alpha_a = wa * a[i - 1] + wa_left * a[i - 2] + wa_right * a[i];
-    const double theta_b = u[i + 1] * inv_c;
-    const double wb_near = 0.5 * (theta_b + std::fabs(theta_b));
-    const double wb_far = 0.5 * (std::fabs(theta_b) - theta_b);
-    const double wb = 1.0 - std::fabs(theta_b);
-    const double beta_b = wb * b[i + 1] + wb_near * b[i] + wb_far * b[i + 2];
-    update(alpha_a, u[i - 1], beta_b, u[i + 1], u[i], &a_next[i], &b_next[i]);
-  }
+double CharacteristicsSolver::StepInterior() {
+  static const InteriorFunction interior = ChooseInterior();
+  const InteriorArgs args{alpha_.data(),
+                          beta_.data(),
+                          leaving_alpha_.data(),
+                          leaving_beta_.data(),
+                          friction_share_.data(),
+                          alpha_next_.data(),
+                          beta_next_.data(),
+                          config_.cells,
+                          dt_s_,
+                          dt_s_ * config_.gravity_slope_mps2,
+                          config_.friction_f1_per_s,
+                          config_.friction_f2_per_m,
+                          1.0 / config_.wave_speed_mps};
+  return interior(args, config_.model == PipeModel::kQuasiLinear);
 }
 
 namespace {
@@ -162,15 +235,14 @@ Status CharacteristicsSolver::Step(const PipeStepInputs& inputs, RangeViolation*
   if (general_) return StepGeneral(inputs, violation);
   // Extra momentum sources from the state before the step (pipe_extension.h); none by default.
   const bool has_sources = EvaluateMomentumSources();
-  if (config_.model == PipeModel::kLinear) {
-    StepInteriorLinear();
-  } else {
-    StepInteriorQuasiLinear();
+  double interior_smallest = StepInterior();
+  if (has_sources) {
+    AddSourcesToInterior();
+    interior_smallest = std::numeric_limits<double>::quiet_NaN();  // changed: CheckRange's own
   }
-  if (has_sources) AddSourcesToInterior();
   StepInletNode(inputs, has_sources);
   StepOutletNode(inputs, has_sources);
-  return AdvanceToNewLevel(violation);
+  return AdvanceToNewLevel(violation, interior_smallest);
 }
 
 // S = a + b u at a boundary node whose new velocity is u.
@@ -179,7 +251,7 @@ double CharacteristicsSolver::SourceAt(bool has_sources, int i, double u) const 
 }
 
 // The node update without S gave u_P0 with 2 u_P0 D = alpha_A + beta_B - ..., D = 2 + h lambda
-// (NodeUpdate). With S = a + b u_P in both characteristic equations:
+// (StepInterior). With S = a + b u_P in both characteristic equations:
 //   u_P = (D u_P0 - 2 h a) / (D + 2 h b),
 //   alpha_P = alpha_P0 - h lambda (u_P - u_P0)/2 - h (a + b u_P), beta_P likewise,
 // which keeps alpha_P + beta_P = 2 u_P.
@@ -241,14 +313,21 @@ void CharacteristicsSolver::StepOutletNode(const PipeStepInputs& inputs, bool ha
 }
 
 // Both paths end alike: the new level becomes the state, checked for NaN and for the model's
-// range.
-Status CharacteristicsSolver::AdvanceToNewLevel(RangeViolation* violation) {
+// range (with the interior nodes' smallest alpha - beta when the step already knows it).
+Status CharacteristicsSolver::AdvanceToNewLevel(RangeViolation* violation,
+                                                double interior_smallest_difference) {
   alpha_.swap(alpha_next_);
   beta_.swap(beta_next_);
   if (!std::isfinite(alpha_.back()) || !std::isfinite(beta_.front())) {
     return Status::Error("pipe state is no longer finite (check the inputs for NaN)");
   }
-  CheckRange(violation);
+  if (std::isnan(interior_smallest_difference)) {
+    CheckRange(violation);
+  } else {
+    const int n = config_.cells;
+    CheckRange(violation, std::min({interior_smallest_difference, alpha_[0] - beta_[0],
+                                    alpha_[n] - beta_[n]}));
+  }
   return Status::Ok();
 }
 
@@ -365,6 +444,11 @@ void CharacteristicsSolver::OnExtensionsChanged() {
                         &beta_left_, &beta_right_, &u_left_, &u_right_}) {
     scratch->assign(nodes, 0.0);
   }
+  const std::size_t mixture_nodes = mixture_ != nullptr ? nodes : 0;
+  log_pressure_.assign(mixture_nodes, 0.0);
+  for (auto* known : {&known_alpha_, &known_beta_, &known_pressure_, &known_log_pressure_}) {
+    known->assign(mixture_nodes, std::numeric_limits<double>::quiet_NaN());  // nothing known
+  }
   cavity_volume_.assign(vapour_pressure_pa_ > 0.0 ? nodes : 0, 0.0);
   velocity_jump_.assign(cavity_volume_.size(), 0.0);
 }
@@ -428,10 +512,20 @@ Status CharacteristicsSolver::StepGeneral(const PipeStepInputs& inputs, RangeVio
 void CharacteristicsSolver::LoadGeneralOldLevel(const GeneralStep& step) {
   const int n = config_.cells;
   for (int i = 0; i <= n; ++i) {
-    const double p = law_.Pressure(alpha_[i], beta_[i]);
     const double u = 0.5 * (alpha_[i] + beta_[i]);
     double c = 0.0;
-    const double w = step.fn.WAndWaveSpeed(p, &c);
+    double p, w;
+    if (mixture_ == nullptr) {
+      p = law_.Pressure(alpha_[i], beta_[i]);
+      w = step.fn.WAndWaveSpeed(p, &c);
+    } else {
+      // The mixture's W at ln p: known from the step that made this state (RememberPressure),
+      // else from the state.
+      const bool known = alpha_[i] == known_alpha_[i] && beta_[i] == known_beta_[i];
+      p = known ? known_pressure_[i] : law_.Pressure(alpha_[i], beta_[i]);
+      log_pressure_[i] = known ? known_log_pressure_[i] : std::log(std::max(p, 1e-300));
+      w = mixture_->WAndWaveSpeedAtLog(p, log_pressure_[i], &c);
+    }
     pressure_[i] = p;
     velocity_[i] = u;
     w_[i] = w;
@@ -506,7 +600,7 @@ bool CharacteristicsSolver::SettleCavity(const GeneralStep& step, int i, double 
 }
 
 // Interior nodes: the trapezoidal rule along both characteristics with the new point's friction
-// linearised, as NodeUpdate, and the momentum sources semi-implicit.
+// linearised, as StepInterior, and the momentum sources semi-implicit.
 void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
   const int n = config_.cells;
   const double h = dt_s_;
@@ -523,7 +617,12 @@ void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
     const double sb = step.SourceImplicit(i);
     double u_p = (a_foot + b_foot - 0.5 * h * (fa + fb) - 2.0 * h * gs - 2.0 * h * sa) /
                  (2.0 + h * lambda + 2.0 * h * sb);
-    double p_p = step.fn.Pressure(0.5 * (a_foot - b_foot) - 0.25 * h * (fa - fb), pressure_[i]);
+    const double w_p = 0.5 * (a_foot - b_foot) - 0.25 * h * (fa - fb);
+    double log_p = 0.0;
+    double p_p = mixture_ != nullptr ? mixture_->PressureAndLog(w_p, log_pressure_[i], &log_p)
+                                     : step.fn.Pressure(w_p, pressure_[i]);
+    const double p_liquid = p_p;
+
     if (step.cavitation) {
       double jump = 0.0;
       if (InCavity(step, i, p_p)) {
@@ -539,9 +638,22 @@ void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
       }
       velocity_jump_[i] = jump;
     }
-    alpha_next_[i] = law_.Alpha(p_p, u_p);
-    beta_next_[i] = law_.Beta(p_p, u_p);
+
+    const double term = law_.PressureTerm(p_p);  // law_.Alpha and law_.Beta, one logarithm
+    alpha_next_[i] = term + u_p;
+    beta_next_[i] = -term + u_p;
+    if (mixture_ != nullptr) RememberPressure(i, p_p, p_p == p_liquid ? log_p : std::log(p_p));
   }
+}
+
+// The new level's pressure at node i and its logarithm, for the next step's LoadGeneralOldLevel
+// (what the mixture law needs is ln p: it saves an exp and a log per node and step). Keyed by
+// alpha and beta: a state set otherwise is recomputed.
+void CharacteristicsSolver::RememberPressure(int i, double pressure_pa, double log_pressure) {
+  known_alpha_[i] = alpha_next_[i];
+  known_beta_[i] = beta_next_[i];
+  known_pressure_[i] = pressure_pa;
+  known_log_pressure_[i] = log_pressure;
 }
 
 // Inlet, x = 0: the beta characteristic from the pipe; u(0) from the piston or a closure.

@@ -33,6 +33,7 @@
 //   flows at the ends). Characteristics leaving a cavity node carry the velocity of their side.
 #pragma once
 
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -65,22 +66,25 @@ class CharacteristicsSolver final : public PipeSolver {
 
  private:
   // Values at the foot of the characteristics that arrive at node i (the velocity is the
-  // neighbouring node's, see StepInteriorQuasiLinear).
+  // neighbouring node's, see StepInterior).
   struct Foot {
     double invariant;
     double velocity;
   };
   Foot AlphaFoot(int i) const;  // alpha characteristic arriving at node i (from the left)
   Foot BetaFoot(int i) const;   // beta characteristic arriving at node i (from the right)
-  void StepInteriorLinear();
-  void StepInteriorQuasiLinear();
+  // Nodes 1..N-1 of the default path, both models (the cell loops of characteristics_solver.cc);
+  // returns their smallest alpha - beta at the new level.
+  double StepInterior();
   // The fast path's other parts (Step), in their order.
   double SourceAt(bool has_sources, int i, double u) const;
   void AddSourcesToInterior();
   void StepInletNode(const PipeStepInputs& inputs, bool has_sources);
   void StepOutletNode(const PipeStepInputs& inputs, bool has_sources);
   // The step's last part, on either path: alpha_next_, beta_next_ become the state.
-  Status AdvanceToNewLevel(RangeViolation* violation);
+  // NaN: the range check looks at every node itself.
+  Status AdvanceToNewLevel(RangeViolation* violation, double interior_smallest_difference =
+                                                          std::numeric_limits<double>::quiet_NaN());
   // The general path (see the header comment), in its steps; GeneralStep holds what they share.
   struct GeneralStep;
   Status StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation);
@@ -96,11 +100,16 @@ class CharacteristicsSolver final : public PipeSolver {
   bool InCavity(const GeneralStep& step, int i, double liquid_pressure_pa) const;
   // Advances node i's cavity with the new jump u_right - u_left: true while it stays open.
   bool SettleCavity(const GeneralStep& step, int i, double liquid_pressure_pa, double jump);
+  void RememberPressure(int i, double pressure_pa, double log_pressure);
 
   double dt_s_;
   std::vector<double> alpha_next_;
   std::vector<double> beta_next_;
   std::vector<double> velocity_;  // scratch: u at the nodes, old time level
+  // Scratch of the default path, per node j, old time level (StepInterior): what the alpha and
+  // the beta characteristic leaving node j carry to its neighbour before the neighbour's own
+  // friction, and that friction's share K_j = (h lambda_j / 2) / (2 + h lambda_j).
+  std::vector<double> leaving_alpha_, leaving_beta_, friction_share_;
 
   // General path.
   bool general_ = false;
@@ -111,6 +120,10 @@ class CharacteristicsSolver final : public PipeSolver {
   // Scratch, old time level: pressure, W, speeds, and the side values of the invariants and u.
   std::vector<double> pressure_, w_, speed_up_, speed_down_;
   std::vector<double> alpha_left_, alpha_right_, beta_left_, beta_right_, u_left_, u_right_;
+  // With a mixture law: ln p of the old level, and the new level's alpha, beta, p and ln p as the
+  // interior computed them (RememberPressure), the next step's old level if nothing changed it.
+  std::vector<double> log_pressure_;
+  std::vector<double> known_alpha_, known_beta_, known_pressure_, known_log_pressure_;
 };
 
 }  // namespace mpdrig

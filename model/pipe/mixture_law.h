@@ -12,10 +12,14 @@
 // W is tabulated once, on a uniform grid in ln p over [1 Pa, 1 GPa] (8192 intervals, nodes from
 // 3-point Gauss-Legendre quadrature of dW/d(ln p) = p sqrt(C/rho)), and interpolated by cubic
 // Hermite polynomials with the exact derivatives at the nodes (relative error ~1e-12). Outside
-// the table W continues linearly in ln p. The inverse is a bracketed Newton iteration.
+// the table W continues linearly in ln p. The inverse is a bracketed Newton iteration on that
+// cubic, started from the inverse's own cubic Hermite on the interval (about 1e-13 from the
+// root in ln p): one Newton step leaves the pressure within round-off (about 1e-15 relative) of
+// the exact inverse of the table.
 #pragma once
 
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "model/core/pipe_law.h"
@@ -32,10 +36,16 @@ class MixtureLaw {
   // W and the wave speed c(p) from the table alone (the derivative of the interpolant: relative
   // error ~1e-9), for the step's loop over the nodes.
   double WAndWaveSpeed(double pressure_pa, double* wave_speed_mps) const;
+  // The same with ln p known (the solver keeps it from the step that computed p).
+  double WAndWaveSpeedAtLog(double pressure_pa, double log_pressure, double* wave_speed_mps) const;
   // dW/dp = 1 / (rho c) [m/s/Pa]: the inverse of the local impedance.
   double DW(double pressure_pa) const;
-  // The pressure whose W is w, starting the search near `guess_pa`.
+  // The pressure whose W is w, starting the search in the table interval of `guess_pa` (or the
+  // next one; elsewhere by bisection of the table).
   double Pressure(double w, double guess_pa) const;
+  // The same with the guess as ln p (kNoGuess: none); also returns ln p of the result.
+  static constexpr double kNoGuess = std::numeric_limits<double>::quiet_NaN();
+  double PressureAndLog(double w, double guess_log_pressure, double* log_pressure) const;
   // c(p) [m/s].
   double WaveSpeed(double pressure_pa) const;
 

@@ -177,8 +177,13 @@ void PipeSolver::CheckRange(RangeViolation* violation) const {
     for (int k = 0; k < 4; ++k) lanes[k] = std::min(lanes[k], a[i + k] - b[i + k]);
   }
   for (; i < count; ++i) lanes[0] = std::min(lanes[0], a[i] - b[i]);
-  const double smallest = std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3]));
-  if (smallest > law_.ZeroPressureDifference()) return;
+  CheckRange(violation, std::min(std::min(lanes[0], lanes[1]), std::min(lanes[2], lanes[3])));
+}
+
+void PipeSolver::CheckRange(RangeViolation* violation, double smallest) const {
+  if (violation == nullptr || smallest > law_.ZeroPressureDifference()) return;
+  const double* a = alpha_.data();
+  const double* b = beta_.data();
   int worst = 0;
   for (int i = 1; i <= config_.cells; ++i) {
     if (a[i] - b[i] < a[worst] - b[worst]) worst = i;

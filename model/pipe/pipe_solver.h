@@ -128,6 +128,8 @@ class PipeSolver {
   // Smallest alpha - beta over the nodes, turned into a RangeViolation if at or below zero
   // pressure.
   void CheckRange(RangeViolation* violation) const;
+  // The same when the scheme already knows that smallest alpha - beta over the nodes.
+  void CheckRange(RangeViolation* violation, double smallest_difference) const;
 
   PipeConfig config_;
   PipeLaw law_;

@@ -283,12 +283,21 @@ Result<RigSample> RigSampler::SampleAt(double time_s, const StepInputsFn& step_i
         << " s): times must not decrease";
     return Status::Error(out.str());
   }
-  while (current_.time_s < time_s) {
-    const StepInputs step = step_inputs(simulator_.next_step_end_s(), simulator_.time_step_s());
-    MPDRIG_RETURN_IF_ERROR(simulator_.Step(step));
-    ++steps_;
-    previous_ = std::move(current_);
-    current_ = simulator_.Sample();
+  // Only the two grid samples around time_s are read: the steps before them are not sampled (a
+  // sample reads every channel, about a fifth of a step at N = 1000). On entry and on success
+  // current_ is the sample of the simulator's present time.
+  if (current_.time_s < time_s) {
+    for (;;) {
+      const bool last = simulator_.next_step_end_s() >= time_s;
+      if (last) previous_ = simulator_.time_s() == current_.time_s ? current_ : simulator_.Sample();
+      const StepInputs step = step_inputs(simulator_.next_step_end_s(), simulator_.time_step_s());
+      MPDRIG_RETURN_IF_ERROR(simulator_.Step(step));
+      ++steps_;
+      if (last) {
+        current_ = simulator_.Sample();
+        break;
+      }
+    }
   }
   if (steps_ == 0 || time_s == current_.time_s) return current_;
   return Interpolate(previous_, current_, time_s);
