@@ -346,6 +346,12 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
   synth_command->add_option("--rate-hz", synth->options.rate_hz, "sample rate [Hz]")
       ->capture_default_str();
   synth_command
+      ->add_option("--cells", synth->options.cells,
+                   "pipe cells of the generating model (diagnose replays on 50: another grid "
+                   "makes a log from a model that is not diagnose's own)")
+      ->check(CLI::Range(2, 200000))
+      ->capture_default_str();
+  synth_command
       ->add_option("--sensor-noise", synth->sensor_noise,
                    "sensor noise: none, lab (thesis Table 4.1.1) or a SPEC such as "
                    "pressure=0.024bar,flow=2%+0.05lpm,piston=0.5mm,choke=0.1deg "
