@@ -75,6 +75,13 @@ void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
                "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
                "(noise floor %.3g%%)\n",
                d.fit_end_s, 100.0 * d.baseline.error, 100.0 * d.noise_floor);
+  if (d.pressure_floors.present()) {
+    std::fprintf(summary,
+                 "pressures held at %.3g bar(a) and ended by a jump (column separation's "
+                 "signature), %d times on %zu channels: ranked with the error there too\n",
+                 d.pressure_floors.level_pa / 1e5, d.pressure_floors.holds,
+                 d.pressure_floors.floors.size());
+  }
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     std::fprintf(summary, "%2zu. %s\n", i + 1,
                  DescribeCandidate(d.candidates[i], d.baseline).c_str());
