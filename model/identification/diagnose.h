@@ -20,7 +20,10 @@
 //    standard errors of the improvement, estimated from its spread over kScoreBlocks blocks
 //    of the scoring data (blocks, because residuals are correlated in time and noise of one
 //    sample says little about the next). The leading kPolishedCandidates are then refitted
-//    with the baseline's iterations and the ranking redone. The verdict is the best significant
+//    with the baseline's iterations and the ranking redone; where the log holds pressures on a
+//    floor ended by a jump (column separation, cavity_evidence.h), it is redone with the floor
+//    samples scored as channels of their own (significance stays that of the plain score). The
+//    verdict is the best significant
 //    candidate, or none; `equivalent` names the significant ones it does not clearly beat. A
 //    candidate whose fit fails is reported as failed, not ranked. No candidate fits its fitting
 //    data worse than the model it extends: where its search's fits end above that model's
