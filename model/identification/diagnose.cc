@@ -851,6 +851,37 @@ void PolishLeaders(const DiagnoseRun& run, const Baseline& reference,
   RankCandidates(ranked);
 }
 
+// Pressures held on a floor (cavity_evidence.h): the base model and every ranked candidate are
+// also scored on the floor samples, one more channel per channel with a floor, and ranked again.
+// Nothing changes on a log without floors.
+void ScoreFloors(const DiagnoseRun& run, const Baseline& baseline, Diagnosis* diagnosis,
+                 StageRuns* runs_total) {
+  diagnosis->pressure_floors = FindPressureFloors(run.measured);
+  const CavityEvidence& evidence = diagnosis->pressure_floors;
+  if (!evidence.present()) return;
+  const auto rescore = [&](const ModelTraces& traces, CandidateResult* candidate) {
+    candidate->floor_error = FloorError(run.measured, evidence, traces);
+    candidate->penalised_error =
+        ErrorWithFloors(candidate->error, static_cast<int>(candidate->channel_errors.size()),
+                        evidence, *candidate->floor_error) *
+        (1.0 + kParameterPrice * candidate->extra_params);
+  };
+  rescore(baseline.traces, &diagnosis->baseline);
+  std::vector<CandidateResult>& ranked = diagnosis->candidates;
+  std::vector<StageRuns> runs(ranked.size());
+  std::vector<std::function<void()>> tasks;
+  for (std::size_t i = 0; i < ranked.size(); ++i) {
+    tasks.push_back([&, i] {
+      auto traces = ReplayWithOwnLevels(run.measured, ranked[i].fitted, run.simulation,
+                                        run.options.replay, &runs[i]);
+      if (traces.ok()) rescore(*traces, &ranked[i]);
+    });
+  }
+  RunTasks(run, tasks);
+  for (const StageRuns& r : runs) *runs_total += r;
+  RankCandidates(&ranked);
+}
+
 // The verdict (step 4 of diagnose.h): the leading candidate if it is significant, the others as
 // good as it, and its model compared over the whole log.
 void DecideVerdict(const DiagnoseRun& run, Diagnosis* diagnosis, StageRuns* runs) {
@@ -1137,6 +1168,7 @@ Result<Diagnosis> Diagnose(const MeasuredLog& measured, const RigParams& start,
   diagnosis.runs.push_back(screening);
   run.Report("polish", 1.0 + static_cast<double>(candidates.size()));
   PolishLeaders(run, *baseline, &diagnosis.candidates, &polishing);
+  ScoreFloors(run, *baseline, &diagnosis, &polishing);
   diagnosis.runs.push_back(polishing);
   DecideVerdict(run, &diagnosis, &verdict);
   diagnosis.runs.push_back(verdict);

@@ -22,7 +22,10 @@
 //    standard errors of the improvement, estimated from its spread over kScoreBlocks blocks
 //    of the scoring data (blocks, because residuals are correlated in time and noise of one
 //    sample says little about the next). The leading kPolishedCandidates are then refitted
-//    with the baseline's iterations and the ranking redone. The verdict is the best significant
+//    with the baseline's iterations and the ranking redone; where the log holds pressures on a
+//    floor ended by a jump (column separation, cavity_evidence.h), it is redone with the floor
+//    samples scored as channels of their own (significance stays that of the plain score). The
+//    verdict is the best significant
 //    candidate, or none; `equivalent` names the significant ones it does not clearly beat. A
 //    candidate whose fit fails is reported as failed, not ranked. No candidate fits its fitting
 //    data worse than the model it extends: where its search's fits end above that model's
@@ -52,6 +55,7 @@
 #include "model/analysis/log_replay.h"
 #include "model/analysis/measured_log.h"
 #include "model/common/status.h"
+#include "model/identification/cavity_evidence.h"
 #include "model/identification/fit.h"
 #include "model/identification/regimes.h"
 #include "model/identification/residual_signature.h"
@@ -169,6 +173,9 @@ struct CandidateResult {
   // Per channel: error (NRMSE) on the scoring data, baseline and this candidate.
   std::vector<std::pair<Channel, double>> channel_errors;
   std::vector<double> block_errors;  // over the kScoreBlocks blocks of the scoring data
+  // Where the log holds pressures on a floor (cavity_evidence.h): the NRMSE on the floor samples,
+  // averaged into penalised_error as one channel per channel with a floor; absent otherwise.
+  std::optional<double> floor_error;
   RigParams fitted;
 };
 
@@ -196,6 +203,9 @@ struct Diagnosis {
   Comparison baseline_comparison;           // fitted baseline over the whole log
   std::vector<CandidateResult> candidates;  // ranked best first (round 1, against the baseline)
   std::vector<CandidateResult> failed;      // candidates whose fit failed (any round): not ranked
+  // Pressures held on a floor and ended by a jump (column separation's signature; empty where
+  // the log has none): round 1 is ranked with the floors scored too (cavity_evidence.h).
+  CavityEvidence pressure_floors;
   // The choke's and FT2's levels as estimated at the fitted base model (EstimateInputLevels;
   // none where the log came with levels applied or options.replay says not to). The fits run on
   // these; each candidate is scored with levels estimated at its own fit.

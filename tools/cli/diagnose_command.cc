@@ -104,6 +104,13 @@ void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
                "base model (fitted on t < %.1f s): error %.3g%% on the scoring data "
                "(noise floor %.3g%%)\n",
                d.fit_end_s, 100.0 * d.baseline.error, 100.0 * d.noise_floor);
+  if (d.pressure_floors.present()) {
+    std::fprintf(summary,
+                 "pressures held at %.3g bar(a) and ended by a jump (column separation's "
+                 "signature), %d times on %zu channels: ranked with the error there too\n",
+                 d.pressure_floors.level_pa / 1e5, d.pressure_floors.holds,
+                 d.pressure_floors.floors.size());
+  }
   for (std::size_t i = 0; i < d.candidates.size(); ++i) {
     std::fprintf(summary, "%2zu. %s\n", i + 1,
                  DescribeCandidate(d.candidates[i], d.baseline).c_str());
@@ -420,6 +427,12 @@ void AddDiagnoseCommand(CLI::App* app, int* exit_code) {
   synth_command->add_option("--duration", synth->options.duration_s, "length [s]")
       ->capture_default_str();
   synth_command->add_option("--rate-hz", synth->options.rate_hz, "sample rate [Hz]")
+      ->capture_default_str();
+  synth_command
+      ->add_option("--cells", synth->options.cells,
+                   "pipe cells of the generating model (diagnose replays on 50: another grid "
+                   "makes a log from a model that is not diagnose's own)")
+      ->check(CLI::Range(2, 200000))
       ->capture_default_str();
   synth_command
       ->add_option("--sensor-noise", synth->sensor_noise,

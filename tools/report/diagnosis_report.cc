@@ -73,6 +73,7 @@ std::string CandidateJson(const CandidateResult& c, const CandidateResult& refer
       << ",\"explains\":" << Quote(c.explains)
       << ",\"description\":" << Quote(DescribeCandidate(c, reference))
       << ",\"channels\":" << ChannelsJson(c.channel_errors);
+  if (c.floor_error) out << ",\"floor_error\":" << Num(*c.floor_error);
   if (!c.failure.empty()) out << ",\"failure\":" << Quote(c.failure);
   if (!c.strength_key.empty()) {
     out << ",\"strength_key\":" << Quote(c.strength_key) << ",\"detectable_from\":"
@@ -160,7 +161,17 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   std::ostringstream out;
   const CandidateResult& b = d.baseline;
   out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
-      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays << ",\"runs\":[";
+      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays;
+  // Pressures held on a floor (cavity_evidence.h): where, at what level, how often.
+  out << ",\"pressure_floors\":{\"present\":" << (d.pressure_floors.present() ? "true" : "false")
+      << ",\"level_pa\":" << Num(d.pressure_floors.level_pa)
+      << ",\"holds\":" << d.pressure_floors.holds << ",\"channels\":[";
+  for (std::size_t i = 0; i < d.pressure_floors.floors.size(); ++i) {
+    const ChannelFloor& floor = d.pressure_floors.floors[i];
+    out << (i ? "," : "") << "{\"channel\":" << Quote(std::string(ChannelName(floor.channel)))
+        << ",\"level_pa\":" << Num(floor.level_pa) << ",\"holds\":" << floor.holds.size() << "}";
+  }
+  out << "]},\"runs\":[";
   // Where the model runs went, stage by stage.
   for (std::size_t i = 0; i < d.runs.size(); ++i) {
     const StageRuns& r = d.runs[i];
