@@ -661,7 +661,8 @@ TEST_F(SecureClass, StudentRunsAShadowOfHerRigThatOnlySheSwitches) {
   // Bob reads it (alice's rig is one he watches) but cannot switch it.
   const std::string bob_read = Dir("ctl-bob-read.txt");
   EXPECT_EQ(ctl("bob", {}, bob_read), 0) << ReadFile(bob_read);
-  EXPECT_NE(ReadFile(bob_read).find("shadow 'shadow' of alice"), std::string::npos) << ReadFile(bob_read);
+  EXPECT_NE(ReadFile(bob_read).find("shadow 'shadow' of alice"), std::string::npos)
+      << ReadFile(bob_read);
   const std::string bob_switch = Dir("ctl-bob-switch.txt");
   EXPECT_NE(ctl("bob", {"--effect-off", "unsteady_friction"}, bob_switch), 0)
       << ReadFile(bob_switch);
