@@ -9,8 +9,8 @@ the README's contents and link back to it. docs/incoming-*.md are drafts being f
 not checked.
 
 A clone is all a reader has, so no file of the repository (code comments and scripts too) may
-point at files beside it (`../shared/...`, an absolute path of a developer's machine), and
-docs/layout.md names every folder: each folder two levels deep has its own row, and a deeper one
+point at files beside it (a sibling folder of the clone, an absolute path of a developer's
+machine), and docs/layout.md names every folder: each folder two levels deep has its own row, and a deeper one
 is named (`name/`) in the row of the folder above it, unless it is a tests/ folder mirroring a
 folder of the same path outside tests/.
 
@@ -189,8 +189,10 @@ def check_pages(root, readme, pages, problems):
             problems.append(f"{name}: its first paragraph does not link back to ../README.md")
 
 
-# A path that leaves the repository: ../shared/..., or a developer machine's absolute path.
-OUTSIDE_REFERENCE = re.compile(r"(?:\.\./)+shared/|/work/(?:shared|main|wt)\b|\bseed/000_")
+# A path that leaves the repository: the project's notes in the folder beside the clone (its
+# name is spelled with a character class so that this line does not match itself), or a
+# developer machine's absolute path.
+OUTSIDE_REFERENCE = re.compile(r"(?:\.\./)+shar[e]d/|/work/(?:shar[e]d|main|wt)\b|\bseed/000_")
 SKIPPED_DIRS = {".git", "node_modules", "__pycache__"}
 TEXT_SUFFIXES = {".md", ".h", ".cc", ".cc.in", ".txt", ".py", ".pyi", ".sh", ".cmake", ".proto",
                  ".idl", ".xml", ".yml", ".yaml", ".conf", ".html", ".in", ".csv", ".json", ""}
