@@ -586,6 +586,7 @@ struct RigService::Impl {
     wire.lost_periods = lost_periods;
     wire.longest_stall_s = longest_stall_s;
     wire.last_stall_sim_time_s = last_stall_sim_time_s;
+    wire.atmospheric_pressure_pa = rig.params().atmospheric_pressure_pa;
     wire.rejected_commands = rig.counters().rejected_commands;
     wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
     wire.last_completed_step_request = last_step_request[index];
