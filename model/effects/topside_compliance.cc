@@ -82,8 +82,8 @@ class TopsideCompliance final : public Effect {
     double u = velocity_guess_mps;
     double previous_change = std::numeric_limits<double>::infinity();
     for (int iteration = 0; iteration < 30; ++iteration) {
-      const double p_k = pipe.PressurePa(u);
-      const double d = pipe.DPressureDVelocity(u);  // < 0 at the outlet
+      double d = 0.0;  // dp/du < 0 at the outlet
+      const double p_k = pipe.PressureAndSlope(u, &d);
       const double m = -area_m2_ / d;
       double p = 0.0;
       if (g <= 0.0) {
