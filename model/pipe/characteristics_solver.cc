@@ -538,8 +538,10 @@ void CharacteristicsSolver::LoadGeneralOldLevel(const GeneralStep& step) {
     double c = 0.0;
     double p, w;
     if (mixture_ == nullptr) {
+      // The law's own W: alpha - beta = 2 W(p) exactly (pipe_law.h), no logarithm needed.
       p = law_.Pressure(alpha_[i], beta_[i]);
-      w = step.fn.WAndWaveSpeed(p, &c);
+      w = 0.5 * (alpha_[i] - beta_[i]);
+      c = law_.wave_speed_mps();
     } else {
       // The mixture's W at ln p: known from the step that made this state (RememberPressure),
       // else from the state.
@@ -661,7 +663,9 @@ void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
       velocity_jump_[i] = jump;
     }
 
-    const double term = law_.PressureTerm(p_p);  // law_.Alpha and law_.Beta, one logarithm
+    // law_.Alpha and law_.Beta, one logarithm; none where the law is the liquid's own and no
+    // cavity moved the pressure: its W is w_p itself.
+    const double term = mixture_ == nullptr && p_p == p_liquid ? w_p : law_.PressureTerm(p_p);
     alpha_next_[i] = term + u_p;
     beta_next_[i] = -term + u_p;
     if (mixture_ != nullptr) RememberPressure(i, p_p, p_p == p_liquid ? log_p : std::log(p_p));
