@@ -69,6 +69,13 @@ void PrintTiming(const char* what, const std::vector<double>& arrival_s) {
                1e3 * jitter.back());
 }
 
+// The header's atmosphere [Pa], exact for any value a rig log can give (12 significant digits).
+std::string FormatAtmosphere(double pa) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.12g", pa);
+  return text;
+}
+
 int Fail(const mpdrig::Status& status) {
   std::fprintf(stderr, "rig_echo: %s\n", status.message().c_str());
   return 1;
@@ -190,6 +197,12 @@ int main(int argc, char** argv) {
   auto rig = mpdrig::client::Rig::Connect(options, interrupt);
   if (!rig.ok()) return Fail(rig.status());
 
+  // The rig's atmosphere, from its status: the samples' gauge pressures are relative to it, so the
+  // log says it and converts back to the same absolute pressures (a playback's log may have its
+  // own).
+  auto status = (*rig)->LatestStatus(interrupt);
+  if (!status.ok()) return Fail(status.status());
+
   std::ofstream file;
   std::ostream* out = &std::cout;
   if (out_path != "-") {
@@ -198,7 +211,8 @@ int main(int argc, char** argv) {
     out = &file;
   }
   *out << "# rig-log: 1\n# source: rig_echo, rig " << rig_id << ", DDS domain " << domain
-       << "\n# atmospheric_pressure_pa: 101325\n"
+       << "\n# atmospheric_pressure_pa: " << FormatAtmosphere(status->atmospheric_pressure_pa)
+       << "\n"
        << kHeader << "\n";
   const Recorded recorded = Record(**rig, *out, max_samples, timing, interrupt);
   out->flush();

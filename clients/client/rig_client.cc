@@ -343,6 +343,7 @@ Status Rig::TakeStatus() {
         out.active_effects = FromSequence(s.active_effects);
         out.actuator_owners = FromSequence(s.actuator_owners);
         out.sensor_noise = s.sensor_noise;
+        out.atmospheric_pressure_pa = s.atmospheric_pressure_pa;
         rig_status_ = std::move(out);
       },
       {}, std::numeric_limits<int>::max(),

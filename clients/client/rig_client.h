@@ -117,6 +117,7 @@ struct RigStatus {
   std::uint64_t last_completed_step_request = 0;
   std::vector<std::string> warnings, active_effects, actuator_owners;
   std::string sensor_noise;
+  double atmospheric_pressure_pa = 101325.0;  // the atmosphere the rig's *_barg are gauge against
 };
 
 // The heave generator's command (mpdrig_piston_command).

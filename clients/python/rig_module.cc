@@ -246,6 +246,7 @@ void BindStatus(py::module_& m) {
       .def_readonly("actuator_owners", &RigStatus::actuator_owners,
                     "per actuator, the ownership strength and writer of the command in force")
       .def_readonly("sensor_noise", &RigStatus::sensor_noise)
+      .def_readonly("atmospheric_pressure_pa", &RigStatus::atmospheric_pressure_pa)
       .def("__repr__", [](const RigStatus& s) {
         return "<mpdrig.Status clock=" + s.clock + " t=" + std::to_string(s.sim_time_s) +
                " s rejected=" + std::to_string(s.rejected_commands) + ">";

@@ -35,8 +35,9 @@ class ChokeInertia final : public Effect {
     double s = q_b + area_m2_ * velocity_guess_mps;
     for (int iteration = 0; iteration < 30; ++iteration) {
       const double u = (s - q_b) / area_m2_;
-      const double p = pipe.PressurePa(u);
-      const double b = -pipe.DPressureDVelocity(u) / area_m2_ + m;
+      double slope = 0.0;
+      const double p = pipe.PressureAndSlope(u, &slope);
+      const double b = -slope / area_m2_ + m;
       const double d = p - in.outlet_pressure_pa + (b - m) * s + m * choke_flow_m3ps_;
       // Root of d - b s - a s|s| = 0.
       const double magnitude = 2.0 * std::fabs(d) / (b + std::sqrt(b * b + 4.0 * a * std::fabs(d)));

@@ -209,6 +209,11 @@ class InletRelation final : public BoundaryRelation {
   double DPressureDVelocity(double u) const override {
     return -law_.DPressureDVelocityAtPressure(PressurePa(u));
   }
+  double PressureAndSlope(double u, double* slope) const override {
+    const double p = PressurePa(u);
+    *slope = -law_.DPressureDVelocityAtPressure(p);
+    return p;
+  }
 
  private:
   const PipeLaw& law_;
@@ -222,6 +227,11 @@ class OutletRelation final : public BoundaryRelation {
   double PressurePa(double u) const override { return law_.PressureFromAlpha(alpha_, u); }
   double DPressureDVelocity(double u) const override {
     return law_.DPressureDVelocityAtPressure(PressurePa(u));
+  }
+  double PressureAndSlope(double u, double* slope) const override {
+    const double p = PressurePa(u);
+    *slope = law_.DPressureDVelocityAtPressure(p);
+    return p;
   }
 
  private:
@@ -366,6 +376,11 @@ class GeneralInletRelation final : public BoundaryRelation {
       : w_(w), beta_(beta), guess_pa_(guess_pa) {}
   double PressurePa(double u) const override { return w_.Pressure(u - beta_, guess_pa_); }
   double DPressureDVelocity(double u) const override { return 1.0 / w_.DW(PressurePa(u)); }
+  double PressureAndSlope(double u, double* slope) const override {
+    const double p = PressurePa(u);
+    *slope = 1.0 / w_.DW(p);
+    return p;
+  }
 
  private:
   const PressureFunction& w_;
@@ -380,6 +395,11 @@ class GeneralOutletRelation final : public BoundaryRelation {
       : w_(w), alpha_(alpha), guess_pa_(guess_pa) {}
   double PressurePa(double u) const override { return w_.Pressure(alpha_ - u, guess_pa_); }
   double DPressureDVelocity(double u) const override { return -1.0 / w_.DW(PressurePa(u)); }
+  double PressureAndSlope(double u, double* slope) const override {
+    const double p = PressurePa(u);
+    *slope = -1.0 / w_.DW(p);
+    return p;
+  }
 
  private:
   const PressureFunction& w_;
@@ -409,8 +429,10 @@ double SolveChokeVelocity(const BoundaryRelation& pipe, const ChokeBoundaryInput
   double s = q_b + area_m2 * velocity_guess_mps;
   for (int iteration = 0; iteration < 30; ++iteration) {
     const double u = (s - q_b) / area_m2;
-    const double b = -pipe.DPressureDVelocity(u) / area_m2;
-    const double d = pipe.PressurePa(u) - in.outlet_pressure_pa + b * s;
+    double slope = 0.0;
+    const double p = pipe.PressureAndSlope(u, &slope);
+    const double b = -slope / area_m2;
+    const double d = p - in.outlet_pressure_pa + b * s;
     const double magnitude =
         d == 0.0 ? 0.0 : 2.0 * std::fabs(d) / (b + std::sqrt(b * b + 4.0 * a * std::fabs(d)));
     const double next = std::copysign(magnitude, d);
@@ -516,8 +538,10 @@ void CharacteristicsSolver::LoadGeneralOldLevel(const GeneralStep& step) {
     double c = 0.0;
     double p, w;
     if (mixture_ == nullptr) {
+      // The law's own W: alpha - beta = 2 W(p) exactly (pipe_law.h), no logarithm needed.
       p = law_.Pressure(alpha_[i], beta_[i]);
-      w = step.fn.WAndWaveSpeed(p, &c);
+      w = 0.5 * (alpha_[i] - beta_[i]);
+      c = law_.wave_speed_mps();
     } else {
       // The mixture's W at ln p: known from the step that made this state (RememberPressure),
       // else from the state.
@@ -639,7 +663,9 @@ void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
       velocity_jump_[i] = jump;
     }
 
-    const double term = law_.PressureTerm(p_p);  // law_.Alpha and law_.Beta, one logarithm
+    // law_.Alpha and law_.Beta, one logarithm; none where the law is the liquid's own and no
+    // cavity moved the pressure: its W is w_p itself.
+    const double term = mixture_ == nullptr && p_p == p_liquid ? w_p : law_.PressureTerm(p_p);
     alpha_next_[i] = term + u_p;
     beta_next_[i] = -term + u_p;
     if (mixture_ != nullptr) RememberPressure(i, p_p, p_p == p_liquid ? log_p : std::log(p_p));

@@ -37,6 +37,13 @@ class BoundaryRelation {
   virtual ~BoundaryRelation() = default;
   virtual double PressurePa(double velocity_mps) const = 0;
   virtual double DPressureDVelocity(double velocity_mps) const = 0;
+  // Both at once: p(u), and dp/du in *slope. The solver's relations get the slope from the
+  // pressure, so this evaluates the pressure law (an exp, or a mixture law's inversion) once
+  // where the two calls above evaluate it twice; a closure's Newton iteration needs both.
+  virtual double PressureAndSlope(double velocity_mps, double* slope) const {
+    *slope = DPressureDVelocity(velocity_mps);
+    return PressurePa(velocity_mps);
+  }
 };
 
 // The inlet's inputs at the end of a step.

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "service/rig/log_playback.h"
+#include "service/rig/pacer.h"
 #include "service/rig/wire.h"
 
 namespace mpdrig::service {
@@ -127,24 +128,9 @@ struct RigService::Impl {
   std::uint64_t estimate_every = 1;                   // publish every this many samples
   std::uint64_t profile_every = 0;                    // 0: no profile topic
   ProfileBuffers profile_buffers;
-  std::uint64_t deadline_misses = 0;
-  std::uint64_t lost_periods = 0;       // sensor periods skipped by those misses
-  double longest_stall_s = 0.0;         // the longest miss, from its deadline [s of wall time]
-  double last_stall_sim_time_s = -1.0;  // rig time at the last miss; -1: none
-  double last_stall_s = 0.0;            // that miss, from its deadline [s of wall time]
-
-  // A warning of its own (the rig's last event, e.g. a safe state taken, stays beside it).
-  std::string StallWarning() const {
-    if (last_stall_sim_time_s < 0.0) return "";
-    char text[240];
-    std::snprintf(text, sizeof text,
-                  "fell behind real time at rig time %.3f s: a %.3f s stall (%llu periods lost "
-                  "in %llu stalls, the longest %.3f s)",
-                  last_stall_sim_time_s, last_stall_s,
-                  static_cast<unsigned long long>(lost_periods),
-                  static_cast<unsigned long long>(deadline_misses), longest_stall_s);
-    return text;
-  }
+  // Real time only: the wall clock's ticks and their stalls (pacer.h).
+  std::optional<RealTimePacer> pacer;
+  RealTimePacer::Stalls stalls() const { return pacer ? pacer->stalls() : RealTimePacer::Stalls{}; }
   Clock::time_point started;
 
   // One per command topic (and step requests); declared before the DDS entities, so they
@@ -582,17 +568,19 @@ struct RigService::Impl {
     wire.sim_time_s = rig.time_s();
     const double wall_s = std::chrono::duration<double>(Clock::now() - started).count();
     wire.real_time_factor = wall_s > 0.0 ? rig.time_s() / wall_s : 0.0;
-    wire.deadline_misses = deadline_misses;
-    wire.lost_periods = lost_periods;
-    wire.longest_stall_s = longest_stall_s;
-    wire.last_stall_sim_time_s = last_stall_sim_time_s;
+    const RealTimePacer::Stalls stall_account = stalls();
+    wire.deadline_misses = stall_account.deadline_misses;
+    wire.lost_periods = stall_account.lost_periods;
+    wire.longest_stall_s = stall_account.longest_s;
+    wire.last_stall_sim_time_s = stall_account.last_sim_time_s;
+    wire.atmospheric_pressure_pa = rig.params().atmospheric_pressure_pa;
     wire.rejected_commands = rig.counters().rejected_commands;
     wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
     wire.last_completed_step_request = last_step_request[index];
     // Warnings: leaving the model's range, falling behind real time, and the last event (e.g. a
     // safe state taken).
     std::string range_warning = rig.range_event() ? rig.range_event()->Describe() : "";
-    std::string stall_warning = StallWarning();
+    std::string stall_warning = stall_account.Warning();
     std::string event = rig.counters().last_event;
     Endpoints& out = EndpointsOf(index);
     std::string reader_warning = StoppedReaderWarning(out);
@@ -697,9 +685,10 @@ struct RigService::Impl {
   Status RunPaced(const std::atomic<bool>& stop) {
     MPDRIG_RETURN_IF_ERROR(AwaitSensorReaders());
     const double period = rigs.front().sensor_period_s();
-    const auto period_wall =
-        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(period));
-    Clock::time_point next = Clock::now() + period_wall;
+    if (options.clock == ClockMode::kRealtime) {
+      // With catch_up (a playback) the ticks after a stall run at once: no period is lost.
+      pacer.emplace(period, options.catch_up, Clock::now());
+    }
     double next_status_s = 0.0;
     while (!stop.load()) {
       if (options.duration_s > 0.0 && rigs.front().time_s() >= options.duration_s - 0.5 * period)
@@ -716,28 +705,7 @@ struct RigService::Impl {
       // Playbacks that have played their last row: the service has nothing more to publish.
       if (std::all_of(rigs.begin(), rigs.end(), [](const RigHost& r) { return r.finished(); }))
         break;
-      if (options.clock == ClockMode::kRealtime) {
-        const Clock::time_point now = Clock::now();
-        if (now > next + period_wall) {  // more than a whole period late: a missed deadline
-          // The periods between the deadline and now are skipped: the rig runs on that far behind
-          // the wall clock. Count them; the status says when it happened (StallWarning). With
-          // catch_up (a playback) they are run at once instead, and none is lost.
-          const double late_s = std::chrono::duration<double>(now - next).count();
-          ++deadline_misses;
-          longest_stall_s = std::max(longest_stall_s, late_s);
-          last_stall_s = late_s;
-          last_stall_sim_time_s = rigs.front().time_s();
-          if (options.catch_up) {
-            next += period_wall;  // the schedule stands: the next ticks run at once until on it
-          } else {
-            lost_periods += static_cast<std::uint64_t>(std::floor(late_s / period));
-            next = now + period_wall;
-          }
-        } else {
-          std::this_thread::sleep_until(next);
-          next += period_wall;
-        }
-      }
+      if (pacer) pacer->AfterTick(rigs.front().time_s());
     }
     return PublishAllStatus();
   }
@@ -915,9 +883,9 @@ RigService::RigService(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RigService::~RigService() = default;
 
 const std::vector<RigHost>& RigService::rigs() const { return impl_->rigs; }
-std::uint64_t RigService::deadline_misses() const { return impl_->deadline_misses; }
-std::uint64_t RigService::lost_periods() const { return impl_->lost_periods; }
-double RigService::longest_stall_s() const { return impl_->longest_stall_s; }
+std::uint64_t RigService::deadline_misses() const { return impl_->stalls().deadline_misses; }
+std::uint64_t RigService::lost_periods() const { return impl_->stalls().lost_periods; }
+double RigService::longest_stall_s() const { return impl_->stalls().longest_s; }
 
 Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs,
                                                        const ServeOptions& options) {

@@ -37,7 +37,9 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
     // Lab-like: four decimals, 100 Hz from t = 12.5 s, no P1/P2/FT3/FT4 and only three PTs;
     // PT5 empty on one row.
     std::ofstream out(original);
-    out << "# rig-log: 1\n# source: playback_echo_test\n"
+    // A lab at altitude (an atmosphere of 950 hPa): the rig's gauge pressures are relative to it,
+    // and the recording must say so to convert back to the same absolute pressures.
+    out << "# rig-log: 1\n# source: playback_echo_test\n# atmospheric_pressure_pa: 95000\n"
         << "time_s,piston_position_m,choke_position_deg,FT2_lpm,C1_barg,C2_barg,PT1_barg,"
            "PT5_barg,PT10_barg,FT1_lpm\n";
     char line[256];
@@ -98,6 +100,7 @@ TEST(PlaybackEcho, ReRecordedLogIsTheLog) {
   ASSERT_TRUE(a.ok()) << a.status().message();
   ASSERT_TRUE(b.ok()) << b.status().message();
   ASSERT_EQ(b->num_rows(), a->num_rows());
+  EXPECT_EQ(b->atmospheric_pressure_pa, 95000.0) << "the recording lost the rig's atmosphere";
   for (std::size_t i = 0; i < a->num_rows(); ++i) {
     ASSERT_EQ(b->time_s[i], a->time_s[i]) << "row " << i;
   }

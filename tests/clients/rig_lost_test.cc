@@ -51,6 +51,16 @@ class RigLost : public ::testing::Test {
     return testing::ChildOptions::Log((dir_ / name).string());
   }
   std::string Output(const char* name) const { return testing::ReadFile(dir_ / name); }
+  // Until `mpdrig serve` says it serves (its banner, on stderr, once its DDS entities exist; its
+  // samples follow at once), up to 30 s. A client whose --timeout is short also gives up on a
+  // first sample that is that late, which a slow start (a sanitizer build under load) can be.
+  void AwaitServing() const {
+    const auto deadline = Clock::now() + std::chrono::seconds(30);
+    while (Output("serve.txt").find("stop with Ctrl-C") == std::string::npos &&
+           Clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  }
   // The recording up to the loss is a rig log the model reads, ending on a whole row.
   void ExpectReadableRecording() const {
     auto read = riglog::ReadRigLog((dir_ / "echo.csv").string());
@@ -67,6 +77,7 @@ class RigLost : public ::testing::Test {
 TEST_F(RigLost, KilledServiceMakesTheClientsExitWithRigLost) {
   testing::ChildProcess serve(Serve(), Log("serve.txt"));
   ASSERT_TRUE(serve.started());
+  AwaitServing();  // the clients' 1 s timeout is for a lost rig, not for the service's start
   testing::ChildProcess controller(Controller("1"), Log("controller.txt"));
   testing::ChildProcess echo(Echo("1"), Log("echo.txt"));
   std::this_thread::sleep_for(std::chrono::seconds(3));

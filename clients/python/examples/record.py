@@ -21,9 +21,14 @@ COLUMNS = ["time_s", "piston_position_m", "choke_position_deg", "FT2_lpm", "C1_b
            "C2_barg", "FT1_lpm", "FT3_lpm", "FT4_lpm"]
 
 
-def write_log(out: TextIO, samples: Iterable[mpdrig.Sensors], source: str) -> int:
-    """Writes the rig-log header and one row per sample with increasing time; returns the rows."""
-    out.write(f"# rig-log: 1\n# source: {source}\n# atmospheric_pressure_pa: 101325\n")
+def write_log(out: TextIO, samples: Iterable[mpdrig.Sensors], source: str,
+              atmospheric_pressure_pa: float = 101325.0) -> int:
+    """Writes the rig-log header and one row per sample with increasing time; returns the rows.
+
+    atmospheric_pressure_pa: the rig's atmosphere (Rig.status().atmospheric_pressure_pa), which
+    its *_barg channels are gauge against."""
+    out.write(f"# rig-log: 1\n# source: {source}\n"
+              f"# atmospheric_pressure_pa: {atmospheric_pressure_pa:.12g}\n")
     out.write(",".join(COLUMNS) + "\n")
     rows = 0
     last_time = -float("inf")
@@ -55,7 +60,8 @@ def main() -> int:
     try:
         with mpdrig.Rig(args.rig, domain=args.domain, timeout=args.timeout) as rig:
             source = f"record.py, rig {args.rig}, DDS domain {args.domain}"
-            rows = write_log(out, rig.stream(args.samples or None), source)
+            atmosphere = rig.status().atmospheric_pressure_pa
+            rows = write_log(out, rig.stream(args.samples or None), source, atmosphere)
     except mpdrig.RigLost as lost:
         print(f"record.py: {lost}; the recording ends there", file=sys.stderr)
         return 3

@@ -19,10 +19,13 @@ def test_recorder_writes_a_rig_log_the_tools_read(serve, tmp_path):
                     "--heave-hz", "0.5", "--rig", "r1")
     out = io.StringIO()
     with mpdrig.Rig("r1", domain=service.domain, timeout=20) as rig:
-        rows = record.write_log(out, rig.stream(max_samples=600), "test")
+        atmosphere = rig.status().atmospheric_pressure_pa
+        rows = record.write_log(out, rig.stream(max_samples=600), "test", atmosphere)
     assert rows == 600
+    assert atmosphere == 101325.0  # the service's default atmosphere, as its status says
     lines = out.getvalue().splitlines()
     assert lines[0] == "# rig-log: 1"
+    assert lines[2] == "# atmospheric_pressure_pa: 101325"
     header = lines[3].split(",")
     assert header == record.COLUMNS and len(lines) == 4 + 600
     times = [float(line.split(",")[0]) for line in lines[4:]]
