@@ -18,6 +18,7 @@
 #include <signal.h>
 #include <sys/resource.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -34,7 +35,9 @@
 
 namespace {
 
-using mpdrig::dashboard::AppendString;
+using mpdrig::dashboard::ErrorJson;
+using mpdrig::dashboard::Json;
+using mpdrig::dashboard::JsonText;
 
 struct Args {
   int domain = 0;
@@ -55,12 +58,6 @@ double CpuSeconds() {
   getrusage(RUSAGE_SELF, &usage);
   return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
          1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
-
-std::string ErrorJson(const std::string& message) {
-  std::string out = "{\"ok\":false,\"error\":";
-  AppendString(&out, message);
-  return out + "}";
 }
 
 // The page with this process's write token in it (page.html's placeholder).
@@ -119,19 +116,18 @@ void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed,
       res.set_content(ErrorJson(sent.status().message()), "application/json");
       return;
     }
-    res.set_content("{\"ok\":true,\"command_id\":\"" + std::to_string(*sent) + "\"}",
+    // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
+    res.set_content(JsonText({{"ok", true}, {"command_id", std::to_string(*sent)}}),
                     "application/json");
   });
   server->Get("/api/health", [feed](const httplib::Request&, httplib::Response& res) {
     const auto h = feed->Health();
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "{\"dds\":\"%s\",\"sessions_opened\":%llu,\"samples_taken\":%llu,"
-                  "\"frames\":%llu,\"cpu_s\":%.3f}",
-                  h.open ? "open" : "closed", static_cast<unsigned long long>(h.sessions_opened),
-                  static_cast<unsigned long long>(h.samples_taken),
-                  static_cast<unsigned long long>(h.frames), CpuSeconds());
-    res.set_content(text, "application/json");
+    const Json health = {{"dds", h.open ? "open" : "closed"},
+                         {"sessions_opened", h.sessions_opened},
+                         {"samples_taken", h.samples_taken},
+                         {"frames", h.frames},
+                         {"cpu_s", std::round(CpuSeconds() * 1e3) / 1e3}};
+    res.set_content(JsonText(health), "application/json");
   });
 }
 
