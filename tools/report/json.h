@@ -38,8 +38,7 @@ inline Json JsonNumbers(const std::vector<double>& values) {
 }
 
 // The text of `value` with a final newline: compact (indent < 0) or indented by `indent` spaces.
-inline std::string JsonText(const Json& value, int indent = -1) {
-  return value.dump(indent, ' ', false, Json::error_handler_t::replace) + "\n";
-}
+// (json.cc: the serializer is compiled once, not in every writer.)
+std::string JsonText(const Json& value, int indent = -1);
 
 }  // namespace mpdrig::report
