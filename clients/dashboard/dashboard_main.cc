@@ -18,7 +18,6 @@
 #include <signal.h>
 #include <sys/resource.h>
 
-#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -27,17 +26,17 @@
 #include <httplib.h>
 #include <CLI/CLI.hpp>
 
+#include "clients/dashboard/api_json.h"
 #include "clients/dashboard/guarded_server.h"
-#include "clients/dashboard/json_out.h"
 #include "clients/dashboard/page.h"
 #include "clients/dashboard/rig_feed.h"
 #include "clients/dashboard/write_guard.h"
 
 namespace {
 
+using mpdrig::dashboard::CommandSentJson;
 using mpdrig::dashboard::ErrorJson;
-using mpdrig::dashboard::Json;
-using mpdrig::dashboard::JsonText;
+using mpdrig::dashboard::HealthJson;
 
 struct Args {
   int domain = 0;
@@ -116,18 +115,10 @@ void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed,
       res.set_content(ErrorJson(sent.status().message()), "application/json");
       return;
     }
-    // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
-    res.set_content(JsonText({{"ok", true}, {"command_id", std::to_string(*sent)}}),
-                    "application/json");
+    res.set_content(CommandSentJson(*sent), "application/json");
   });
   server->Get("/api/health", [feed](const httplib::Request&, httplib::Response& res) {
-    const auto h = feed->Health();
-    const Json health = {{"dds", h.open ? "open" : "closed"},
-                         {"sessions_opened", h.sessions_opened},
-                         {"samples_taken", h.samples_taken},
-                         {"frames", h.frames},
-                         {"cpu_s", std::round(CpuSeconds() * 1e3) / 1e3}};
-    res.set_content(JsonText(health), "application/json");
+    res.set_content(HealthJson(feed->Health(), CpuSeconds()), "application/json");
   });
 }
 

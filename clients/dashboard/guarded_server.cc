@@ -14,7 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "clients/dashboard/json_out.h"
+#include "clients/dashboard/api_json.h"
 
 namespace mpdrig::dashboard {
 

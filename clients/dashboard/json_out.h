@@ -1,4 +1,5 @@
-// The dashboard's JSON (its API and the refusals), written with nlohmann-json: the library and
+// The dashboard's JSON (its API and the refusals; api_json.h has the small answers without the
+// library's header), written with nlohmann-json: the library and
 // the string rule of every JSON mpdrig writes. Strings are escaped as RFC 8259 says, and a byte
 // that is not well-formed UTF-8 (a rig id a client sent as `?rig=%ff`) becomes U+FFFD, so the
 // JSON stays valid for the browser. A measured value is rounded to 7 significant digits (more
@@ -42,14 +43,7 @@ inline Json JsonNumbers(const std::vector<double>& values) {
   return array;
 }
 
-// The compact text of `value`.
-inline std::string JsonText(const Json& value) {
-  return value.dump(-1, ' ', false, Json::error_handler_t::replace);
-}
-
-// {"ok":false,"error":message}: every refusal's body.
-inline std::string ErrorJson(const std::string& message) {
-  return JsonText({{"ok", false}, {"error", message}});
-}
+// The compact text of `value` (json_out.cc: the serializer compiled once).
+std::string JsonText(const Json& value);
 
 }  // namespace mpdrig::dashboard

@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "clients/dashboard/api_json.h"
 #include "clients/dashboard/json_out.h"
 #include "clients/dashboard/rig_feed.h"
 #include "mpdrig.h"
