@@ -1,11 +1,11 @@
 // The dashboard's JSON (its API and the refusals; api_json.h has the small answers without the
-// library's header), written with nlohmann-json: the library and
-// the string rule of every JSON mpdrig writes. Strings are escaped as RFC 8259 says, and a byte
-// that is not well-formed UTF-8 (a rig id a client sent as `?rig=%ff`) becomes U+FFFD, so the
-// JSON stays valid for the browser. A measured value is rounded to 7 significant digits (more
-// than a chart or a readout shows, and a third of the bytes); NaN and infinities (a channel "not
-// measured", an error still warming up) become null, which the page draws as a gap: JSON has no
-// NaN. Counters and sequence numbers are integers, exact.
+// library's header), written with nlohmann-json: the library and the string rule of every JSON
+// mpdrig writes. Strings are escaped as RFC 8259 says, and a byte that is not well-formed UTF-8
+// (a rig id a client sent as `?rig=%ff`) becomes U+FFFD, so the JSON stays valid for the
+// browser. A measured value is rounded to 7 significant digits (more than a chart or a readout
+// shows, and a third of the bytes); NaN and infinities (a channel "not measured", an error still
+// warming up) become null, which the page draws as a gap: JSON has no NaN. Counters and sequence
+// numbers are integers, exact.
 #pragma once
 
 #include <charconv>
