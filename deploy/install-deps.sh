@@ -25,6 +25,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev  # tests and benchmarks
   libfftw3-dev pkg-config  # spectra for `mpdrig compare` (bands, lag, transfer functions)
   libceres-dev           # `mpdrig fit`: bounded nonlinear least squares and covariance
+  nlohmann-json3-dev     # every JSON mpdrig writes or reads (header-only)
   # headless browser for the test that renders the comparison report (tests/tools/report/report_test),
   # and its WebDriver with Selenium for the dashboard's test (tests/clients/dashboard_test.py)
   chromium chromium-driver python3-selenium

@@ -26,15 +26,17 @@
 #include <httplib.h>
 #include <CLI/CLI.hpp>
 
+#include "clients/dashboard/api_json.h"
 #include "clients/dashboard/guarded_server.h"
-#include "clients/dashboard/json_out.h"
 #include "clients/dashboard/page.h"
 #include "clients/dashboard/rig_feed.h"
 #include "clients/dashboard/write_guard.h"
 
 namespace {
 
-using mpdrig::dashboard::AppendString;
+using mpdrig::dashboard::CommandSentJson;
+using mpdrig::dashboard::ErrorJson;
+using mpdrig::dashboard::HealthJson;
 
 struct Args {
   int domain = 0;
@@ -55,12 +57,6 @@ double CpuSeconds() {
   getrusage(RUSAGE_SELF, &usage);
   return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
          1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
-
-std::string ErrorJson(const std::string& message) {
-  std::string out = "{\"ok\":false,\"error\":";
-  AppendString(&out, message);
-  return out + "}";
 }
 
 // The page with this process's write token in it (page.html's placeholder).
@@ -119,19 +115,10 @@ void Route(httplib::Server* server, mpdrig::dashboard::RigFeed* feed,
       res.set_content(ErrorJson(sent.status().message()), "application/json");
       return;
     }
-    res.set_content("{\"ok\":true,\"command_id\":\"" + std::to_string(*sent) + "\"}",
-                    "application/json");
+    res.set_content(CommandSentJson(*sent), "application/json");
   });
   server->Get("/api/health", [feed](const httplib::Request&, httplib::Response& res) {
-    const auto h = feed->Health();
-    char text[256];
-    std::snprintf(text, sizeof text,
-                  "{\"dds\":\"%s\",\"sessions_opened\":%llu,\"samples_taken\":%llu,"
-                  "\"frames\":%llu,\"cpu_s\":%.3f}",
-                  h.open ? "open" : "closed", static_cast<unsigned long long>(h.sessions_opened),
-                  static_cast<unsigned long long>(h.samples_taken),
-                  static_cast<unsigned long long>(h.frames), CpuSeconds());
-    res.set_content(text, "application/json");
+    res.set_content(HealthJson(feed->Health(), CpuSeconds()), "application/json");
   });
 }
 

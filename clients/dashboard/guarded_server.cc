@@ -14,7 +14,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "clients/dashboard/json_out.h"
+#include "clients/dashboard/api_json.h"
 
 namespace mpdrig::dashboard {
 
@@ -74,9 +74,7 @@ const char* Reason(int status) {
 // A refusal the poller writes itself (the request never reaches httplib): small enough for the
 // socket's send buffer, so it is written without waiting or not at all.
 void SendRefusal(int fd, int status, const std::string& message) {
-  std::string body = "{\"ok\":false,\"error\":";
-  AppendString(&body, message);
-  body += '}';
+  const std::string body = ErrorJson(message);
   char head[256];
   std::snprintf(head, sizeof head,
                 "HTTP/1.1 %d %s\r\nContent-Type: application/json\r\nContent-Length: %zu\r\n"

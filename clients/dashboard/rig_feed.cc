@@ -140,24 +140,16 @@ class Series {
   }
   void Clear() { points_.clear(); }
 
-  void AppendJson(std::string* out, std::uint64_t since) const {
-    *out += '[';
-    bool first = true;
+  // [[seq, t, values...], ...] for the points newer than `since`.
+  Json ToJson(std::uint64_t since) const {
+    Json out = Json::array();
     for (const Point& p : points_) {
       if (p.seq <= since) continue;
-      if (!first) *out += ',';
-      first = false;
-      *out += '[';
-      AppendNumber(out, static_cast<double>(p.seq));
-      *out += ',';
-      AppendNumber(out, p.t);
-      for (const double v : p.values) {
-        *out += ',';
-        AppendNumber(out, v);
-      }
-      *out += ']';
+      Json point = Json::array({p.seq, JsonNumber(p.t)});
+      for (const double v : p.values) point.push_back(JsonNumber(v));
+      out.push_back(std::move(point));
     }
-    *out += ']';
+    return out;
   }
 
  private:
@@ -169,30 +161,21 @@ class Series {
   std::deque<Point> points_;
 };
 
-void AppendSensors(std::string* out, const SensorsView& s, dds_time_t now) {
-  *out += "{\"counter\":";
-  AppendNumber(out, static_cast<double>(s.counter));
-  const std::pair<const char*, double> fields[] = {
-      {"t", s.t},
-      {"piston_m", s.piston_m},
-      {"choke_deg", s.choke_deg},
-      {"P1", s.P1},
-      {"P2", s.P2},
-      {"C1", s.C1},
-      {"C2", s.C2},
-      {"FT1", s.FT1},
-      {"FT2", s.FT2},
-      {"FT3", s.FT3},
-      {"FT4", s.FT4},
-      {"age_ms", static_cast<double>(now - s.written_ns) * 1e-6}};
-  for (const auto& [key, value] : fields) {
-    *out += ',';
-    AppendKey(out, key);
-    AppendNumber(out, value);
-  }
-  *out += ",\"PT\":";
-  AppendNumbers(out, std::vector<double>(std::begin(s.PT), std::end(s.PT)));
-  *out += '}';
+Json SensorsJson(const SensorsView& s, dds_time_t now) {
+  return {{"counter", s.counter},
+          {"t", JsonNumber(s.t)},
+          {"piston_m", JsonNumber(s.piston_m)},
+          {"choke_deg", JsonNumber(s.choke_deg)},
+          {"P1", JsonNumber(s.P1)},
+          {"P2", JsonNumber(s.P2)},
+          {"C1", JsonNumber(s.C1)},
+          {"C2", JsonNumber(s.C2)},
+          {"FT1", JsonNumber(s.FT1)},
+          {"FT2", JsonNumber(s.FT2)},
+          {"FT3", JsonNumber(s.FT3)},
+          {"FT4", JsonNumber(s.FT4)},
+          {"age_ms", JsonNumber(static_cast<double>(now - s.written_ns) * 1e-6)},
+          {"PT", JsonNumbers(std::vector<double>(std::begin(s.PT), std::end(s.PT)))}};
 }
 
 std::optional<std::string> ActionOf(const std::string& action, mpdrig_ShadowAction* wire) {
@@ -510,14 +493,9 @@ std::string RigFeed::RigsJson() const {
     if (std::find(rigs.begin(), rigs.end(), id) == rigs.end()) rigs.push_back(id);
   }
   std::sort(rigs.begin(), rigs.end());
-  std::string out = "{\"rigs\":";
-  AppendStrings(&out, rigs);
-  out += ",\"dds\":";
-  AppendString(&out, session_ ? "open" : (touched_ ? "opening" : "closed"));
-  out += ",\"error\":";
-  AppendString(&out, health_.error);
-  out += '}';
-  return out;
+  return JsonText({{"rigs", rigs},
+                   {"dds", session_ ? "open" : (touched_ ? "opening" : "closed")},
+                   {"error", health_.error}});
 }
 
 FeedHealth RigFeed::Health() const {
@@ -527,81 +505,45 @@ FeedHealth RigFeed::Health() const {
 
 namespace {
 
-void AppendStatus(std::string* out, const StatusView& st) {
-  *out += "{\"clock\":";
-  AppendString(out, st.clock);
-  const std::pair<const char*, double> numbers[] = {
-      {"t", st.t},
-      {"rtf", st.rtf},
-      {"deadline_misses", static_cast<double>(st.deadline_misses)},
-      {"lost_periods", static_cast<double>(st.lost_periods)},
-      {"longest_stall_s", st.longest_stall_s},
-      {"rejected", static_cast<double>(st.rejected)}};
-  for (const auto& [key, value] : numbers) {
-    *out += ',';
-    AppendKey(out, key);
-    AppendNumber(out, value);
-  }
-  *out += ",\"last_rejection\":";
-  AppendString(out, st.last_rejection);
-  *out += ",\"noise\":";
-  AppendString(out, st.noise);
-  *out += ",\"warnings\":";
-  AppendStrings(out, st.warnings);
-  *out += ",\"effects\":";
-  AppendStrings(out, st.effects);
-  *out += ",\"owners\":";
-  AppendStrings(out, st.owners);
-  *out += '}';
+Json StatusJson(const StatusView& st) {
+  return {{"clock", st.clock},
+          {"t", JsonNumber(st.t)},
+          {"rtf", JsonNumber(st.rtf)},
+          {"deadline_misses", st.deadline_misses},
+          {"lost_periods", st.lost_periods},
+          {"longest_stall_s", JsonNumber(st.longest_stall_s)},
+          {"rejected", st.rejected},
+          {"last_rejection", st.last_rejection},
+          {"noise", st.noise},
+          {"warnings", st.warnings},
+          {"effects", st.effects},
+          {"owners", st.owners}};
 }
 
-void AppendShadowStatus(std::string* out, const ShadowStatusView& st) {
-  *out += "{\"t\":";
-  AppendNumber(out, st.t);
-  const std::pair<const char*, double> numbers[] = {{"window_s", st.window_s},
-                                                    {"error", st.error},
-                                                    {"last_change_t", st.last_change_t},
-                                                    {"error_at_change", st.error_at_change},
-                                                    {"rejected", static_cast<double>(st.rejected)}};
-  for (const auto& [key, value] : numbers) {
-    *out += ',';
-    AppendKey(out, key);
-    AppendNumber(out, value);
-  }
-  // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
-  *out += ",\"last_command_id\":";
-  AppendString(out, std::to_string(st.last_command_id));
-  const std::pair<const char*, const std::vector<std::string>*> lists[] = {
-      {"channels", &st.channels},
-      {"effects", &st.effects},
-      {"parameters", &st.parameters},
-      {"available", &st.available}};
-  for (const auto& [key, list] : lists) {
-    *out += ',';
-    AppendKey(out, key);
-    AppendStrings(out, *list);
-  }
-  *out += ",\"nrmse\":";
-  AppendNumbers(out, st.nrmse);
-  const std::pair<const char*, const std::string*> texts[] = {
-      {"last_change", &st.last_change},
-      {"last_rejection", &st.last_rejection},
-      {"fit_state", &st.fit_state}};
-  for (const auto& [key, text] : texts) {
-    *out += ',';
-    AppendKey(out, key);
-    AppendString(out, *text);
-  }
-  *out += '}';
+Json ShadowStatusJson(const ShadowStatusView& st) {
+  return {{"t", JsonNumber(st.t)},
+          {"window_s", JsonNumber(st.window_s)},
+          {"error", JsonNumber(st.error)},
+          {"last_change_t", JsonNumber(st.last_change_t)},
+          {"error_at_change", JsonNumber(st.error_at_change)},
+          {"rejected", st.rejected},
+          // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
+          {"last_command_id", std::to_string(st.last_command_id)},
+          {"channels", st.channels},
+          {"effects", st.effects},
+          {"parameters", st.parameters},
+          {"available", st.available},
+          {"nrmse", JsonNumbers(st.nrmse)},
+          {"last_change", st.last_change},
+          {"last_rejection", st.last_rejection},
+          {"fit_state", st.fit_state}};
 }
-
-}  // namespace
 
 // The pressure along the pipe at one instant for the rig, the observer and the shadow: the newest
 // profile sample the shadow has reached (the newest one without a shadow), with the rig's and the
-// shadow's PT1..PT10 of that same sample.
-void RigFeed::AppendAlignedProfile(std::string* out, const RigView& v) {
-  if (v.profiles.empty()) return;
+// shadow's PT1..PT10 of that same sample; null before the first profile.
+Json AlignedProfileJson(const RigFeed::RigView& v) {
+  if (v.profiles.empty()) return nullptr;
   const ProfileView* chosen = &v.profiles.back();
   if (!v.shadow_pt.empty()) {
     const std::uint64_t reached = v.shadow_pt.back().counter;
@@ -617,85 +559,50 @@ void RigFeed::AppendAlignedProfile(std::string* out, const RigView& v) {
     }
     return {};
   };
-  *out += ",\"profile\":{\"t\":";
-  AppendNumber(out, chosen->t);
-  *out += ",\"x\":";
-  AppendNumbers(out, chosen->x);
-  *out += ",\"p\":";
-  AppendNumbers(out, chosen->p);
-  *out += ",\"p_est\":";
-  AppendNumbers(out, chosen->p_est);
-  *out += ",\"rig_PT\":";
-  AppendNumbers(out, pt_at(v.rig_pt));
-  *out += ",\"shadow_PT\":";
-  AppendNumbers(out, pt_at(v.shadow_pt));
-  *out += '}';
+  return {{"t", JsonNumber(chosen->t)},
+          {"x", JsonNumbers(chosen->x)},
+          {"p", JsonNumbers(chosen->p)},
+          {"p_est", JsonNumbers(chosen->p_est)},
+          {"rig_PT", JsonNumbers(pt_at(v.rig_pt))},
+          {"shadow_PT", JsonNumbers(pt_at(v.shadow_pt))}};
 }
+
+}  // namespace
 
 std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) const {
   std::lock_guard lock(mu_);
-  std::string out = "{\"rig\":";
-  AppendString(&out, rig_id);
-  out += ",\"dds\":";
-  AppendString(&out, session_ ? "open" : "opening");
+  Json out = {{"rig", rig_id}, {"dds", session_ ? "open" : "opening"}};
   const auto found = views_.find(rig_id);
   if (found == views_.end()) {
-    out += ",\"known\":false}";
-    return out;
+    out["known"] = false;
+    return JsonText(out);
   }
   const RigView& v = *found->second;
   const dds_time_t now = dds_time();
-  out += ",\"known\":true,\"samples\":";
-  AppendNumber(&out, static_cast<double>(v.samples));
-  out += ",\"seq\":";
-  AppendNumber(&out, static_cast<double>(next_seq_ - 1));
-  if (v.sensors) {
-    out += ",\"sensors\":";
-    AppendSensors(&out, *v.sensors, now);
-  }
-  if (v.shadow) {
-    out += ",\"shadow\":";
-    AppendSensors(&out, *v.shadow, now);
-  }
+  out["known"] = true;
+  out["samples"] = v.samples;
+  out["seq"] = next_seq_ - 1;
+  if (v.sensors) out["sensors"] = SensorsJson(*v.sensors, now);
+  if (v.shadow) out["shadow"] = SensorsJson(*v.shadow, now);
   if (v.estimate) {
     const EstimateView& e = *v.estimate;
-    out += ",\"estimate\":{\"t\":";
-    AppendNumber(&out, e.t);
-    out += ",\"bhp\":";
-    AppendNumber(&out, e.bhp);
-    out += ",\"piston_m\":";
-    AppendNumber(&out, e.piston_m);
-    out += ",\"velocity\":";
-    AppendNumber(&out, e.velocity);
-    out += ",\"FT4\":";
-    AppendNumber(&out, e.FT4);
-    out += ",\"freq_hz\":";
-    AppendNumber(&out, e.freq_hz);
-    out += ",\"source\":";
-    AppendString(&out, e.source);
-    out += '}';
+    out["estimate"] = {{"t", JsonNumber(e.t)},
+                       {"bhp", JsonNumber(e.bhp)},
+                       {"piston_m", JsonNumber(e.piston_m)},
+                       {"velocity", JsonNumber(e.velocity)},
+                       {"FT4", JsonNumber(e.FT4)},
+                       {"freq_hz", JsonNumber(e.freq_hz)},
+                       {"source", e.source}};
   }
-  AppendAlignedProfile(&out, v);
-  if (v.status) {
-    out += ",\"status\":";
-    AppendStatus(&out, *v.status);
-  }
-  if (v.shadow_status) {
-    out += ",\"shadow_status\":";
-    AppendShadowStatus(&out, *v.shadow_status);
-  }
-  out += ",\"hist\":{\"rig\":";
-  v.rig_series.AppendJson(&out, since);
-  out += ",\"est\":";
-  v.estimate_series.AppendJson(&out, since);
-  out += ",\"shadow\":";
-  v.shadow_series.AppendJson(&out, since);
-  out += ",\"err\":";
-  v.error_series.AppendJson(&out, since);
-  out += ",\"err_channels\":";
-  AppendStrings(&out, v.error_channels);
-  out += "}}";
-  return out;
+  if (Json profile = AlignedProfileJson(v); !profile.is_null()) out["profile"] = std::move(profile);
+  if (v.status) out["status"] = StatusJson(*v.status);
+  if (v.shadow_status) out["shadow_status"] = ShadowStatusJson(*v.shadow_status);
+  out["hist"] = {{"rig", v.rig_series.ToJson(since)},
+                 {"est", v.estimate_series.ToJson(since)},
+                 {"shadow", v.shadow_series.ToJson(since)},
+                 {"err", v.error_series.ToJson(since)},
+                 {"err_channels", v.error_channels}};
+  return JsonText(out);
 }
 
 Result<std::uint64_t> RigFeed::SendShadowCommand(const std::string& rig_id,

@@ -90,7 +90,6 @@ class RigFeed {
   void Drain();             // takes every topic into the views (mu_ held)
   void AddHistoryPoints();  // after Drain: each fresh series its newest point (mu_ held)
   bool Wanted(const char* rig_id) const;
-  static void AppendAlignedProfile(std::string* out, const RigView& view);
   RigView& View(const std::string& rig_id);
 
   FeedOptions options_;

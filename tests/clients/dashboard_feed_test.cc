@@ -11,6 +11,7 @@
 
 #include <gtest/gtest.h>
 
+#include "clients/dashboard/api_json.h"
 #include "clients/dashboard/json_out.h"
 #include "clients/dashboard/rig_feed.h"
 #include "mpdrig.h"
@@ -37,13 +38,13 @@ bool Eventually(double timeout_s, Done done, Each each) {
 }
 
 TEST(DashboardJson, NanIsNullAndStringsAreEscaped) {
-  std::string out;
-  AppendNumbers(&out, {1.5, std::numeric_limits<double>::quiet_NaN(), -2e-9,
-                       std::numeric_limits<double>::infinity()});
-  EXPECT_EQ(out, "[1.5,null,-2e-09,null]");
-  out.clear();
-  AppendString(&out, "refused: \"x\"\\\n\x01");
-  EXPECT_EQ(out, "\"refused: \\\"x\\\"\\\\\\n\\u0001\"");
+  EXPECT_EQ(JsonText(JsonNumbers({1.5, std::numeric_limits<double>::quiet_NaN(), -2e-9,
+                                  std::numeric_limits<double>::infinity()})),
+            "[1.5,null,-2e-09,null]");
+  EXPECT_EQ(JsonText("refused: \"x\"\\\n\x01"), "\"refused: \\\"x\\\"\\\\\\n\\u0001\"");
+  // 7 significant digits; counters are integers and exact.
+  EXPECT_EQ(JsonText(JsonNumbers({13.0, 1.23456789, 1234567.89})), "[13,1.234568,1234568]");
+  EXPECT_EQ(JsonText(Json(std::uint64_t{12345678901234567})), "12345678901234567");
 }
 
 class RigFeedTest : public ::testing::Test {
@@ -80,19 +81,29 @@ class RigFeedTest : public ::testing::Test {
 // A rig id from a URL (`/api/state?rig=%ff`) is not UTF-8: it must not make the JSON invalid.
 // Well-formed UTF-8 passes as it is; each stray, overlong or surrogate byte sequence is U+FFFD.
 TEST(DashboardJson, InvalidUtf8BecomesTheReplacementCharacter) {
-  std::string out;
-  AppendString(&out, "rig-\xff");
-  EXPECT_EQ(out, "\"rig-\\ufffd\"");
-  out.clear();
-  AppendString(&out, "Tr\xc3\xb8ndheim \xe2\x82\xac \xf0\x9f\x8c\x8a");  // ø, euro, a wave
-  EXPECT_EQ(out, "\"Tr\xc3\xb8ndheim \xe2\x82\xac \xf0\x9f\x8c\x8a\"");
-  out.clear();
-  // Overlong '/', a surrogate, a truncated sequence at the end.
-  AppendString(&out, "\xc0\xaf|\xed\xa0\x80|\xe2\x82");
-  EXPECT_EQ(out.find('\xc0'), std::string::npos) << out;
-  EXPECT_EQ(out.find('\xed'), std::string::npos) << out;
-  EXPECT_EQ(out.find('\xe2'), std::string::npos) << out;
-  EXPECT_NE(out.find("\\ufffd"), std::string::npos) << out;
+  const std::string replacement = "\xef\xbf\xbd";  // U+FFFD
+  EXPECT_EQ(Json::parse(JsonText("rig-\xff")), "rig-" + replacement);
+  const std::string utf8 = "Tr\xc3\xb8ndheim \xe2\x82\xac \xf0\x9f\x8c\x8a";  // ø, euro, a wave
+  EXPECT_EQ(JsonText(utf8), "\"" + utf8 + "\"");
+  // Overlong '/', a surrogate, a truncated sequence at the end: each byte of them U+FFFD.
+  const std::string out = JsonText("\xc0\xaf|\xed\xa0\x80|\xe2\x82");
+  Json parsed;
+  ASSERT_NO_THROW(parsed = Json::parse(out)) << out;
+  const std::string& r = replacement;
+  const std::string expected = r + r + "|" + r + r + r + "|" + r;
+  EXPECT_EQ(parsed, expected) << out;
+}
+
+// A rig id with quotes, backslashes, control characters and non-ASCII UTF-8 comes back from the
+// API's JSON as it was (escaping was the bug class of the hand-written writers).
+TEST_F(RigFeedTest, AnyRigIdRoundTripsThroughTheJson) {
+  const std::string id = "rig \"A\"\\b\n\t\x01 \xc3\xb6";  // ", \, newline, tab, U+0001, ö
+  const Json state = Json::parse(feed_->StateJson(id, 0));
+  EXPECT_EQ(state["rig"], id);
+  EXPECT_EQ(state["known"], false);
+  const Json refusal = Json::parse(ErrorJson("unknown rig " + id));
+  EXPECT_EQ(refusal["error"], "unknown rig " + id);
+  EXPECT_EQ(refusal["ok"], false);
 }
 
 TEST_F(RigFeedTest, ReadsOnlyWhileWatched) {

@@ -5,18 +5,21 @@
 #include <cstdio>
 #include <mutex>
 #include <optional>
-#include <sstream>
 
 #include "model/analysis/resonance_list.h"
 #include "model/common/units.h"
 #include "model/effects/param_by_key.h"
 #include "model/identification/resonance_diagnose.h"
 #include "tools/cli/fit_resonances.h"
-#include "tools/cli/json_text.h"
 #include "tools/cli/parallel_tasks.h"
+#include "tools/report/json.h"
 
 namespace mpdrig::cli {
 namespace {
+
+using report::Json;
+using report::JsonNumber;
+using report::JsonText;
 
 std::string Name(Termination t) { return std::string(TerminationName(t)); }
 
@@ -34,61 +37,63 @@ std::optional<double> Modelled(const ResonanceFitResult& fit, Termination t) {
   return std::nullopt;
 }
 
-std::string JsonFitParams(const ResonanceFitResult& fit) {
-  std::ostringstream out;
-  out << "{";
-  for (std::size_t j = 0; j < fit.keys.size(); ++j) {
-    out << (j ? ", " : "") << JsonString(fit.keys[j]) << ": " << JsonNumber(fit.estimates[j]);
-  }
-  return out.str() + "}";
+Json JsonFitParams(const ResonanceFitResult& fit) {
+  Json out = Json::object();
+  for (std::size_t j = 0; j < fit.keys.size(); ++j) out[fit.keys[j]] = JsonNumber(fit.estimates[j]);
+  return out;
 }
 
-std::string JsonModelHz(const ResonanceFitResult& fit) {
-  std::ostringstream out;
-  out << "[";
-  for (std::size_t i = 0; i < fit.configurations.size(); ++i) {
-    out << (i ? ", " : "") << JsonNumber(fit.configurations[i].model_hz);
-  }
-  return out.str() + "]";
+Json JsonModelHz(const ResonanceFitResult& fit) {
+  Json out = Json::array();
+  for (const ResonanceFitConfiguration& c : fit.configurations)
+    out.push_back(JsonNumber(c.model_hz));
+  return out;
 }
 
-std::string JsonCandidate(const ResonanceCandidate& c) {
-  std::ostringstream out;
-  out << "{\"effect\": " << JsonString(c.effect) << ", \"round\": " << c.round
-      << ", \"outcome\": " << JsonString(std::string(OutcomeName(c.outcome)))
-      << ", \"screen_shift_hz\": " << JsonNumber(c.screen_shift_hz);
+Json JsonCandidate(const ResonanceCandidate& c) {
+  Json out = {{"effect", c.effect},
+              {"round", c.round},
+              {"outcome", std::string(OutcomeName(c.outcome))},
+              {"screen_shift_hz", JsonNumber(c.screen_shift_hz)}};
   if (c.outcome != ResonanceCandidate::Outcome::kFitted) {
-    return out.str() + ", \"note\": " + JsonString(c.note) + "}";
+    out["note"] = c.note;
+    return out;
   }
-  out << ", \"chi2\": " << JsonNumber(c.chi2) << ", \"delta_chi2\": " << JsonNumber(c.delta_chi2)
-      << ", \"threshold\": " << JsonNumber(c.threshold)
-      << ", \"significant\": " << (c.significant ? "true" : "false")
-      << ", \"max_error_hz\": " << JsonNumber(c.fit.max_error_hz)
-      << ", \"model_hz\": " << JsonModelHz(c.fit) << ", \"fitted\": " << JsonFitParams(c.fit)
-      << ", \"equivalent\": [";
-  for (std::size_t i = 0; i < c.equivalent.size(); ++i) {
-    out << (i ? ", " : "") << JsonString(c.equivalent[i]);
+  Json not_excluded = Json::array();
+  for (const auto& other : c.not_excluded) {
+    not_excluded.push_back({{"effect", other.effect},
+                            {"chi2", JsonNumber(other.chi2)},
+                            {"max_error_hz", JsonNumber(other.max_error_hz)}});
   }
-  out << "], \"not_excluded\": [";
-  for (std::size_t i = 0; i < c.not_excluded.size(); ++i) {
-    out << (i ? ", " : "") << "{\"effect\": " << JsonString(c.not_excluded[i].effect)
-        << ", \"chi2\": " << JsonNumber(c.not_excluded[i].chi2)
-        << ", \"max_error_hz\": " << JsonNumber(c.not_excluded[i].max_error_hz) << "}";
+  Json params = Json::array();
+  for (const ResonanceParamEstimate& p : c.params) {
+    params.push_back({{"key", p.key},
+                      {"estimate", JsonNumber(p.estimate)},
+                      {"std_error", JsonNumber(p.standard_error)},
+                      {"lower", JsonNumber(p.bound_lower)},
+                      {"upper", JsonNumber(p.bound_upper)},
+                      {"plausible_lower", JsonNumber(p.plausible_lower)},
+                      {"plausible_upper", JsonNumber(p.plausible_upper)},
+                      {"at_bound", p.at_bound},
+                      {"within_plausible", p.within_plausible}});
   }
-  out << "], \"params\": [";
-  for (std::size_t j = 0; j < c.params.size(); ++j) {
-    const ResonanceParamEstimate& p = c.params[j];
-    out << (j ? ", " : "") << "{\"key\": " << JsonString(p.key)
-        << ", \"estimate\": " << JsonNumber(p.estimate)
-        << ", \"std_error\": " << JsonNumber(p.standard_error)
-        << ", \"lower\": " << JsonNumber(p.bound_lower)
-        << ", \"upper\": " << JsonNumber(p.bound_upper)
-        << ", \"plausible_lower\": " << JsonNumber(p.plausible_lower)
-        << ", \"plausible_upper\": " << JsonNumber(p.plausible_upper)
-        << ", \"at_bound\": " << (p.at_bound ? "true" : "false")
-        << ", \"within_plausible\": " << (p.within_plausible ? "true" : "false") << "}";
-  }
-  return out.str() + "]}";
+  out["chi2"] = JsonNumber(c.chi2);
+  out["delta_chi2"] = JsonNumber(c.delta_chi2);
+  out["threshold"] = JsonNumber(c.threshold);
+  out["significant"] = c.significant;
+  out["max_error_hz"] = JsonNumber(c.fit.max_error_hz);
+  out["model_hz"] = JsonModelHz(c.fit);
+  out["fitted"] = JsonFitParams(c.fit);
+  out["equivalent"] = c.equivalent;
+  out["not_excluded"] = std::move(not_excluded);
+  out["params"] = std::move(params);
+  return out;
+}
+
+Json JsonCandidates(const std::vector<ResonanceCandidate>& candidates) {
+  Json out = Json::array();
+  for (const ResonanceCandidate& c : candidates) out.push_back(JsonCandidate(c));
+  return out;
 }
 
 // closed/open and valve/closed ratios of a set of resonances (NaN where one is missing).
@@ -107,65 +112,59 @@ Ratios RatiosOf(Get get) {
 }
 
 std::string DiagnosisJson(const ResonanceDiagnosis& d, const ResonanceDiagnoseArgs& args) {
-  std::ostringstream out;
-  out << "{\n  \"resonance_list\": " << JsonString(args.resonances_path) << ",\n  \"held\": [";
-  for (std::size_t i = 0; i < d.held.size(); ++i) out << (i ? ", " : "") << JsonString(d.held[i]);
-  out << "],\n  \"resonances\": [";
+  Json resonances = Json::array();
   for (std::size_t i = 0; i < d.measured.size(); ++i) {
     const MeasuredResonance& m = d.measured[i];
-    out << (i ? "," : "") << "\n    {\"configuration\": " << JsonString(Name(m.configuration))
-        << ", \"measured_hz\": " << JsonNumber(m.frequency_hz)
-        << ", \"uncertainty_hz\": " << JsonNumber(m.uncertainty_hz)
-        << ", \"base_model_hz\": " << JsonNumber(d.base.configurations[i].model_hz)
-        << ", \"model_hz\": " << JsonNumber(d.Final().configurations[i].model_hz)
-        << ", \"after_each\": [";
-    for (std::size_t s = 0; s < d.selected.size(); ++s) {
-      out << (s ? ", " : "") << JsonNumber(d.selected[s].fit.configurations[i].model_hz);
+    Json after_each = Json::array();
+    for (const ResonanceCandidate& s : d.selected) {
+      after_each.push_back(JsonNumber(s.fit.configurations[i].model_hz));
     }
-    out << "], \"response\": "
-        << JsonString(std::string(ResponseMethodName(d.Final().configurations[i].method))) << "}";
+    resonances.push_back(
+        {{"configuration", Name(m.configuration)},
+         {"measured_hz", JsonNumber(m.frequency_hz)},
+         {"uncertainty_hz", JsonNumber(m.uncertainty_hz)},
+         {"base_model_hz", JsonNumber(d.base.configurations[i].model_hz)},
+         {"model_hz", JsonNumber(d.Final().configurations[i].model_hz)},
+         {"after_each", after_each},
+         {"response", std::string(ResponseMethodName(d.Final().configurations[i].method))}});
   }
-  out << "\n  ],\n";
-  out << "  \"base\": {\"fitted\": " << JsonFitParams(d.base)
-      << ", \"chi2\": " << JsonNumber(d.base.chi2_after)
-      << ", \"max_error_hz\": " << JsonNumber(d.base.max_error_hz) << "},\n";
   const Ratios measured = RatiosOf([&](Termination t) { return Measured(d, t); });
   const Ratios uniform = RatiosOf([&](Termination t) { return Modelled(d.uniform, t); });
-  out << "  \"uniform_wave_speed\": {\"wave_speed_mps\": "
-      << JsonNumber(d.uniform.estimates.empty() ? std::nan("") : d.uniform.estimates[0])
-      << ", \"chi2\": " << JsonNumber(d.uniform.chi2_after)
-      << ", \"max_error_hz\": " << JsonNumber(d.uniform.max_error_hz)
-      << ", \"model_hz\": " << JsonModelHz(d.uniform)
-      << ", \"closed_open_ratio\": " << JsonNumber(uniform.closed_open)
-      << ", \"measured_closed_open_ratio\": " << JsonNumber(measured.closed_open)
-      << ", \"valve_closed_ratio\": " << JsonNumber(uniform.valve_closed)
-      << ", \"measured_valve_closed_ratio\": " << JsonNumber(measured.valve_closed) << "},\n";
-  out << "  \"candidates\": [";
-  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
-    out << (i ? "," : "") << "\n    " << JsonCandidate(d.candidates[i]);
+  Json removed = Json::array();
+  for (const RemovedEffect& r : d.removed) {
+    removed.push_back({{"effect", r.effect},
+                       {"round", r.round},
+                       {"delta_chi2", JsonNumber(r.delta_chi2)},
+                       {"threshold", JsonNumber(r.threshold)}});
   }
-  out << "\n  ],\n  \"selected\": [";
-  for (std::size_t i = 0; i < d.selected.size(); ++i) {
-    out << (i ? "," : "") << "\n    " << JsonCandidate(d.selected[i]);
-  }
-  out << "\n  ],\n  \"removed\": [";
-  for (std::size_t i = 0; i < d.removed.size(); ++i) {
-    const RemovedEffect& r = d.removed[i];
-    out << (i ? ", " : "") << "{\"effect\": " << JsonString(r.effect) << ", \"round\": " << r.round
-        << ", \"delta_chi2\": " << JsonNumber(r.delta_chi2)
-        << ", \"threshold\": " << JsonNumber(r.threshold) << "}";
-  }
-  out << "],\n  \"next\": " << (d.next ? JsonCandidate(*d.next) : "null") << ",\n";
-  out << "  \"not_fitted\": [";
-  for (std::size_t i = 0; i < d.not_fitted.size(); ++i) {
-    out << (i ? "," : "") << "\n    " << JsonCandidate(d.not_fitted[i]);
-  }
-  out << "\n  ],\n  \"selection_end\": " << JsonString(d.selection_end) << ",\n";
-  out << "  \"verdict\": " << (d.selected.empty() ? "null" : JsonString(d.selected[0].effect))
-      << ",\n";
-  out << "  \"max_error_hz\": " << JsonNumber(d.Final().max_error_hz) << ",\n";
-  out << "  \"resonances_computed\": " << d.resonances_computed << "\n}\n";
-  return out.str();
+  const Json json = {
+      {"resonance_list", args.resonances_path},
+      {"held", d.held},
+      {"resonances", resonances},
+      {"base",
+       {{"fitted", JsonFitParams(d.base)},
+        {"chi2", JsonNumber(d.base.chi2_after)},
+        {"max_error_hz", JsonNumber(d.base.max_error_hz)}}},
+      {"uniform_wave_speed",
+       {{"wave_speed_mps",
+         JsonNumber(d.uniform.estimates.empty() ? std::nan("") : d.uniform.estimates[0])},
+        {"chi2", JsonNumber(d.uniform.chi2_after)},
+        {"max_error_hz", JsonNumber(d.uniform.max_error_hz)},
+        {"model_hz", JsonModelHz(d.uniform)},
+        {"closed_open_ratio", JsonNumber(uniform.closed_open)},
+        {"measured_closed_open_ratio", JsonNumber(measured.closed_open)},
+        {"valve_closed_ratio", JsonNumber(uniform.valve_closed)},
+        {"measured_valve_closed_ratio", JsonNumber(measured.valve_closed)}}},
+      {"candidates", JsonCandidates(d.candidates)},
+      {"selected", JsonCandidates(d.selected)},
+      {"removed", removed},
+      {"next", d.next ? JsonCandidate(*d.next) : Json(nullptr)},
+      {"not_fitted", JsonCandidates(d.not_fitted)},
+      {"selection_end", d.selection_end},
+      {"verdict", d.selected.empty() ? Json(nullptr) : Json(d.selected[0].effect)},
+      {"max_error_hz", JsonNumber(d.Final().max_error_hz)},
+      {"resonances_computed", d.resonances_computed}};
+  return JsonText(json, 2);
 }
 
 void PrintParams(const ResonanceCandidate& c, FILE* out) {

@@ -8,7 +8,6 @@
 #include <fstream>
 #include <limits>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -17,11 +16,16 @@
 #include "model/identification/fit.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/fit_resonances.h"
-#include "tools/cli/json_text.h"
 #include "tools/cli/model_options.h"
+#include "tools/report/json.h"
 
 namespace mpdrig::cli {
 namespace {
+
+using report::Json;
+using report::JsonNumber;
+using report::JsonNumbers;
+using report::JsonText;
 
 constexpr int kFitDefaultCells = 50;  // a fit replays the log dozens of times
 
@@ -78,39 +82,30 @@ Status ParseWindow(const std::string& spec, FitOptions* options) {
 
 std::string FitJson(const FitResult& fit, const std::vector<FitParameter>& parameters,
                     const FitArgs& args, const FitOptions& options) {
-  std::ostringstream out;
-  out << "{\n  \"log\": " << JsonString(args.log_path) << ",\n  \"params\": {";
+  Json params = Json::object();
   for (std::size_t j = 0; j < fit.keys.size(); ++j) {
-    out << (j ? "," : "") << "\n    " << JsonString(fit.keys[j])
-        << ": {\"initial\": " << JsonNumber(fit.initial[j])
-        << ", \"estimate\": " << JsonNumber(fit.estimates[j])
-        << ", \"std_error\": " << JsonNumber(fit.standard_errors[j])
-        << ", \"held\": " << (fit.held[j] ? "true" : "false")
-        << ", \"lower\": " << JsonNumber(parameters[j].lower)
-        << ", \"upper\": " << JsonNumber(parameters[j].upper) << "}";
+    params[fit.keys[j]] = {{"initial", JsonNumber(fit.initial[j])},
+                           {"estimate", JsonNumber(fit.estimates[j])},
+                           {"std_error", JsonNumber(fit.standard_errors[j])},
+                           {"held", static_cast<bool>(fit.held[j])},
+                           {"lower", JsonNumber(parameters[j].lower)},
+                           {"upper", JsonNumber(parameters[j].upper)}};
   }
-  out << "\n  },\n  \"correlation\": {\"keys\": [";
-  for (std::size_t j = 0; j < fit.keys.size(); ++j)
-    out << (j ? ", " : "") << JsonString(fit.keys[j]);
-  out << "], \"matrix\": [";
-  for (std::size_t i = 0; i < fit.correlation.size(); ++i) {
-    out << (i ? ", " : "") << "[";
-    for (std::size_t j = 0; j < fit.correlation[i].size(); ++j) {
-      out << (j ? ", " : "") << JsonNumber(fit.correlation[i][j]);
-    }
-    out << "]";
-  }
-  out << "]},\n";
-  out << "  \"error_before\": " << JsonNumber(fit.error_before) << ",\n";
-  out << "  \"error_after\": " << JsonNumber(fit.error_after) << ",\n";
-  out << "  \"iterations\": " << fit.iterations << ",\n";
-  out << "  \"replays\": " << fit.replays << ",\n";
-  out << "  \"converged\": " << (fit.converged ? "true" : "false") << ",\n";
-  out << "  \"window_s\": [" << JsonNumber(options.window_begin_s) << ", "
-      << JsonNumber(options.window_end_s) << "],\n";
-  out << "  \"cells\": " << options.simulation.cells << ",\n";
-  out << "  \"solver_report\": " << JsonString(fit.solver_report) << "\n}\n";
-  return out.str();
+  Json matrix = Json::array();
+  for (const auto& row : fit.correlation) matrix.push_back(JsonNumbers(row));
+  const Json json = {{"log", args.log_path},
+                     {"params", params},
+                     {"correlation", {{"keys", fit.keys}, {"matrix", matrix}}},
+                     {"error_before", JsonNumber(fit.error_before)},
+                     {"error_after", JsonNumber(fit.error_after)},
+                     {"iterations", fit.iterations},
+                     {"replays", fit.replays},
+                     {"converged", fit.converged},
+                     {"window_s", Json::array({JsonNumber(options.window_begin_s),
+                                               JsonNumber(options.window_end_s)})},
+                     {"cells", options.simulation.cells},
+                     {"solver_report", fit.solver_report}};
+  return JsonText(json, 2);
 }
 
 void PrintSummary(const FitResult& fit, const std::vector<FitParameter>& parameters,

@@ -2,17 +2,20 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <sstream>
 
 #include "model/analysis/resonance_list.h"
 #include "model/common/units.h"
 #include "model/effects/effect.h"
 #include "model/effects/param_by_key.h"
 #include "model/identification/resonance_fit.h"
-#include "tools/cli/json_text.h"
+#include "tools/report/json.h"
 
 namespace mpdrig::cli {
 namespace {
+
+using report::Json;
+using report::JsonNumber;
+using report::JsonText;
 
 // The keys fitted: --params, or the wave speed and every fitted parameter of the effects on;
 // without the --hold keys.
@@ -56,42 +59,36 @@ Result<std::vector<FitParameter>> Parameters(const RigParams& start, const Reson
 
 std::string FitJson(const ResonanceFitResult& fit, const ResonanceFitArgs& args,
                     const std::vector<std::string>& effects) {
-  std::ostringstream out;
-  out << "{\n  \"resonances\": " << JsonString(args.resonances_path) << ",\n";
-  out << "  \"effects\": [";
-  for (std::size_t i = 0; i < effects.size(); ++i) out << (i ? ", " : "") << JsonString(effects[i]);
-  out << "],\n  \"held\": [";
-  for (std::size_t i = 0; i < args.hold.size(); ++i)
-    out << (i ? ", " : "") << JsonString(args.hold[i]);
-  out << "],\n  \"params\": {";
+  Json params = Json::object();
   for (std::size_t j = 0; j < fit.keys.size(); ++j) {
-    out << (j ? "," : "") << "\n    " << JsonString(fit.keys[j])
-        << ": {\"initial\": " << JsonNumber(fit.initial[j])
-        << ", \"estimate\": " << JsonNumber(fit.estimates[j])
-        << ", \"std_error\": " << JsonNumber(fit.standard_errors[j])
-        << ", \"lower\": " << JsonNumber(fit.lower[j])
-        << ", \"upper\": " << JsonNumber(fit.upper[j]) << "}";
+    params[fit.keys[j]] = {{"initial", JsonNumber(fit.initial[j])},
+                           {"estimate", JsonNumber(fit.estimates[j])},
+                           {"std_error", JsonNumber(fit.standard_errors[j])},
+                           {"lower", JsonNumber(fit.lower[j])},
+                           {"upper", JsonNumber(fit.upper[j])}};
   }
-  out << "\n  },\n  \"configurations\": [";
-  for (std::size_t i = 0; i < fit.configurations.size(); ++i) {
-    const ResonanceFitConfiguration& c = fit.configurations[i];
-    out << (i ? "," : "")
-        << "\n    {\"configuration\": " << JsonString(std::string(TerminationName(c.configuration)))
-        << ", \"measured_hz\": " << JsonNumber(c.measured_hz)
-        << ", \"uncertainty_hz\": " << JsonNumber(c.uncertainty_hz)
-        << ", \"base_model_hz\": " << JsonNumber(c.base_model_hz)
-        << ", \"model_hz\": " << JsonNumber(c.model_hz)
-        << ", \"response\": " << JsonString(std::string(ResponseMethodName(c.method))) << "}";
+  Json configurations = Json::array();
+  for (const ResonanceFitConfiguration& c : fit.configurations) {
+    configurations.push_back({{"configuration", std::string(TerminationName(c.configuration))},
+                              {"measured_hz", JsonNumber(c.measured_hz)},
+                              {"uncertainty_hz", JsonNumber(c.uncertainty_hz)},
+                              {"base_model_hz", JsonNumber(c.base_model_hz)},
+                              {"model_hz", JsonNumber(c.model_hz)},
+                              {"response", std::string(ResponseMethodName(c.method))}});
   }
-  out << "\n  ],\n";
-  out << "  \"chi2_before\": " << JsonNumber(fit.chi2_before) << ",\n";
-  out << "  \"chi2_after\": " << JsonNumber(fit.chi2_after) << ",\n";
-  out << "  \"max_error_hz\": " << JsonNumber(fit.max_error_hz) << ",\n";
-  out << "  \"iterations\": " << fit.iterations << ",\n";
-  out << "  \"resonances_computed\": " << fit.evaluations << ",\n";
-  out << "  \"converged\": " << (fit.converged ? "true" : "false") << ",\n";
-  out << "  \"solver_report\": " << JsonString(fit.solver_report) << "\n}\n";
-  return out.str();
+  const Json json = {{"resonances", args.resonances_path},
+                     {"effects", effects},
+                     {"held", args.hold},
+                     {"params", params},
+                     {"configurations", configurations},
+                     {"chi2_before", JsonNumber(fit.chi2_before)},
+                     {"chi2_after", JsonNumber(fit.chi2_after)},
+                     {"max_error_hz", JsonNumber(fit.max_error_hz)},
+                     {"iterations", fit.iterations},
+                     {"resonances_computed", fit.evaluations},
+                     {"converged", fit.converged},
+                     {"solver_report", fit.solver_report}};
+  return JsonText(json, 2);
 }
 
 }  // namespace

@@ -7,47 +7,46 @@
 #include "model/analysis/resonance_list.h"
 #include "model/analysis/termination.h"
 #include "model/riglog/rig_log.h"
-#include "tools/cli/json_text.h"
 #include "tools/cli/model_options.h"
+#include "tools/report/json.h"
 
 namespace mpdrig::cli {
 namespace {
 
+using report::Json;
+using report::JsonNumber;
+using report::JsonText;
+
 std::string ResponseJson(const EmpiricalResponse& r, const FreqrespLogArgs& args) {
-  std::ostringstream out;
-  out << "{\n  \"log\": " << JsonString(args.log_path) << ",\n";
-  out << "  \"input\": \"piston_position\",\n";
-  out << "  \"magnitude_unit\": \"Pa/m\",\n";
-  out << "  \"sample_rate_hz\": " << JsonNumber(r.sample_rate_hz) << ",\n";
-  out << "  \"segment_s\": " << JsonNumber(r.segment_s) << ",\n";
-  out << "  \"segments\": " << r.segments << ",\n";
-  out << "  \"df_hz\": " << JsonNumber(r.df_hz) << ",\n";
-  out << "  \"min_coherence\": " << JsonNumber(args.response.min_coherence) << ",\n";
-  out << "  \"channels\": [";
-  for (std::size_t c = 0; c < r.channels.size(); ++c) {
-    const ChannelResponse& ch = r.channels[c];
-    out << (c ? "," : "") << "\n    {\"channel\": " << JsonString(ch.channel)
-        << ",\n     \"peaks\": [";
-    for (std::size_t k = 0; k < ch.peaks.size(); ++k) {
-      const ResonancePeak& p = ch.peaks[k];
-      out << (k ? ", " : "") << "{\"freq_hz\": " << JsonNumber(p.freq_hz)
-          << ", \"uncertainty_hz\": " << JsonNumber(p.uncertainty_hz)
-          << ", \"magnitude\": " << JsonNumber(p.magnitude)
-          << ", \"coherence\": " << JsonNumber(p.coherence)
-          << ", \"half_power_width_hz\": " << JsonNumber(p.half_power_width_hz) << "}";
+  Json channels = Json::array();
+  for (const ChannelResponse& ch : r.channels) {
+    Json peaks = Json::array();
+    for (const ResonancePeak& p : ch.peaks) {
+      peaks.push_back({{"freq_hz", JsonNumber(p.freq_hz)},
+                       {"uncertainty_hz", JsonNumber(p.uncertainty_hz)},
+                       {"magnitude", JsonNumber(p.magnitude)},
+                       {"coherence", JsonNumber(p.coherence)},
+                       {"half_power_width_hz", JsonNumber(p.half_power_width_hz)}});
     }
-    out << "],\n     \"points\": [";
-    for (std::size_t k = 0; k < ch.points.size(); ++k) {
-      const EmpiricalPoint& p = ch.points[k];
-      out << (k ? ", " : "") << "{\"freq_hz\": " << JsonNumber(p.freq_hz)
-          << ", \"magnitude\": " << JsonNumber(p.magnitude)
-          << ", \"phase_deg\": " << JsonNumber(p.phase_deg)
-          << ", \"coherence\": " << JsonNumber(p.coherence) << "}";
+    Json points = Json::array();
+    for (const EmpiricalPoint& p : ch.points) {
+      points.push_back({{"freq_hz", JsonNumber(p.freq_hz)},
+                        {"magnitude", JsonNumber(p.magnitude)},
+                        {"phase_deg", JsonNumber(p.phase_deg)},
+                        {"coherence", JsonNumber(p.coherence)}});
     }
-    out << "]}";
+    channels.push_back({{"channel", ch.channel}, {"peaks", peaks}, {"points", points}});
   }
-  out << "\n  ]\n}\n";
-  return out.str();
+  const Json json = {{"log", args.log_path},
+                     {"input", "piston_position"},
+                     {"magnitude_unit", "Pa/m"},
+                     {"sample_rate_hz", JsonNumber(r.sample_rate_hz)},
+                     {"segment_s", JsonNumber(r.segment_s)},
+                     {"segments", r.segments},
+                     {"df_hz", JsonNumber(r.df_hz)},
+                     {"min_coherence", JsonNumber(args.response.min_coherence)},
+                     {"channels", channels}};
+  return JsonText(json, 2);
 }
 
 std::string ResponseCsv(const EmpiricalResponse& r) {

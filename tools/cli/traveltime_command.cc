@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -14,9 +13,14 @@
 #include "model/riglog/rig_log_reader.h"
 #include "tools/cli/commands.h"
 #include "tools/cli/model_options.h"
+#include "tools/report/json.h"
 
 namespace mpdrig::cli {
 namespace {
+
+using report::Json;
+using report::JsonNumber;
+using report::JsonText;
 
 struct TravelTimeArgs {
   std::string log_path;
@@ -28,22 +32,6 @@ struct TravelTimeArgs {
   bool per_move = false;
   double min_move_deg = 2.0;
 };
-
-std::string JsonNumber(double value) {
-  if (!std::isfinite(value)) return "null";
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.10g", value);
-  return buffer;
-}
-
-std::string JsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) >= 0x20) out += c;
-  }
-  return out + "\"";
-}
 
 Status ParseWindow(const std::string& spec, TravelTimeOptions* options) {
   const std::size_t colon = spec.find(':');
@@ -120,62 +108,53 @@ double EndToEndDelay(const TravelTimeResult& r) {
   return NAN;
 }
 
-std::string MovesJson(const std::vector<MoveTravelTime>& moves) {
-  std::ostringstream out;
-  out << ",\n  \"moves\": [";
-  for (std::size_t k = 0; k < moves.size(); ++k) {
-    const MoveTravelTime& m = moves[k];
-    out << (k ? "," : "") << "\n    {\"time_s\": " << JsonNumber(m.time_s);
+Json MovesJson(const std::vector<MoveTravelTime>& moves) {
+  Json out = Json::array();
+  for (const MoveTravelTime& m : moves) {
+    Json move = {{"time_s", JsonNumber(m.time_s)}};
     if (m.status.ok()) {
-      out << ", \"wave_speed_mps\": " << JsonNumber(m.result.wave_speed_mps)
-          << ", \"wave_speed_uncertainty_mps\": " << JsonNumber(m.result.wave_speed_uncertainty_mps)
-          << ", \"pairs_used\": " << m.result.pairs_used
-          << ", \"end_to_end_delay_s\": " << JsonNumber(EndToEndDelay(m.result));
+      move["wave_speed_mps"] = JsonNumber(m.result.wave_speed_mps);
+      move["wave_speed_uncertainty_mps"] = JsonNumber(m.result.wave_speed_uncertainty_mps);
+      move["pairs_used"] = m.result.pairs_used;
+      move["end_to_end_delay_s"] = JsonNumber(EndToEndDelay(m.result));
     } else {
-      out << ", \"error\": " << JsonString(m.status.message());
+      move["error"] = m.status.message();
     }
-    out << "}";
+    out.push_back(std::move(move));
   }
-  out << "\n  ]";
-  return out.str();
+  return out;
 }
 
 std::string TravelTimeJson(const TravelTimeResult& r, const TravelTimeArgs& args,
                            const std::vector<MoveTravelTime>& moves) {
-  std::ostringstream out;
-  out << "{\n  \"log\": " << JsonString(args.log_path) << ",\n";
-  out << "  \"wave_speed_mps\": " << JsonNumber(r.wave_speed_mps) << ",\n";
-  out << "  \"wave_speed_uncertainty_mps\": " << JsonNumber(r.wave_speed_uncertainty_mps) << ",\n";
-  out << "  \"stack_wave_speed_mps\": " << JsonNumber(r.stack_wave_speed_mps) << ",\n";
-  out << "  \"residual_rms_s\": " << JsonNumber(r.residual_rms_s) << ",\n";
-  out << "  \"front_width_s\": " << JsonNumber(r.front_width_s) << ",\n";
-  out << "  \"pairs_used\": " << r.pairs_used << ",\n";
-  out << "  \"sample_rate_hz\": " << JsonNumber(r.sample_rate_hz) << ",\n";
-  out << "  \"duration_s\": " << JsonNumber(r.duration_s) << ",\n";
-  out << "  \"band_hz\": [" << JsonNumber(r.band_low_hz) << ", " << JsonNumber(r.band_high_hz)
-      << "],\n";
-  out << "  \"transmitters\": [";
-  for (std::size_t k = 0; k < r.transmitters.size(); ++k) {
-    out << (k ? ", " : "") << JsonString(r.transmitters[k]);
+  Json pairs = Json::array();
+  for (const PairDelay& p : r.pairs) {
+    Json pair = {{"from", p.first},
+                 {"to", p.second},
+                 {"distance_m", JsonNumber(p.distance_m)},
+                 {"delay_s", JsonNumber(p.delay_s)},
+                 {"delay_up_s", JsonNumber(p.delay_up_s)},
+                 {"delay_down_s", JsonNumber(p.delay_down_s)},
+                 {"peak_correlation", JsonNumber(p.peak_correlation)},
+                 {"peak_sigmas", JsonNumber(p.peak_sigmas)},
+                 {"used", p.used}};
+    if (!p.note.empty()) pair["note"] = p.note;
+    pairs.push_back(std::move(pair));
   }
-  out << "],\n  \"pairs\": [";
-  for (std::size_t k = 0; k < r.pairs.size(); ++k) {
-    const PairDelay& p = r.pairs[k];
-    out << (k ? "," : "") << "\n    {\"from\": " << JsonString(p.first)
-        << ", \"to\": " << JsonString(p.second) << ", \"distance_m\": " << JsonNumber(p.distance_m)
-        << ", \"delay_s\": " << JsonNumber(p.delay_s)
-        << ", \"delay_up_s\": " << JsonNumber(p.delay_up_s)
-        << ", \"delay_down_s\": " << JsonNumber(p.delay_down_s)
-        << ", \"peak_correlation\": " << JsonNumber(p.peak_correlation)
-        << ", \"peak_sigmas\": " << JsonNumber(p.peak_sigmas)
-        << ", \"used\": " << (p.used ? "true" : "false");
-    if (!p.note.empty()) out << ", \"note\": " << JsonString(p.note);
-    out << "}";
-  }
-  out << "\n  ]";
-  if (args.per_move) out << MovesJson(moves);
-  out << "\n}\n";
-  return out.str();
+  Json json = {{"log", args.log_path},
+               {"wave_speed_mps", JsonNumber(r.wave_speed_mps)},
+               {"wave_speed_uncertainty_mps", JsonNumber(r.wave_speed_uncertainty_mps)},
+               {"stack_wave_speed_mps", JsonNumber(r.stack_wave_speed_mps)},
+               {"residual_rms_s", JsonNumber(r.residual_rms_s)},
+               {"front_width_s", JsonNumber(r.front_width_s)},
+               {"pairs_used", r.pairs_used},
+               {"sample_rate_hz", JsonNumber(r.sample_rate_hz)},
+               {"duration_s", JsonNumber(r.duration_s)},
+               {"band_hz", Json::array({JsonNumber(r.band_low_hz), JsonNumber(r.band_high_hz)})},
+               {"transmitters", r.transmitters},
+               {"pairs", pairs}};
+  if (args.per_move) json["moves"] = MovesJson(moves);
+  return JsonText(json, 2);
 }
 
 // One line per move, then the mean and spread of their speeds, as the thesis's Table 8.3.1.

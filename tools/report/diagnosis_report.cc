@@ -6,50 +6,32 @@
 
 #include "model/common/units.h"
 #include "model/riglog/channels.h"
+#include "tools/report/json.h"
 #include "tools/report/svg_plot.h"
 
 namespace mpdrig::report {
 namespace {
 
-std::string Num(double value) {
-  if (!std::isfinite(value)) return "null";
-  std::string text;
-  riglog::AppendNumber(value, &text);
-  return text;
+Json ParamsJson(const std::vector<NamedValue>& params) {
+  Json out = Json::object();
+  for (const NamedValue& p : params) {
+    out[p.key] = {{"value", JsonNumber(p.value)},
+                  {"std_error", JsonNumber(p.standard_error)},
+                  {"held", p.held}};
+  }
+  return out;
 }
 
-std::string Quote(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') {
-      out += '\\', out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += ' ';
-    } else {
-      out += c;
-    }
+Json ChannelsJson(const std::vector<std::pair<Channel, double>>& errors) {
+  Json out = Json::object();
+  for (const auto& [channel, error] : errors) {
+    out[std::string(riglog::ChannelName(channel))] = JsonNumber(error);
   }
-  return out + "\"";
+  return out;
 }
 
-std::string ParamsJson(const std::vector<NamedValue>& params) {
-  std::string out = "{";
-  for (std::size_t i = 0; i < params.size(); ++i) {
-    if (i) out += ",";
-    out += Quote(params[i].key) + ":{\"value\":" + Num(params[i].value) +
-           ",\"std_error\":" + Num(params[i].standard_error) +
-           ",\"held\":" + (params[i].held ? "true" : "false") + "}";
-  }
-  return out + "}";
-}
-
-std::string ChannelsJson(const std::vector<std::pair<Channel, double>>& errors) {
-  std::string out = "{";
-  for (std::size_t i = 0; i < errors.size(); ++i) {
-    if (i) out += ",";
-    out += Quote(std::string(riglog::ChannelName(errors[i].first))) + ":" + Num(errors[i].second);
-  }
-  return out + "}";
+Json OptionalNumber(const std::optional<double>& value) {
+  return value ? JsonNumber(*value) : Json(nullptr);
 }
 
 double ErrorOf(const CandidateResult& result, Channel channel) {
@@ -61,160 +43,169 @@ double ErrorOf(const CandidateResult& result, Channel channel) {
 
 // One candidate's object; `reference` is the model it was measured against (the baseline, or
 // the model with the effects selected before it).
-std::string CandidateJson(const CandidateResult& c, const CandidateResult& reference) {
-  std::ostringstream out;
-  out << "{\"effect\":" << Quote(c.effect) << ",\"round\":" << c.round
-      << ",\"params\":" << ParamsJson(c.params) << ",\"error\":" << Num(c.error)
-      << ",\"penalised_error\":" << Num(c.penalised_error) << ",\"fit_error\":" << Num(c.fit_error)
-      << ",\"improvement\":" << Num(c.improvement)
-      << ",\"improvement_std_error\":" << Num(c.improvement_std_error)
-      << ",\"extra_params\":" << c.extra_params
-      << ",\"significant\":" << (c.significant ? "true" : "false")
-      << ",\"explains\":" << Quote(c.explains)
-      << ",\"description\":" << Quote(DescribeCandidate(c, reference))
-      << ",\"channels\":" << ChannelsJson(c.channel_errors);
-  if (c.floor_error) out << ",\"floor_error\":" << Num(*c.floor_error);
-  if (!c.failure.empty()) out << ",\"failure\":" << Quote(c.failure);
+Json CandidateJson(const CandidateResult& c, const CandidateResult& reference) {
+  Json out = {{"effect", c.effect},
+              {"round", c.round},
+              {"params", ParamsJson(c.params)},
+              {"error", JsonNumber(c.error)},
+              {"penalised_error", JsonNumber(c.penalised_error)},
+              {"fit_error", JsonNumber(c.fit_error)},
+              {"improvement", JsonNumber(c.improvement)},
+              {"improvement_std_error", JsonNumber(c.improvement_std_error)},
+              {"extra_params", c.extra_params},
+              {"significant", c.significant},
+              {"explains", c.explains},
+              {"description", DescribeCandidate(c, reference)},
+              {"channels", ChannelsJson(c.channel_errors)}};
+  if (c.floor_error) out["floor_error"] = JsonNumber(*c.floor_error);
+  if (!c.failure.empty()) out["failure"] = c.failure;
   if (!c.strength_key.empty()) {
-    out << ",\"strength_key\":" << Quote(c.strength_key) << ",\"detectable_from\":"
-        << (c.detectable_from ? Num(*c.detectable_from) : std::string("null"))
-        << ",\"strength_inverse\":" << (c.strength_inverse ? "true" : "false")
-        << ",\"strength_scan_limit\":" << Num(c.strength_scan_limit);
+    out["strength_key"] = c.strength_key;
+    out["detectable_from"] = OptionalNumber(c.detectable_from);
+    out["strength_inverse"] = c.strength_inverse;
+    out["strength_scan_limit"] = JsonNumber(c.strength_scan_limit);
   }
-  out << "}";
-  return out.str();
+  return out;
 }
 
 // The log's regimes and the split (regimes.h).
-std::string RegimesJson(const Diagnosis& d) {
-  std::ostringstream out;
-  out << ",\"split\":{\"fit_end_s\":" << Num(d.fit_end_s)
-      << ",\"requested_fit_end_s\":" << Num(d.requested_fit_end_s) << ",\"one_sided\":[";
-  for (std::size_t i = 0; i < d.one_sided_regimes.size(); ++i) {
-    out << (i ? "," : "") << Quote(d.one_sided_regimes[i]);
-  }
-  out << "]},\"regimes\":[";
-  for (std::size_t i = 0; i < d.regimes.size(); ++i) {
-    const Regime& r = d.regimes[i];
-    out << (i ? "," : "") << "{\"name\":" << Quote(r.name) << ",\"input\":" << Quote(r.input)
-        << ",\"duration_s\":" << Num(r.duration_s) << ",\"fit_s\":" << Num(r.fit_s)
-        << ",\"score_s\":" << Num(r.score_s) << ",\"intervals\":[";
-    for (std::size_t k = 0; k < r.intervals.size(); ++k) {
-      out << (k ? "," : "") << "[" << Num(r.intervals[k].begin_s) << ","
-          << Num(r.intervals[k].end_s) << "]";
+void AddRegimes(const Diagnosis& d, Json& out) {
+  out["split"] = {{"fit_end_s", JsonNumber(d.fit_end_s)},
+                  {"requested_fit_end_s", JsonNumber(d.requested_fit_end_s)},
+                  {"one_sided", d.one_sided_regimes}};
+  Json regimes = Json::array();
+  for (const Regime& r : d.regimes) {
+    Json intervals = Json::array();
+    for (const TimeInterval& interval : r.intervals) {
+      intervals.push_back(Json::array({JsonNumber(interval.begin_s), JsonNumber(interval.end_s)}));
     }
-    out << "]}";
+    regimes.push_back({{"name", r.name},
+                       {"input", r.input},
+                       {"duration_s", JsonNumber(r.duration_s)},
+                       {"fit_s", JsonNumber(r.fit_s)},
+                       {"score_s", JsonNumber(r.score_s)},
+                       {"intervals", intervals}});
   }
-  out << "]";
-  return out.str();
+  out["regimes"] = std::move(regimes);
 }
 
 // What the best model leaves (residual_signature.h), lab units for the offsets.
-std::string ResidualJson(const ResidualSignature& r) {
-  std::ostringstream out;
-  out << ",\"residual\":{\"model\":" << Quote(r.model)
-      << ",\"misses\":" << (r.misses ? "true" : "false")
-      << ",\"above_noise\":" << (r.above_noise ? "true" : "false") << ",\"error\":" << Num(r.error)
-      << ",\"noise_floor\":" << Num(r.noise_floor) << ",\"sensor_floor\":" << Num(r.sensor_floor)
-      << ",\"input_floor\":" << Num(r.input_floor) << ",\"misses_factor\":" << Num(kMissesFactor)
-      << ",\"noise_floor_method\":" << Quote(kNoiseFloorMethod)
-      << ",\"whole_error\":" << Num(r.whole_error) << ",\"whole_floor\":" << Num(r.whole_floor)
-      << ",\"steady_share\":" << Num(r.steady_share)
-      << ",\"quarter_wave_hz\":" << Num(r.quarter_wave_hz) << ",\"summary\":" << Quote(r.Summary())
-      << ",\"reasons\":[";
-  for (std::size_t i = 0; i < r.reasons.size(); ++i) out << (i ? "," : "") << Quote(r.reasons[i]);
-  out << "],\"findings\":[";
-  for (std::size_t i = 0; i < r.findings.size(); ++i) out << (i ? "," : "") << Quote(r.findings[i]);
-  out << "],\"channels\":[";
-  for (std::size_t i = 0; i < r.channels.size(); ++i) {
-    const ChannelResidual& c = r.channels[i];
-    out << (i ? "," : "") << "{\"channel\":" << Quote(std::string(riglog::ChannelName(c.channel)))
-        << ",\"x_m\":" << (c.x_m ? Num(*c.x_m) : std::string("null"))
-        << ",\"nrmse\":" << Num(c.nrmse) << ",\"sensor_floor\":" << Num(c.sensor_floor)
-        << ",\"input_floor\":" << Num(c.input_floor) << ",\"floor\":" << Num(c.floor)
-        << ",\"excess\":" << Num(c.excess) << ",\"bias\":" << Num(c.bias_unit)
-        << ",\"steady_share\":" << Num(c.steady_share) << ",\"score_nrmse\":" << Num(c.score_nrmse)
-        << ",\"score_floor\":" << Num(c.score_floor) << "}";
+Json ResidualJson(const ResidualSignature& r) {
+  Json channels = Json::array();
+  for (const ChannelResidual& c : r.channels) {
+    channels.push_back({{"channel", std::string(riglog::ChannelName(c.channel))},
+                        {"x_m", OptionalNumber(c.x_m)},
+                        {"nrmse", JsonNumber(c.nrmse)},
+                        {"sensor_floor", JsonNumber(c.sensor_floor)},
+                        {"input_floor", JsonNumber(c.input_floor)},
+                        {"floor", JsonNumber(c.floor)},
+                        {"excess", JsonNumber(c.excess)},
+                        {"bias", JsonNumber(c.bias_unit)},
+                        {"steady_share", JsonNumber(c.steady_share)},
+                        {"score_nrmse", JsonNumber(c.score_nrmse)},
+                        {"score_floor", JsonNumber(c.score_floor)}});
   }
-  out << "],\"bands\":[";
-  for (std::size_t i = 0; i < r.bands.size(); ++i) {
-    const BandResidual& b = r.bands[i];
-    out << (i ? "," : "") << "{\"name\":" << Quote(b.name) << ",\"low_hz\":" << Num(b.low_hz)
-        << ",\"high_hz\":" << Num(b.high_hz) << ",\"error\":" << Num(b.error)
-        << ",\"floor\":" << Num(b.floor) << ",\"excess_share\":" << Num(b.excess_share) << "}";
+  Json bands = Json::array();
+  for (const BandResidual& b : r.bands) {
+    bands.push_back({{"name", b.name},
+                     {"low_hz", JsonNumber(b.low_hz)},
+                     {"high_hz", JsonNumber(b.high_hz)},
+                     {"error", JsonNumber(b.error)},
+                     {"floor", JsonNumber(b.floor)},
+                     {"excess_share", JsonNumber(b.excess_share)}});
   }
-  out << "],\"regimes\":[";
-  for (std::size_t i = 0; i < r.regimes.size(); ++i) {
-    const RegimeResidual& g = r.regimes[i];
-    out << (i ? "," : "") << "{\"regime\":" << Quote(g.regime) << ",\"input\":" << Quote(g.input)
-        << ",\"duration_s\":" << Num(g.duration_s) << ",\"error\":" << Num(g.error)
-        << ",\"floor\":" << Num(g.floor) << ",\"steady_share\":" << Num(g.steady_share)
-        << ",\"channels\":" << ChannelsJson(g.channel_errors) << "}";
+  Json regimes = Json::array();
+  for (const RegimeResidual& g : r.regimes) {
+    regimes.push_back({{"regime", g.regime},
+                       {"input", g.input},
+                       {"duration_s", JsonNumber(g.duration_s)},
+                       {"error", JsonNumber(g.error)},
+                       {"floor", JsonNumber(g.floor)},
+                       {"steady_share", JsonNumber(g.steady_share)},
+                       {"channels", ChannelsJson(g.channel_errors)}});
   }
-  out << "]}";
-  return out.str();
+  return {{"model", r.model},
+          {"misses", r.misses},
+          {"above_noise", r.above_noise},
+          {"error", JsonNumber(r.error)},
+          {"noise_floor", JsonNumber(r.noise_floor)},
+          {"sensor_floor", JsonNumber(r.sensor_floor)},
+          {"input_floor", JsonNumber(r.input_floor)},
+          {"misses_factor", JsonNumber(kMissesFactor)},
+          {"noise_floor_method", kNoiseFloorMethod},
+          {"whole_error", JsonNumber(r.whole_error)},
+          {"whole_floor", JsonNumber(r.whole_floor)},
+          {"steady_share", JsonNumber(r.steady_share)},
+          {"quarter_wave_hz", JsonNumber(r.quarter_wave_hz)},
+          {"summary", r.Summary()},
+          {"reasons", r.reasons},
+          {"findings", r.findings},
+          {"channels", channels},
+          {"bands", bands},
+          {"regimes", regimes}};
 }
 
 }  // namespace
 
 std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
-  std::ostringstream out;
   const CandidateResult& b = d.baseline;
-  out << "{\"log\":" << Quote(log_path) << ",\"fit_end_s\":" << Num(d.fit_end_s)
-      << ",\"noise_floor\":" << Num(d.noise_floor) << ",\"replays\":" << d.replays;
+  Json out = {{"log", log_path},
+              {"fit_end_s", JsonNumber(d.fit_end_s)},
+              {"noise_floor", JsonNumber(d.noise_floor)},
+              {"replays", d.replays}};
   // Pressures held on a floor (cavity_evidence.h): where, at what level, how often.
-  out << ",\"pressure_floors\":{\"present\":" << (d.pressure_floors.present() ? "true" : "false")
-      << ",\"level_pa\":" << Num(d.pressure_floors.level_pa)
-      << ",\"holds\":" << d.pressure_floors.holds << ",\"channels\":[";
-  for (std::size_t i = 0; i < d.pressure_floors.floors.size(); ++i) {
-    const ChannelFloor& floor = d.pressure_floors.floors[i];
-    out << (i ? "," : "") << "{\"channel\":" << Quote(std::string(ChannelName(floor.channel)))
-        << ",\"level_pa\":" << Num(floor.level_pa) << ",\"holds\":" << floor.holds.size() << "}";
+  Json floors = Json::array();
+  for (const ChannelFloor& floor : d.pressure_floors.floors) {
+    floors.push_back({{"channel", std::string(ChannelName(floor.channel))},
+                      {"level_pa", JsonNumber(floor.level_pa)},
+                      {"holds", floor.holds.size()}});
   }
-  out << "]},\"runs\":[";
+  out["pressure_floors"] = {{"present", d.pressure_floors.present()},
+                            {"level_pa", JsonNumber(d.pressure_floors.level_pa)},
+                            {"holds", d.pressure_floors.holds},
+                            {"channels", floors}};
   // Where the model runs went, stage by stage.
-  for (std::size_t i = 0; i < d.runs.size(); ++i) {
-    const StageRuns& r = d.runs[i];
-    out << (i ? "," : "") << "{\"stage\":" << Quote(r.stage) << ",\"scans\":" << r.scans
-        << ",\"fits\":" << r.fits << ",\"detectability\":" << r.detectability
-        << ",\"scoring\":" << r.scoring << "}";
+  Json runs = Json::array();
+  for (const StageRuns& r : d.runs) {
+    runs.push_back({{"stage", r.stage},
+                    {"scans", r.scans},
+                    {"fits", r.fits},
+                    {"detectability", r.detectability},
+                    {"scoring", r.scoring}});
   }
-  out << "]"
-      // The choke's and FT2's levels as estimated at the fitted base model, lab units.
-      << ",\"input_levels\":{\"choke_offset_deg\":"
-      << Num(units::ChokeFracToDeg(d.input_levels.choke_offset_frac))
-      << ",\"choke_trend_deg\":" << Num(units::ChokeFracToDeg(d.input_levels.choke_trend_frac))
-      << ",\"FT2_offset_lpm\":" << Num(units::M3psToLpm(d.input_levels.pump_offset_m3ps))
-      << ",\"FT2_trend_lpm\":" << Num(units::M3psToLpm(d.input_levels.pump_trend_m3ps))
-      << ",\"at_bound\":" << (d.input_levels.at_bound ? "true" : "false") << "}"
-      << ",\"baseline\":{\"error\":" << Num(b.error) << ",\"fit_error\":" << Num(b.fit_error)
-      << ",\"params\":" << ParamsJson(b.params)
-      << ",\"channels\":" << ChannelsJson(b.channel_errors) << "},\"candidates\":[";
-  for (std::size_t i = 0; i < d.candidates.size(); ++i) {
-    out << (i ? "," : "") << CandidateJson(d.candidates[i], b);
-  }
-  out << "],\"verdict\":" << (d.verdict ? Quote(*d.verdict) : std::string("null"));
-  out << ",\"equivalent\":[";
-  for (std::size_t i = 0; i < d.equivalent.size(); ++i)
-    out << (i ? "," : "") << Quote(d.equivalent[i]);
-  out << "]";
+  out["runs"] = std::move(runs);
+  // The choke's and FT2's levels as estimated at the fitted base model, lab units.
+  out["input_levels"] = {
+      {"choke_offset_deg", JsonNumber(units::ChokeFracToDeg(d.input_levels.choke_offset_frac))},
+      {"choke_trend_deg", JsonNumber(units::ChokeFracToDeg(d.input_levels.choke_trend_frac))},
+      {"FT2_offset_lpm", JsonNumber(units::M3psToLpm(d.input_levels.pump_offset_m3ps))},
+      {"FT2_trend_lpm", JsonNumber(units::M3psToLpm(d.input_levels.pump_trend_m3ps))},
+      {"at_bound", d.input_levels.at_bound}};
+  out["baseline"] = {{"error", JsonNumber(b.error)},
+                     {"fit_error", JsonNumber(b.fit_error)},
+                     {"params", ParamsJson(b.params)},
+                     {"channels", ChannelsJson(b.channel_errors)}};
+  Json candidates = Json::array();
+  for (const CandidateResult& c : d.candidates) candidates.push_back(CandidateJson(c, b));
+  out["candidates"] = std::move(candidates);
+  out["verdict"] = d.verdict ? Json(*d.verdict) : Json(nullptr);
+  out["equivalent"] = d.equivalent;
   // Forward selection: the effects added in order, each against the model before it.
-  out << ",\"selected\":[";
+  Json selected = Json::array();
   for (std::size_t i = 0; i < d.selected.size(); ++i) {
-    out << (i ? "," : "") << CandidateJson(d.selected[i], i ? d.selected[i - 1] : b);
+    selected.push_back(CandidateJson(d.selected[i], i ? d.selected[i - 1] : b));
   }
-  out << "],\"next\":"
-      << (d.next ? CandidateJson(*d.next, d.selected.empty() ? b : d.selected.back())
-                 : std::string("null"))
-      << ",\"selection_end\":" << Quote(d.selection_end) << ",\"failed\":[";
-  for (std::size_t i = 0; i < d.failed.size(); ++i) {
-    out << (i ? "," : "") << "{\"effect\":" << Quote(d.failed[i].effect)
-        << ",\"round\":" << d.failed[i].round << ",\"failure\":" << Quote(d.failed[i].failure)
-        << "}";
+  out["selected"] = std::move(selected);
+  out["next"] =
+      d.next ? CandidateJson(*d.next, d.selected.empty() ? b : d.selected.back()) : Json(nullptr);
+  out["selection_end"] = d.selection_end;
+  Json failed = Json::array();
+  for (const auto& f : d.failed) {
+    failed.push_back({{"effect", f.effect}, {"round", f.round}, {"failure", f.failure}});
   }
-  out << "]";
-  out << RegimesJson(d);
-  if (d.residual) out << ResidualJson(*d.residual);
+  out["failed"] = std::move(failed);
+  AddRegimes(d, out);
+  if (d.residual) out["residual"] = ResidualJson(*d.residual);
   // Where the fitted base model fails: worst channels, worst bands, lags.
   const Comparison& cmp = d.baseline_comparison;
   std::vector<const ChannelMetrics*> channels;
@@ -223,27 +214,25 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
     return (std::isfinite(a->nrmse) ? a->nrmse : -1.0) >
            (std::isfinite(b->nrmse) ? b->nrmse : -1.0);
   });
-  out << ",\"where_baseline_fails\":{\"worst_channels\":[";
+  Json worst = Json::array();
   for (std::size_t i = 0; i < channels.size() && i < 5; ++i) {
     const ChannelMetrics& m = *channels[i];
-    if (i) out << ",";
-    out << "{\"channel\":" << Quote(std::string(riglog::ChannelName(m.channel)))
-        << ",\"nrmse\":" << Num(m.nrmse) << ",\"lag_s\":" << Num(m.lag_s)
-        << ",\"residual_white\":" << (m.residual.white ? "true" : "false")
-        << ",\"residual_independent_of_inputs\":"
-        << (m.residual.independent_of_inputs ? "true" : "false") << ",\"bands\":[";
-    for (std::size_t k = 0; k < m.bands.size(); ++k) {
-      const BandMetrics& band = m.bands[k];
-      if (k) out << ",";
-      out << "{\"freq_hz\":" << Num(band.freq_hz)
-          << ",\"magnitude_ratio\":" << Num(band.magnitude_ratio)
-          << ",\"phase_diff_deg\":" << Num(band.phase_diff_deg)
-          << ",\"band_nrmse\":" << Num(band.band_nrmse) << "}";
+    Json bands = Json::array();
+    for (const BandMetrics& band : m.bands) {
+      bands.push_back({{"freq_hz", JsonNumber(band.freq_hz)},
+                       {"magnitude_ratio", JsonNumber(band.magnitude_ratio)},
+                       {"phase_diff_deg", JsonNumber(band.phase_diff_deg)},
+                       {"band_nrmse", JsonNumber(band.band_nrmse)}});
     }
-    out << "]}";
+    worst.push_back({{"channel", std::string(riglog::ChannelName(m.channel))},
+                     {"nrmse", JsonNumber(m.nrmse)},
+                     {"lag_s", JsonNumber(m.lag_s)},
+                     {"residual_white", m.residual.white},
+                     {"residual_independent_of_inputs", m.residual.independent_of_inputs},
+                     {"bands", bands}});
   }
-  out << "]}}\n";
-  return out.str();
+  out["where_baseline_fails"] = {{"worst_channels", worst}};
+  return JsonText(out);
 }
 
 namespace {

@@ -632,16 +632,21 @@ TEST(ServiceProcessTest, StatusReportsLostPeriodsAndTheLongestStallOfTheRealTime
   };
   ASSERT_TRUE(wait_for([](const Seen& s) { return s.sim_time_s >= 1.0; }))
       << "the service never ran 1 s of rig time";
-  EXPECT_EQ(seen.lost_periods, 0u) << "no stall yet";
+  // A loaded machine (a sanitizer build beside two other tests) may already have stalled the
+  // service for a period or two here; the 1.5 s stop is counted on top of those (the counting rule
+  // itself: pacer_test, on a clock the test moves).
+  const std::uint64_t lost_before = seen.lost_periods;
+  std::printf("periods lost before the stop: %llu\n", static_cast<unsigned long long>(lost_before));
+  EXPECT_LT(lost_before, 50u) << "the service kept real time before it was stopped";
   const double stopped_at_s = seen.sim_time_s;
 
   ASSERT_TRUE(serve.Signal(SIGSTOP));
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
   ASSERT_TRUE(serve.Signal(SIGCONT));
-  ASSERT_TRUE(wait_for([](const Seen& s) { return s.lost_periods > 0; }))
+  ASSERT_TRUE(wait_for([&](const Seen& s) { return s.lost_periods >= lost_before + 100; }))
       << "no status reported the stall; last: " << seen.warnings;
-  EXPECT_GE(seen.lost_periods, 120u) << "1.5 s at 100 Hz";
-  EXPECT_LE(seen.lost_periods, 400u);
+  EXPECT_GE(seen.lost_periods - lost_before, 120u) << "1.5 s at 100 Hz";
+  EXPECT_LE(seen.lost_periods - lost_before, 400u);
   EXPECT_GE(seen.longest_stall_s, 1.2);
   EXPECT_LE(seen.longest_stall_s, 4.0);
   EXPECT_GE(seen.last_stall_sim_time_s, stopped_at_s);
