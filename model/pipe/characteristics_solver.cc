@@ -199,15 +199,23 @@ double CharacteristicsSolver::StepInterior() {
 
 namespace {
 
+// The solver's relations get dp/du from the pressure: each says both in PressureAndSlope, and
+// the slope alone is that (one formula per relation).
+class SlopeFromPressure : public BoundaryRelation {
+ public:
+  double DPressureDVelocity(double u) const final {
+    double slope = 0.0;
+    PressureAndSlope(u, &slope);
+    return slope;
+  }
+};
+
 // p(0) as a function of u(0) once beta(0) is known: alpha(0) = 2 u - beta(0).
-class InletRelation final : public BoundaryRelation {
+class InletRelation final : public SlopeFromPressure {
  public:
   InletRelation(const PipeLaw& law, double beta) : law_(law), beta_(beta) {}
   double PressurePa(double u) const override {
     return law_.PressureFromDifference(2.0 * (u - beta_));
-  }
-  double DPressureDVelocity(double u) const override {
-    return -law_.DPressureDVelocityAtPressure(PressurePa(u));
   }
   double PressureAndSlope(double u, double* slope) const override {
     const double p = PressurePa(u);
@@ -221,13 +229,10 @@ class InletRelation final : public BoundaryRelation {
 };
 
 // p(L) as a function of u(L) once alpha(L) is known.
-class OutletRelation final : public BoundaryRelation {
+class OutletRelation final : public SlopeFromPressure {
  public:
   OutletRelation(const PipeLaw& law, double alpha) : law_(law), alpha_(alpha) {}
   double PressurePa(double u) const override { return law_.PressureFromAlpha(alpha_, u); }
-  double DPressureDVelocity(double u) const override {
-    return law_.DPressureDVelocityAtPressure(PressurePa(u));
-  }
   double PressureAndSlope(double u, double* slope) const override {
     const double p = PressurePa(u);
     *slope = law_.DPressureDVelocityAtPressure(p);
@@ -370,12 +375,11 @@ class PressureFunction {
 };
 
 // p(0) once beta(0) is known: W(p) = u - beta.
-class GeneralInletRelation final : public BoundaryRelation {
+class GeneralInletRelation final : public SlopeFromPressure {
  public:
   GeneralInletRelation(const PressureFunction& w, double beta, double guess_pa)
       : w_(w), beta_(beta), guess_pa_(guess_pa) {}
   double PressurePa(double u) const override { return w_.Pressure(u - beta_, guess_pa_); }
-  double DPressureDVelocity(double u) const override { return 1.0 / w_.DW(PressurePa(u)); }
   double PressureAndSlope(double u, double* slope) const override {
     const double p = PressurePa(u);
     *slope = 1.0 / w_.DW(p);
@@ -389,12 +393,11 @@ class GeneralInletRelation final : public BoundaryRelation {
 };
 
 // p(L) once alpha(L) is known: W(p) = alpha - u.
-class GeneralOutletRelation final : public BoundaryRelation {
+class GeneralOutletRelation final : public SlopeFromPressure {
  public:
   GeneralOutletRelation(const PressureFunction& w, double alpha, double guess_pa)
       : w_(w), alpha_(alpha), guess_pa_(guess_pa) {}
   double PressurePa(double u) const override { return w_.Pressure(alpha_ - u, guess_pa_); }
-  double DPressureDVelocity(double u) const override { return -1.0 / w_.DW(PressurePa(u)); }
   double PressureAndSlope(double u, double* slope) const override {
     const double p = PressurePa(u);
     *slope = -1.0 / w_.DW(p);
