@@ -378,6 +378,49 @@ double EstimateNoiseFloor(const MeasuredLog& log) {
   return used > 0 ? sum / used : 0.0;
 }
 
+// The significant candidates first, each group best first by the penalised error; ties keep
+// their order. Significance first: the floor samples (ScoreFloors) can rank a candidate that
+// matches the held pressures but gains too little over the baseline ahead of one that gains
+// enough; the verdict is the leading candidate, which must be a significant one if any is (a
+// hidden choke inertia, significant at 19.6 %, lost its verdict to a column separation fitted to
+// its bound at 6.2 %).
+void RankCandidates(std::vector<CandidateResult>* candidates) {
+  std::stable_sort(candidates->begin(), candidates->end(),
+                   [](const CandidateResult& a, const CandidateResult& b) {
+                     if (a.significant != b.significant) return a.significant;
+                     return a.penalised_error < b.penalised_error;
+                   });
+}
+
+// The effects a round tries: those of the round before that removed some of its reference's
+// error and are not selected yet. Those `equivalent` to the verdict stay: a second effect present
+// beside the first also explains much of the log on its own, and may come within the equivalence
+// margin of it (measured: a hidden unsteady friction beside a sensor lag, 0.93 points behind it
+// against a margin of 0.92); where the two are one explanation (the inlet compliances), the round
+// finds no gain in the second.
+std::vector<const EffectInfo*> NextCandidates(const std::vector<CandidateResult>& ranked,
+                                              const Diagnosis& diagnosis) {
+  // Where the effect just selected removed most of the error, the round before measured every
+  // other candidate against a misfit that effect dominated: one that removed nothing of it may
+  // remove much of what is left (a hidden unsteady friction beside a pump curve that left the
+  // base model 97 % off: its fit stayed at zero strength in round 1, and was never tried again).
+  const bool dominated =
+      !diagnosis.selected.empty() && diagnosis.selected.back().improvement > kDominatingImprovement;
+  std::vector<const EffectInfo*> next;
+  for (const CandidateResult& candidate : ranked) {
+    // One that explained nothing of the misfit in the round before is not tried with the
+    // selected effects either; every one that explained some is (a leaders' cut missed a hidden
+    // gas entrainment ranked 6th beside a sensor lag, once the catalogue had 10 effects).
+    if (!(candidate.improvement > 0.0) && !dominated) continue;
+    if (std::any_of(diagnosis.selected.begin(), diagnosis.selected.end(),
+                    [&](const CandidateResult& s) { return s.effect == candidate.effect; })) {
+      continue;
+    }
+    if (const EffectInfo* info = FindEffectInfo(candidate.effect)) next.push_back(info);
+  }
+  return next;
+}
+
 namespace {
 
 // The replay of `params` over the whole log with the inputs' levels estimated at `params`
@@ -732,14 +775,6 @@ void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const Effec
   Assess(*score, reference.score, reference.score.error, candidate);
 }
 
-// Best first by the penalised error; ties keep their order.
-void RankCandidates(std::vector<CandidateResult>* candidates) {
-  std::stable_sort(candidates->begin(), candidates->end(),
-                   [](const CandidateResult& a, const CandidateResult& b) {
-                     return a.penalised_error < b.penalised_error;
-                   });
-}
-
 // Runs independent tasks by options.run_tasks: in turn where there is none, in parallel when the
 // caller (the command line) supplies threads. Each task writes only its own slot.
 void RunTasks(const DiagnoseRun& run, const std::vector<std::function<void()>>& tasks) {
@@ -967,29 +1002,6 @@ Status ScoreReference(const DiagnoseRun& run, Baseline* reference, StageRuns* ru
   reference->traces = std::move(traces).value();
   reference->score = Score(run.log, reference->traces, run.score_begin, run.t_end);
   return Status::Ok();
-}
-
-// The effects a round tries: those of the round before that removed some of its reference's
-// error and are not selected yet. Those `equivalent` to the verdict stay: a second effect present
-// beside the first also explains much of the log on its own, and may come within the equivalence
-// margin of it (measured: a hidden unsteady friction beside a sensor lag, 0.93 points behind it
-// against a margin of 0.92); where the two are one explanation (the inlet compliances), the round
-// finds no gain in the second.
-std::vector<const EffectInfo*> NextCandidates(const std::vector<CandidateResult>& ranked,
-                                              const Diagnosis& diagnosis) {
-  std::vector<const EffectInfo*> next;
-  for (const CandidateResult& candidate : ranked) {
-    // One that explained nothing of the misfit in the round before is not tried with the
-    // selected effects either; every one that explained some is (a leaders' cut missed a hidden
-    // gas entrainment ranked 6th beside a sensor lag, once the catalogue had 10 effects).
-    if (!(candidate.improvement > 0.0)) continue;
-    if (std::any_of(diagnosis.selected.begin(), diagnosis.selected.end(),
-                    [&](const CandidateResult& s) { return s.effect == candidate.effect; })) {
-      continue;
-    }
-    if (const EffectInfo* info = FindEffectInfo(candidate.effect)) next.push_back(info);
-  }
-  return next;
 }
 
 // Forward selection: after the verdict, the leading candidates are fitted again with the

@@ -55,6 +55,7 @@
 #include "model/analysis/log_replay.h"
 #include "model/analysis/measured_log.h"
 #include "model/common/status.h"
+#include "model/effects/effect.h"
 #include "model/identification/cavity_evidence.h"
 #include "model/identification/fit.h"
 #include "model/identification/regimes.h"
@@ -84,8 +85,12 @@ inline constexpr std::size_t kPolishedCandidates = 3;
 // a missing effect that shows beyond its partners removes error in the round before as well
 // (there, the partners' misfit only adds to every model's), if only a little (a hidden gas
 // entrainment beside a sensor lag: 7.391 % against the base model's 7.417 %, 6th of 10); one
-// that removed none is not tried again.
+// that removed none is not tried again, unless the effect selected last removed more than this
+// share of its reference's error: then the round before saw every other candidate against a
+// misfit that effect dominated (a pump curve leaving the base model 97 % off), and one that
+// removed none of it may still remove much of the rest.
 inline constexpr std::size_t kMaxSelectedEffects = 3;
+inline constexpr double kDominatingImprovement = 0.5;
 // Detectability: an effect of strength s changes the fitted base model's channels by d(s) (mean
 // NRMSE of the change, relative to the baseline's own variation). If the base parameters cannot
 // absorb it, the baseline's error rises from e0 to sqrt(e0^2 + d^2) and the candidate removes
@@ -244,6 +249,17 @@ std::string DescribeCandidate(const CandidateResult& candidate, const CandidateR
 // from unsteady_friction.k >= 0.02" or "not detectable at this noise even at ... = 0.5"; empty
 // where not computed.
 std::string DescribeDetectability(const CandidateResult& candidate);
+
+// The order of a ranking (Diagnosis::candidates, a selection round's): the significant candidates
+// first, each group best first by the penalised error, ties in their order. The verdict and each
+// round's pick are the first, so a significant candidate is chosen if there is one.
+void RankCandidates(std::vector<CandidateResult>* candidates);
+
+// The effects the next selection round tries, from the ranking of the round before (`ranked`):
+// those that removed some of its error and are not selected yet; every one not selected where
+// the effect selected last (diagnosis.selected.back()) removed more than kDominatingImprovement.
+std::vector<const EffectInfo*> NextCandidates(const std::vector<CandidateResult>& ranked,
+                                              const Diagnosis& diagnosis);
 
 // Mean over the compared channels of sigma_noise / std(y), sigma_noise from second differences
 // (std(d2 y) / sqrt(6)): the error a perfect model would have on this log.
