@@ -2,8 +2,7 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
-#include <limits>
+#include <chrono>
 #include <utility>
 
 #include "clients/client/participant.h"
@@ -15,27 +14,10 @@ namespace mpdrig::dashboard {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// A sensor sample as held: the client library's, in the wire's lab units, with when it was
-// written (published_s).
-using SensorsView = client::Sensors;
-
 // Now on the writers' clock (s since 1970), for a sample's age.
 double WallClockS() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
-
-struct EstimateView {
-  double t = 0.0, bhp = kNaN, piston_m = kNaN, velocity = kNaN, FT4 = kNaN, freq_hz = kNaN;
-  std::string source;
-};
-
-struct ProfileView {
-  std::uint64_t counter = 0;
-  double t = 0.0;
-  std::vector<double> x, p, p_est;
-};
 
 // PT1..PT10 of one sample, kept for a few seconds so that the profile chart can show the rig,
 // the observer and the shadow at one instant: the shadow trails the rig by a few samples, and
@@ -52,22 +34,6 @@ void PushRing(std::deque<T>* ring, T item, std::size_t size) {
   ring->push_back(std::move(item));
   while (ring->size() > size) ring->pop_front();
 }
-
-struct StatusView {
-  std::string clock;
-  double t = 0.0, rtf = 0.0, longest_stall_s = 0.0;
-  std::uint64_t deadline_misses = 0, lost_periods = 0, rejected = 0;
-  std::string last_rejection, noise;
-  std::vector<std::string> warnings, effects, owners;
-};
-
-struct ShadowStatusView {
-  double t = 0.0, window_s = 0.0, error = kNaN, last_change_t = -1.0, error_at_change = kNaN;
-  std::vector<std::string> channels, effects, parameters, available;
-  std::vector<double> nrmse;
-  std::string last_change, last_rejection, fit_state;
-  std::uint64_t rejected = 0, last_command_id = 0;
-};
 
 // A thinned time series for one chart: one point per frame at most, the newest `history_s` of
 // rig time. A point is {sequence number, rig time, values...}; the sequence lets a browser ask
@@ -105,7 +71,7 @@ class Series {
   std::deque<Point> points_;
 };
 
-Json SensorsJson(const SensorsView& s, double now_s) {
+Json SensorsJson(const client::Sensors& s, double now_s) {
   return {{"counter", s.sample_counter},
           {"t", JsonNumber(s.time_s)},
           {"piston_m", JsonNumber(s.piston_position_m)},
@@ -129,55 +95,6 @@ Result<client::ShadowAction> ActionOf(const std::string& action) {
   }
   return Status::Error("unknown action '" + action +
                        "' (effect_on, effect_off, set, reset, fit_now)");
-}
-
-EstimateView EstimateFromClient(const client::Estimate& e) {
-  std::string source = e.frequency_source;  // "piston_sine" on the page is "piston sine"
-  std::replace(source.begin(), source.end(), '_', ' ');
-  return EstimateView{e.time_s,
-                      e.BHP_est_barg,
-                      e.piston_position_est_m,
-                      e.piston_velocity_est_mps,
-                      e.FT4_est_lpm,
-                      e.disturbance_frequency_hz,
-                      std::move(source)};
-}
-
-StatusView StatusFromClient(const client::RigStatus& w) {
-  StatusView st;
-  st.clock = w.clock;
-  st.t = w.sim_time_s;
-  st.rtf = w.real_time_factor;
-  st.deadline_misses = w.deadline_misses;
-  st.lost_periods = w.lost_periods;
-  st.longest_stall_s = w.longest_stall_s;
-  st.rejected = w.rejected_commands;
-  st.last_rejection = w.last_rejection;
-  st.noise = w.sensor_noise;
-  st.warnings = w.warnings;
-  st.effects = w.active_effects;
-  st.owners = w.actuator_owners;
-  return st;
-}
-
-ShadowStatusView ShadowStatusFromClient(const client::ShadowStatus& w) {
-  ShadowStatusView st;
-  st.t = w.sim_time_s;
-  st.window_s = w.window_s;
-  st.error = w.error;
-  st.channels = w.channels;
-  st.nrmse = w.nrmse;
-  st.effects = w.active_effects;
-  st.parameters = w.parameters;
-  st.available = w.available_effects;
-  st.last_change = w.last_change;
-  st.last_change_t = w.last_change_sim_time_s;
-  st.error_at_change = w.error_at_last_change;
-  st.rejected = w.rejected_commands;
-  st.last_rejection = w.last_rejection;
-  st.last_command_id = w.last_command_id;
-  st.fit_state = w.fit_state;
-  return st;
 }
 
 }  // namespace
@@ -215,13 +132,13 @@ struct RigFeed::Session {
 };
 
 struct RigFeed::RigView {
-  std::optional<SensorsView> sensors, shadow;
-  std::optional<EstimateView> estimate;
-  std::optional<StatusView> status;
-  std::optional<ShadowStatusView> shadow_status;
-  std::deque<ProfileView> profiles;    // the newest few, for the aligned snapshot
-  std::deque<PtAt> rig_pt, shadow_pt;  // the newest few seconds of PT1..PT10
-  std::uint64_t samples = 0;           // sensor samples taken
+  std::optional<client::Sensors> sensors, shadow;
+  std::optional<client::Estimate> estimate;
+  std::optional<client::RigStatus> status;
+  std::optional<client::ShadowStatus> shadow_status;
+  std::deque<client::Profile> profiles;  // the newest few, for the aligned snapshot
+  std::deque<PtAt> rig_pt, shadow_pt;    // the newest few seconds of PT1..PT10
+  std::uint64_t samples = 0;             // sensor samples taken
   // Charts: rig {PT1, piston, choke, FT2}, estimate {BHP}, shadow {PT1}, error {error, nrmse...}.
   Series rig_series, estimate_series, shadow_series, error_series;
   std::vector<std::string> error_channels;
@@ -346,17 +263,14 @@ void RigFeed::Drain() {
   };
   visit.estimate = [&](const std::string& rig_id, const client::Estimate& e) {
     RigView& v = View(rig_id);
-    v.estimate = EstimateFromClient(e);
+    v.estimate = e;
     v.fresh_estimate = true;
   };
   visit.profile = [&](const std::string& rig_id, const client::Profile& p) {
-    PushRing(
-        &View(rig_id).profiles,
-        ProfileView{p.sample_counter, p.time_s, p.position_m, p.pressure_barg, p.pressure_est_barg},
-        kProfileRing);
+    PushRing(&View(rig_id).profiles, p, kProfileRing);
   };
   visit.status = [&](const std::string& rig_id, const client::RigStatus& st) {
-    View(rig_id).status = StatusFromClient(st);
+    View(rig_id).status = st;
   };
   visit.shadow_sensors = [&](const std::string& rig_id, const client::Sensors& x) {
     RigView& v = View(rig_id);
@@ -366,7 +280,7 @@ void RigFeed::Drain() {
   };
   visit.shadow_status = [&](const client::ShadowStatus& st) {
     RigView& v = View(st.rig_id);
-    v.shadow_status = ShadowStatusFromClient(st);
+    v.shadow_status = st;
     v.fresh_error = true;
   };
   const client::RigStreams::Taken taken = s.streams->Take(visit);
@@ -388,27 +302,28 @@ void RigFeed::Drain() {
 void RigFeed::AddHistoryPoints() {
   for (auto& [id, v] : views_) {
     if (v->fresh_sensors) {
-      const SensorsView& x = *v->sensors;
+      const client::Sensors& x = *v->sensors;
       v->rig_series.Add(next_seq_++, x.time_s,
                         {x.PT_barg[0], x.piston_position_m, x.choke_position_deg, x.FT2_lpm},
                         options_.history_s);
     }
     if (v->fresh_estimate) {
-      v->estimate_series.Add(next_seq_++, v->estimate->t, {v->estimate->bhp}, options_.history_s);
+      v->estimate_series.Add(next_seq_++, v->estimate->time_s, {v->estimate->BHP_est_barg},
+                             options_.history_s);
     }
     if (v->fresh_shadow) {
       v->shadow_series.Add(next_seq_++, v->shadow->time_s, {v->shadow->PT_barg[0]},
                            options_.history_s);
     }
     if (v->fresh_error) {
-      const ShadowStatusView& st = *v->shadow_status;
+      const client::ShadowStatus& st = *v->shadow_status;
       if (st.channels != v->error_channels) {  // another shadow, or other channels: start over
         v->error_series.Clear();
         v->error_channels = st.channels;
       }
       std::vector<double> values{st.error};
       values.insert(values.end(), st.nrmse.begin(), st.nrmse.end());
-      v->error_series.Add(next_seq_++, st.t, std::move(values), options_.history_s);
+      v->error_series.Add(next_seq_++, st.sim_time_s, std::move(values), options_.history_s);
     }
     v->fresh_sensors = v->fresh_estimate = v->fresh_shadow = v->fresh_error = false;
   }
@@ -433,38 +348,51 @@ FeedHealth RigFeed::Health() const {
 
 namespace {
 
-Json StatusJson(const StatusView& st) {
+Json StatusJson(const client::RigStatus& st) {
   return {{"clock", st.clock},
-          {"t", JsonNumber(st.t)},
-          {"rtf", JsonNumber(st.rtf)},
+          {"t", JsonNumber(st.sim_time_s)},
+          {"rtf", JsonNumber(st.real_time_factor)},
           {"deadline_misses", st.deadline_misses},
           {"lost_periods", st.lost_periods},
           {"longest_stall_s", JsonNumber(st.longest_stall_s)},
-          {"rejected", st.rejected},
+          {"rejected", st.rejected_commands},
           {"last_rejection", st.last_rejection},
-          {"noise", st.noise},
+          {"noise", st.sensor_noise},
           {"warnings", st.warnings},
-          {"effects", st.effects},
-          {"owners", st.owners}};
+          {"effects", st.active_effects},
+          {"owners", st.actuator_owners}};
 }
 
-Json ShadowStatusJson(const ShadowStatusView& st) {
-  return {{"t", JsonNumber(st.t)},
+Json ShadowStatusJson(const client::ShadowStatus& st) {
+  return {{"t", JsonNumber(st.sim_time_s)},
           {"window_s", JsonNumber(st.window_s)},
           {"error", JsonNumber(st.error)},
-          {"last_change_t", JsonNumber(st.last_change_t)},
-          {"error_at_change", JsonNumber(st.error_at_change)},
-          {"rejected", st.rejected},
+          {"last_change_t", JsonNumber(st.last_change_sim_time_s)},
+          {"error_at_change", JsonNumber(st.error_at_last_change)},
+          {"rejected", st.rejected_commands},
           // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
           {"last_command_id", std::to_string(st.last_command_id)},
           {"channels", st.channels},
-          {"effects", st.effects},
+          {"effects", st.active_effects},
           {"parameters", st.parameters},
-          {"available", st.available},
+          {"available", st.available_effects},
           {"nrmse", JsonNumbers(st.nrmse)},
           {"last_change", st.last_change},
           {"last_rejection", st.last_rejection},
           {"fit_state", st.fit_state}};
+}
+
+// The observer's estimate; its frequency source as the page names it ("piston sine").
+Json EstimateJson(const client::Estimate& e) {
+  std::string source = e.frequency_source;
+  std::replace(source.begin(), source.end(), '_', ' ');
+  return {{"t", JsonNumber(e.time_s)},
+          {"bhp", JsonNumber(e.BHP_est_barg)},
+          {"piston_m", JsonNumber(e.piston_position_est_m)},
+          {"velocity", JsonNumber(e.piston_velocity_est_mps)},
+          {"FT4", JsonNumber(e.FT4_est_lpm)},
+          {"freq_hz", JsonNumber(e.disturbance_frequency_hz)},
+          {"source", source}};
 }
 
 // The pressure along the pipe at one instant for the rig, the observer and the shadow: the newest
@@ -472,27 +400,25 @@ Json ShadowStatusJson(const ShadowStatusView& st) {
 // shadow's PT1..PT10 of that same sample; null before the first profile.
 Json AlignedProfileJson(const RigFeed::RigView& v) {
   if (v.profiles.empty()) return nullptr;
-  const ProfileView* chosen = &v.profiles.back();
+  const client::Profile* chosen = &v.profiles.back();
   if (!v.shadow_pt.empty()) {
     const std::uint64_t reached = v.shadow_pt.back().counter;
     for (auto it = v.profiles.rbegin(); it != v.profiles.rend(); ++it) {
       chosen = &*it;
-      if (it->counter <= reached) break;
+      if (it->sample_counter <= reached) break;
     }
   }
   auto pt_at = [&](const std::deque<PtAt>& ring) -> std::vector<double> {
     for (auto it = ring.rbegin(); it != ring.rend(); ++it) {
-      if (it->counter == chosen->counter) return {it->PT.begin(), it->PT.end()};
-      if (it->counter < chosen->counter) break;
+      if (it->counter == chosen->sample_counter) return {it->PT.begin(), it->PT.end()};
+      if (it->counter < chosen->sample_counter) break;
     }
     return {};
   };
-  return {{"t", JsonNumber(chosen->t)},
-          {"x", JsonNumbers(chosen->x)},
-          {"p", JsonNumbers(chosen->p)},
-          {"p_est", JsonNumbers(chosen->p_est)},
-          {"rig_PT", JsonNumbers(pt_at(v.rig_pt))},
-          {"shadow_PT", JsonNumbers(pt_at(v.shadow_pt))}};
+  return {
+      {"t", JsonNumber(chosen->time_s)},         {"x", JsonNumbers(chosen->position_m)},
+      {"p", JsonNumbers(chosen->pressure_barg)}, {"p_est", JsonNumbers(chosen->pressure_est_barg)},
+      {"rig_PT", JsonNumbers(pt_at(v.rig_pt))},  {"shadow_PT", JsonNumbers(pt_at(v.shadow_pt))}};
 }
 
 }  // namespace
@@ -512,16 +438,7 @@ std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) c
   out["seq"] = next_seq_ - 1;
   if (v.sensors) out["sensors"] = SensorsJson(*v.sensors, now);
   if (v.shadow) out["shadow"] = SensorsJson(*v.shadow, now);
-  if (v.estimate) {
-    const EstimateView& e = *v.estimate;
-    out["estimate"] = {{"t", JsonNumber(e.t)},
-                       {"bhp", JsonNumber(e.bhp)},
-                       {"piston_m", JsonNumber(e.piston_m)},
-                       {"velocity", JsonNumber(e.velocity)},
-                       {"FT4", JsonNumber(e.FT4)},
-                       {"freq_hz", JsonNumber(e.freq_hz)},
-                       {"source", e.source}};
-  }
+  if (v.estimate) out["estimate"] = EstimateJson(*v.estimate);
   if (Json profile = AlignedProfileJson(v); !profile.is_null()) out["profile"] = std::move(profile);
   if (v.status) out["status"] = StatusJson(*v.status);
   if (v.shadow_status) out["shadow_status"] = ShadowStatusJson(*v.shadow_status);
