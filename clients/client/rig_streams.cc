@@ -116,15 +116,18 @@ RigStreams::Taken RigStreams::Take(const Visitor& visit) {
       taken.error = n.status().message();
     }
   };
+  // The rig's sensors and the shadow's are one type on two topics.
+  using SensorVisit = std::function<void(const std::string&, const Sensors&)>;
+  auto take_sensors = [&](const dds::Reader<mpdrig_RigSensors>& reader, const SensorVisit& to) {
+    count(reader.TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
+      if (!Wanted(w.rig_id)) return;
+      Sensors s = FromWire(w, info);
+      s.received_s = ReceivedS();
+      to(w.rig_id, s);
+    }));
+  };
   for (Dds::Readers& r : dds_->readers) {
-    if (visit.sensors) {
-      count(r.sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
-        if (!Wanted(w.rig_id)) return;
-        Sensors s = FromWire(w, info);
-        s.received_s = ReceivedS();
-        visit.sensors(w.rig_id, s);
-      }));
-    }
+    if (visit.sensors) take_sensors(*r.sensors, visit.sensors);
     if (visit.estimate) {
       count(r.estimate->TakeEach([&](const mpdrig_RigEstimate& w, const dds_sample_info_t&) {
         if (Wanted(w.rig_id)) visit.estimate(w.rig_id, FromWire(w));
@@ -140,15 +143,7 @@ RigStreams::Taken RigStreams::Take(const Visitor& visit) {
         if (Wanted(w.rig_id)) visit.status(w.rig_id, FromWire(w));
       }));
     }
-    if (visit.shadow_sensors) {
-      count(r.shadow_sensors->TakeEach(
-          [&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
-            if (!Wanted(w.rig_id)) return;
-            Sensors s = FromWire(w, info);
-            s.received_s = ReceivedS();
-            visit.shadow_sensors(w.rig_id, s);
-          }));
-    }
+    if (visit.shadow_sensors) take_sensors(*r.shadow_sensors, visit.shadow_sensors);
     if (visit.shadow_status) {
       count(r.shadow_status->TakeEach([&](const mpdrig_ShadowStatus& w, const dds_sample_info_t&) {
         if (Wanted(w.rig_id) && options_.shadow_id == w.shadow_id) visit.shadow_status(FromWire(w));

@@ -125,12 +125,17 @@ void CommandIntake::Piston(const mpdrig_PistonCommand& c, const CommandOrigin& o
           [&](RigHost& rig) { return rig.SetPiston(FromWire(c)); });
 }
 
-// An instance whose writers are gone matters only in its own rig's partition.
-void CommandIntake::ChokeLost(const char* rig_id, int partition_rig) {
+// An instance whose writers are gone matters only in its own rig's partition: that rig, or
+// nullptr.
+RigHost* CommandIntake::LostOwner(const char* rig_id, int partition_rig, const char* actuator) {
   if (partition_rig >= 0 && (*rigs_)[static_cast<std::size_t>(partition_rig)].rig_id() != rig_id)
-    return;
-  NoteOwner(rig_id, "choke", "none");
-  RigHost* rig = Find(rig_id);
+    return nullptr;
+  NoteOwner(rig_id, actuator, "none");
+  return Find(rig_id);
+}
+
+void CommandIntake::ChokeLost(const char* rig_id, int partition_rig) {
+  RigHost* rig = LostOwner(rig_id, partition_rig, "choke");
   if (rig == nullptr) return;
   if (std::isnan(safe_choke_deg_)) {
     rig->NoteEvent("no choke controller left: the choke keeps its last command");
@@ -141,10 +146,7 @@ void CommandIntake::ChokeLost(const char* rig_id, int partition_rig) {
 }
 
 void CommandIntake::PistonLost(const char* rig_id, int partition_rig) {
-  if (partition_rig >= 0 && (*rigs_)[static_cast<std::size_t>(partition_rig)].rig_id() != rig_id)
-    return;
-  NoteOwner(rig_id, "piston", "none");
-  RigHost* rig = Find(rig_id);
+  RigHost* rig = LostOwner(rig_id, partition_rig, "piston");
   if (rig == nullptr) return;
   (void)rig->SetPiston(PistonCommandIn{});  // hold
   rig->NoteEvent("no piston controller left: safe state, piston holds");

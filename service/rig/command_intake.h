@@ -126,6 +126,7 @@ class CommandIntake {
   void Command(const char* topic, const char* actuator, const char* rig_id,
                const CommandOrigin& origin, const Apply& apply);
   void NoteOwner(const char* rig_id, const char* actuator, const std::string& owner);
+  RigHost* LostOwner(const char* rig_id, int partition_rig, const char* actuator);
 
   std::vector<RigHost>* rigs_;
   double safe_choke_deg_;
