@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <deque>
 #include <limits>
 #include <optional>
 #include <sstream>
@@ -12,6 +11,7 @@
 #include <utility>
 
 #include "service/rig/command_intake.h"
+#include "service/rig/lockstep_queue.h"
 #include "service/rig/log_playback.h"
 #include "service/rig/pacer.h"
 #include "service/rig/private_rigs.h"
@@ -22,16 +22,8 @@ namespace mpdrig::service {
 
 using Clock = std::chrono::steady_clock;
 
-// Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
-constexpr std::uint64_t kLockstepSliceSteps = 100;
-// Lockstep: the most rig time one step request may ask for. A request cannot be cancelled, and
-// a rig's later requests (its own controller's) wait behind it: 2^32 - 1 steps ran about 15 h
-// while the rig's controller failed. An hour of rig time (360 000 steps at the lab's 100 Hz,
-// about 10-20 s of wall time here) is far beyond any one control step and any experiment a
-// client would not split; a longer one is refused on the status with the reason.
-constexpr double kMaxStepRequestRigTimeS = 3600.0;
-// While a long request runs, its rig's status goes out this often [s of wall time], so that
-// clients and dashboards see the rig time move (and any refusal) before the request completes.
+// Lockstep: while a long request runs, its rig's status goes out this often [s of wall time], so
+// that clients and dashboards see the rig time move (and any refusal) before the request completes.
 constexpr double kLockstepStatusEveryS = 0.5;
 
 struct RigService::Impl {
@@ -376,25 +368,19 @@ struct RigService::Impl {
     return PublishAllStatus();
   }
 
-  // Lockstep: each rig has a queue of step requests; the rigs with work are served in turn, at
-  // most kLockstepSliceSteps steps each, so one long request (up to an hour of rig time) neither
-  // starves another rig nor delays a stop by more than one step. A request's commands are taken
-  // when it starts; it completes (last_completed_step_request, status) after its last step.
+  // Lockstep: the step requests are queued and served in turns (lockstep_queue.h); a request's
+  // commands are taken when it starts, and its completion goes out on the rig's status.
   Status RunLockstep(const std::atomic<bool>& stop) {
     MPDRIG_RETURN_IF_ERROR(AwaitSensorReaders());
     MPDRIG_RETURN_IF_ERROR(PublishAllStatus());  // clients see the rigs are up
-    struct Pending {
-      std::uint64_t id = 0;
-      std::uint64_t remaining = 0;
-      bool started = false;
+    struct Request {
+      std::string rig_id;
+      std::uint64_t id = 0, steps = 0;
     };
-    std::vector<std::deque<Pending>> queues(rigs.size());
+    LockstepQueue queue(rigs.front().sensor_period_s());
     std::vector<Clock::time_point> last_status_wall(rigs.size(), Clock::now());
-    auto busy = [&queues] {
-      return std::any_of(queues.begin(), queues.end(), [](const auto& q) { return !q.empty(); });
-    };
     while (!stop.load()) {
-      if (!busy()) {
+      if (!queue.busy()) {
         const dds_return_t ready =
             dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
         if (ready < 0) return dds::Check(ready, "dds_waitset_wait");
@@ -410,9 +396,8 @@ struct RigService::Impl {
         if (ready == 0) continue;
       }
       MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
-      queues.resize(rigs.size());
       last_status_wall.resize(rigs.size(), Clock::now());
-      std::vector<std::pair<std::string, Pending>> requests;
+      std::vector<Request> requests;
       bool refused = false;  // from another rig's partition (security), or an unknown rig's dispose
       for (auto& set : endpoints) {
         auto& steps = set->steps;
@@ -423,7 +408,7 @@ struct RigService::Impl {
                 refused = true;
                 return;
               }
-              requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
+              requests.push_back({r.rig_id, r.request_id, r.steps});
             },
             {}, std::numeric_limits<int>::max(),
             // A dispose of an unknown rig's request (the filter does not see it), as the
@@ -434,45 +419,30 @@ struct RigService::Impl {
         if (!taken.ok()) return taken.status();
       }
       if (refused) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
-      for (auto& [rig_id, request] : requests) {
-        RigHost* rig = intake->Find(rig_id.c_str());
+      for (const Request& request : requests) {
+        RigHost* rig = intake->Find(request.rig_id.c_str());
         if (rig == nullptr) {  // the topic filter lets none through; kept for safety
           MPDRIG_RETURN_IF_ERROR(TakeCommands());
-          intake->RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(rig_id.c_str()));
+          intake->RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(request.rig_id.c_str()));
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
         const std::size_t index = static_cast<std::size_t>(rig - rigs.data());
-        const double max_steps = std::floor(kMaxStepRequestRigTimeS / rig->sensor_period_s());
-        if (static_cast<double>(request.remaining) > max_steps) {
-          char reason[300];
-          std::snprintf(reason, sizeof reason,
-                        "%s %llu of %llu steps refused: more than %.0f s of rig time (%.0f steps "
-                        "at this rate) in one request; send several",
-                        dds::topics::kStepRequest.name, static_cast<unsigned long long>(request.id),
-                        static_cast<unsigned long long>(request.remaining), kMaxStepRequestRigTimeS,
-                        max_steps);
-          (void)rig->Refuse(reason);
+        if (auto refused_why = queue.Add(index, request.id, request.steps)) {
+          (void)rig->Refuse(*refused_why);
           MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
-          continue;
         }
-        queues[index].push_back(request);
       }
       for (std::size_t index = 0; index < rigs.size() && !stop.load(); ++index) {
-        if (queues[index].empty()) continue;
-        Pending& request = queues[index].front();
-        if (!request.started) {
-          MPDRIG_RETURN_IF_ERROR(TakeCommands());
-          request.started = true;
-        }
-        const std::uint64_t slice = std::min(request.remaining, kLockstepSliceSteps);
-        for (std::uint64_t i = 0; i < slice && !stop.load(); ++i) {
+        const std::optional<LockstepQueue::Turn> turn = queue.NextTurn(index);
+        if (!turn) continue;
+        if (turn->starts) MPDRIG_RETURN_IF_ERROR(TakeCommands());
+        std::uint64_t ran = 0;
+        for (; ran < turn->steps && !stop.load(); ++ran) {
           MPDRIG_RETURN_IF_ERROR(TickAndPublish(rigs[index]));
-          --request.remaining;
         }
-        if (request.remaining == 0) {
-          last_step_request[index] = request.id;
-          queues[index].pop_front();
+        if (const std::optional<std::uint64_t> completed = queue.Ran(index, ran)) {
+          last_step_request[index] = *completed;
           MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
           last_status_wall[index] = Clock::now();
         } else if (std::chrono::duration<double>(Clock::now() - last_status_wall[index]).count() >=
