@@ -9,6 +9,9 @@
 //   auto s = (*rig)->Step(1);               // lockstep: advance one period, return its sample
 //   (*rig)->Choke(30.0);                    // a command, applied at the rig's next step
 //
+// A program with several rigs connects each through one Participant (participant.h):
+// Rig::Connect(participant, options).
+//
 // Rules it keeps for its user:
 //   - Commands use dds::CommandQos(strength): exclusive ownership, transient-local, a 1 s
 //     liveliness lease. A command writer is made on the first command of its kind and waits for
