@@ -1,6 +1,6 @@
 // shadow_ctl: changes a running `mpdrig shadow` (its mpdrig_shadow_command topic) and prints the
-// shadow's answer: its error before, the change, and its error over the window after. A client:
-// it speaks only the DDS topics.
+// shadow's answer: its error before, the change, and its error over the window after. A client on
+// the client library (clients/client/shadow_client.h): it speaks only the DDS topics.
 //
 //   shadow_ctl --rig rig-1 --effect-on unsteady_friction
 //   shadow_ctl --rig rig-1 --set wave_speed_mps=900
@@ -19,10 +19,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "mpdrig.h"
-#include "service/dds/dds.h"
-#include "service/dds/security.h"
-#include "service/dds/topics.h"
+#include "clients/client/participant.h"
+#include "clients/client/shadow_client.h"
 
 namespace {
 
@@ -31,28 +29,29 @@ int Fail(const std::string& what) {
   return 1;
 }
 
-void Print(const mpdrig_ShadowStatus& s) {
-  std::printf("shadow '%s' of %s at t = %.2f s: error %.4f over %.0f s\n", s.shadow_id, s.rig_id,
-              s.sim_time_s, s.error, s.window_s);
-  for (std::uint32_t i = 0; i < s.channels._length && i < s.nrmse._length; ++i) {
-    if (!std::isnan(s.nrmse._buffer[i]))
-      std::printf("  %-5s NRMSE %.4f\n", s.channels._buffer[i], s.nrmse._buffer[i]);
+using mpdrig::client::ShadowAction;
+using mpdrig::client::ShadowStatus;
+
+void Print(const ShadowStatus& s) {
+  std::printf("shadow '%s' of %s at t = %.2f s: error %.4f over %.0f s\n", s.shadow_id.c_str(),
+              s.rig_id.c_str(), s.sim_time_s, s.error, s.window_s);
+  for (std::size_t i = 0; i < s.channels.size() && i < s.nrmse.size(); ++i) {
+    if (!std::isnan(s.nrmse[i]))
+      std::printf("  %-5s NRMSE %.4f\n", s.channels[i].c_str(), s.nrmse[i]);
   }
   std::printf("  effects:");
-  for (std::uint32_t i = 0; i < s.active_effects._length; ++i)
-    std::printf(" [%s]", s.active_effects._buffer[i]);
-  std::printf("%s\n  parameters set:", s.active_effects._length == 0 ? " none" : "");
-  for (std::uint32_t i = 0; i < s.parameters._length; ++i)
-    std::printf(" %s", s.parameters._buffer[i]);
-  std::printf("%s\n", s.parameters._length == 0 ? " none" : "");
-  if (s.last_change[0] != '\0') {
-    std::printf("  last change: %s at t = %.2f s (error then %.4f)\n", s.last_change,
+  for (const std::string& effect : s.active_effects) std::printf(" [%s]", effect.c_str());
+  std::printf("%s\n  parameters set:", s.active_effects.empty() ? " none" : "");
+  for (const std::string& parameter : s.parameters) std::printf(" %s", parameter.c_str());
+  std::printf("%s\n", s.parameters.empty() ? " none" : "");
+  if (!s.last_change.empty()) {
+    std::printf("  last change: %s at t = %.2f s (error then %.4f)\n", s.last_change.c_str(),
                 s.last_change_sim_time_s, s.error_at_last_change);
   }
-  if (s.fit_state[0] != '\0') std::printf("  fit: %s\n", s.fit_state);
+  if (!s.fit_state.empty()) std::printf("  fit: %s\n", s.fit_state.c_str());
   if (s.rejected_commands > 0) {
     std::printf("  %llu commands refused, the last: %s\n",
-                static_cast<unsigned long long>(s.rejected_commands), s.last_rejection);
+                static_cast<unsigned long long>(s.rejected_commands), s.last_rejection.c_str());
   }
 }
 
@@ -106,68 +105,64 @@ void AddOptions(CLI::App& app, Args& args) {
 }
 
 // The change the flags ask for, with its argument; none: only print the status.
-std::optional<std::pair<mpdrig_ShadowAction, std::string>> RequestedAction(const Args& args) {
-  if (!args.effect_on.empty()) return std::pair{mpdrig_SHADOW_EFFECT_ON, args.effect_on};
-  if (!args.effect_off.empty()) return std::pair{mpdrig_SHADOW_EFFECT_OFF, args.effect_off};
-  if (!args.set.empty()) return std::pair{mpdrig_SHADOW_SET, args.set};
-  if (args.reset) return std::pair{mpdrig_SHADOW_RESET, std::string()};
-  if (args.fit_now) return std::pair{mpdrig_SHADOW_FIT_NOW, std::string()};
-  if (args.cancel_fit) return std::pair{mpdrig_SHADOW_FIT_CANCEL, std::string()};
+std::optional<std::pair<ShadowAction, std::string>> RequestedAction(const Args& args) {
+  if (!args.effect_on.empty()) return std::pair{ShadowAction::kEffectOn, args.effect_on};
+  if (!args.effect_off.empty()) return std::pair{ShadowAction::kEffectOff, args.effect_off};
+  if (!args.set.empty()) return std::pair{ShadowAction::kSet, args.set};
+  if (args.reset) return std::pair{ShadowAction::kReset, std::string()};
+  if (args.fit_now) return std::pair{ShadowAction::kFitNow, std::string()};
+  if (args.cancel_fit) return std::pair{ShadowAction::kFitCancel, std::string()};
   return std::nullopt;
 }
 
-using Reader = mpdrig::dds::Reader<mpdrig_ShadowStatus>;
 using Clock = std::chrono::steady_clock;
 using Deadline = std::chrono::time_point<Clock, std::chrono::duration<double>>;
+constexpr double kPollS = 0.1;
 
 // The shadow's current status (transient-local: it arrives once matched), printed; its count of
 // refused commands, or nothing if no shadow of the rig answered before the deadline.
-mpdrig::Result<std::optional<std::uint64_t>> ReadCurrentStatus(Reader& status, const Args& args,
+mpdrig::Result<std::optional<std::uint64_t>> ReadCurrentStatus(mpdrig::client::Shadow& shadow,
                                                                Deadline deadline) {
   std::optional<std::uint64_t> rejected;
   while (!rejected && Clock::now() < deadline) {
-    auto ready = status.Wait(DDS_MSECS(100));
-    if (!ready.ok()) return ready.status();
-    (void)status.TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-      if (args.rig_id != s.rig_id || args.shadow_id != s.shadow_id) return;
+    auto taken = shadow.TakeStatus(kPollS);
+    if (!taken.ok()) return taken.status();
+    for (const ShadowStatus& s : *taken) {
       rejected = s.rejected_commands;
       Print(s);
-    });
+    }
   }
   return rejected;
 }
 
 // The answer: the status that names the command; for a fit, then the one that ends it (waited
 // for up to fit_timeout_s past the deadline). The exit code.
-int AwaitAnswer(Reader& status, const Args& args, const mpdrig_ShadowCommand& command,
-                std::uint64_t before_rejected, Deadline deadline) {
+int AwaitAnswer(mpdrig::client::Shadow& shadow, const Args& args, ShadowAction action,
+                std::uint64_t command_id, std::uint64_t before_rejected, Deadline deadline) {
   bool fitting = false;
   auto until = deadline;
   while (Clock::now() < until) {
-    auto ready = status.Wait(DDS_MSECS(100));
-    if (!ready.ok()) return Fail(ready.status().message());
+    auto taken = shadow.TakeStatus(kPollS);
+    if (!taken.ok()) return Fail(taken.status().message());
     int code = -1;
-    (void)status.TakeEach([&](const mpdrig_ShadowStatus& s, const dds_sample_info_t&) {
-      if (code >= 0 || args.rig_id != s.rig_id || args.shadow_id != s.shadow_id ||
-          s.last_command_id != command.command_id)
-        return;
-      const std::string fit_state = s.fit_state;
+    for (const ShadowStatus& s : *taken) {
+      if (code >= 0 || s.last_command_id != command_id) continue;
       if (s.rejected_commands > before_rejected) {
-        std::printf("refused: %s\n", s.last_rejection);
+        std::printf("refused: %s\n", s.last_rejection.c_str());
         code = 1;
-      } else if (command.action == mpdrig_SHADOW_FIT_NOW && fit_state.rfind("running:", 0) == 0) {
-        if (!fitting) std::printf("fit %s\n", s.fit_state);
+      } else if (action == ShadowAction::kFitNow && s.fit_state.rfind("running:", 0) == 0) {
+        if (!fitting) std::printf("fit %s\n", s.fit_state.c_str());
         fitting = true;
-      } else if (command.action == mpdrig_SHADOW_FIT_NOW && fitting) {
+      } else if (action == ShadowAction::kFitNow && fitting) {
         std::printf("after the fit:\n");
         Print(s);
-        code = fit_state.rfind("done:", 0) == 0 ? 0 : 1;
-      } else if (command.action != mpdrig_SHADOW_FIT_NOW) {
+        code = s.fit_state.rfind("done:", 0) == 0 ? 0 : 1;
+      } else if (action != ShadowAction::kFitNow) {
         std::printf("after the change:\n");
         Print(s);
         code = 0;
       }
-    });
+    }
     if (code >= 0) return code;
     if (fitting) {
       until = std::max(until, deadline + std::chrono::duration<double>(args.fit_timeout_s));
@@ -186,21 +181,14 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   using namespace mpdrig;
-  auto created = dds::Domain::Create(
-      args.domain, args.dds_config.empty() ? dds::LoopbackConfig() : args.dds_config);
-  if (!created.ok()) return Fail(created.status().message());
   // With --security the shadow's topics are in its rig's partition.
-  auto scope = dds::CreateClientScope(args.domain, args.security, args.rig_id);
-  if (!scope.ok()) return Fail(scope.status().message());
-  const dds_entity_t p = scope->participant.handle();
-  auto command_topic = dds::CreateTopic(p, dds::topics::kShadowCommand);
-  auto status_topic = dds::CreateTopic(p, dds::topics::kShadowStatus);
-  if (!command_topic.ok()) return Fail(command_topic.status().message());
-  if (!status_topic.ok()) return Fail(status_topic.status().message());
-  auto status = Reader::Create(scope->sub(), status_topic->handle(), dds::StatusQos());
-  if (!status.ok()) return Fail(status.status().message());
+  auto participant = client::Participant::Join(
+      {.domain = args.domain, .dds_config = args.dds_config, .security_dir = args.security});
+  if (!participant.ok()) return Fail(participant.status().message());
+  auto shadow = client::Shadow::Open(*participant, args.rig_id, args.shadow_id);
+  if (!shadow.ok()) return Fail(shadow.status().message());
   const Deadline deadline = Clock::now() + std::chrono::duration<double>(args.timeout_s);
-  auto before_rejected = ReadCurrentStatus(*status, args, deadline);
+  auto before_rejected = ReadCurrentStatus(**shadow, deadline);
   if (!before_rejected.ok()) return Fail(before_rejected.status().message());
   if (!*before_rejected) {
     return Fail("no shadow '" + args.shadow_id + "' of rig '" + args.rig_id +
@@ -211,23 +199,12 @@ int main(int argc, char** argv) {
   if (!action) return 0;
 
   // Only now: reading the status needs no right to command (a watcher under security has none).
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(scope->pub(), command_topic->handle(),
-                                                          dds::RequestQos());
-  if (!writer.ok()) return Fail(writer.status().message());
   // A command written before the shadow's reader has matched would be lost (volatile).
   const std::chrono::duration<double> left = deadline - Clock::now();
-  const auto matched = dds::AwaitReader(writer->handle(), dds::DeadlineAfter(left.count()));
+  const auto matched = (*shadow)->AwaitCommandReader(left.count());
   if (!matched.ok()) return Fail(matched.status().message());
   if (!*matched) return Fail("the shadow's command reader did not match within --timeout");
-
-  mpdrig_ShadowCommand command{};
-  command.rig_id = args.rig_id.data();
-  command.shadow_id = args.shadow_id.data();
-  command.command_id =
-      static_cast<unsigned long long>(std::chrono::system_clock::now().time_since_epoch().count());
-  command.action = action->first;
-  command.argument = action->second.data();
-  auto written = writer->Write(command);
-  if (!written.ok()) return Fail(written.message());
-  return AwaitAnswer(*status, args, command, **before_rejected, deadline);
+  auto sent = (*shadow)->Send(action->first, action->second);
+  if (!sent.ok()) return Fail(sent.status().message());
+  return AwaitAnswer(**shadow, args, action->first, *sent, **before_rejected, deadline);
 }

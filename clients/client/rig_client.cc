@@ -8,30 +8,13 @@
 #include <map>
 #include <mutex>
 
+#include "clients/client/client_wire.h"
 #include "mpdrig.h"
 #include "service/dds/dds.h"
-#include "service/dds/security.h"
 #include "service/dds/topics.h"
 
 namespace mpdrig::client {
 namespace {
-
-// Cyclone allows one domain object per id in a process; Rigs on the same id share it, and the
-// first one's configuration holds for all of them.
-std::shared_ptr<dds::Domain> SharedDomain(int id, const std::string& config, Status* error) {
-  static std::mutex mutex;
-  static std::map<int, std::weak_ptr<dds::Domain>> domains;
-  std::lock_guard<std::mutex> lock(mutex);
-  if (auto existing = domains[id].lock()) return existing;
-  auto created = dds::Domain::Create(id, config);
-  if (!created.ok()) {
-    *error = created.status();
-    return nullptr;
-  }
-  auto shared = std::make_shared<dds::Domain>(std::move(created).value());
-  domains[id] = shared;
-  return shared;
-}
 
 double WallSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -46,39 +29,11 @@ constexpr const dds::TopicSpec* kCommandTopics[] = {
     &dds::topics::kChokeCommand, &dds::topics::kPumpCommand, &dds::topics::kOutletCommand,
     &dds::topics::kPistonCommand};
 
-Sensors FromWire(const mpdrig_RigSensors& s) {
-  Sensors out;
-  out.sample_counter = s.sample_counter;
-  out.time_s = s.sim_time_s;
-  out.piston_position_m = s.piston_position_m;
-  out.choke_position_deg = s.choke_position_deg;
-  out.P1_barg = s.P1_barg;
-  out.P2_barg = s.P2_barg;
-  for (int i = 0; i < 10; ++i) out.PT_barg[i] = s.PT_barg[i];
-  out.C1_barg = s.C1_barg;
-  out.C2_barg = s.C2_barg;
-  out.FT1_lpm = s.FT1_lpm;
-  out.FT2_lpm = s.FT2_lpm;
-  out.FT3_lpm = s.FT3_lpm;
-  out.FT4_lpm = s.FT4_lpm;
-  return out;
-}
-
-std::vector<double> FromSequence(const dds_sequence_double& seq) {
-  return std::vector<double>(seq._buffer, seq._buffer + seq._length);
-}
-
-std::vector<std::string> FromSequence(const dds_sequence_string& seq) {
-  std::vector<std::string> out;
-  for (std::uint32_t i = 0; i < seq._length; ++i) out.emplace_back(seq._buffer[i]);
-  return out;
-}
-
 }  // namespace
 
 struct Rig::Dds {
-  std::shared_ptr<dds::Domain> domain;
-  dds::ClientScope scope;  // the participant; with security, a publisher and subscriber too
+  std::shared_ptr<Participant> participant;  // first: the others are deleted before it goes
+  Participant::Scope scope;                  // with security, the rig's partition
   dds::Entity sensors_topic, estimate_topic, profile_topic, status_topic, step_topic;
   std::array<dds::Entity, 4> command_topics;
   std::optional<dds::Reader<mpdrig_RigSensors>> sensors;
@@ -97,32 +52,11 @@ struct Rig::Dds {
 
 namespace {
 
-// The domain configuration: loopback by default; FastAckConfig added to a fragment (appended) or
-// to a list of files (one more element of Cyclone's comma-separated list).
-std::string ClientConfig(const std::string& given) {
-  const std::size_t first = given.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return dds::LoopbackConfig() + dds::FastAckConfig();
-  if (given[first] != '<') return given + "," + dds::FastAckConfig();
-  if (given.find("CycloneDDS") == std::string::npos) return given + dds::FastAckConfig();
-  return given;
-}
-
-// A DDS error, with what DDS Security's refusal means for this client.
-Status EndpointError(const Status& error, const RigOptions& o, const char* what) {
-  if (o.security_dir.empty() || error.message().find(dds_strretcode(
-                                    DDS_RETCODE_NOT_ALLOWED_BY_SECURITY)) == std::string::npos) {
-    return error;
-  }
-  return Status::Error("DDS Security: the permissions of " + o.security_dir + " do not allow " +
-                       what + " rig '" + o.rig_id + "' (partition " + dds::RigPartition(o.rig_id) +
-                       "; make-class NAME:WATCH grants reading)");
-}
-
 template <typename T>
-Status MakeReader(dds_entity_t subscriber, const dds::Entity& topic, const dds::Qos& qos,
-                  const RigOptions& o, std::optional<dds::Reader<T>>* out) {
+Status MakeReader(const Participant& participant, dds_entity_t subscriber, const dds::Entity& topic,
+                  const dds::Qos& qos, const RigOptions& o, std::optional<dds::Reader<T>>* out) {
   auto reader = dds::Reader<T>::Create(subscriber, topic.handle(), qos);
-  if (!reader.ok()) return EndpointError(reader.status(), o, "reading");
+  if (!reader.ok()) return participant.EndpointError(reader.status(), o.rig_id, "reading");
   out->emplace(std::move(reader).value());
   return Status::Ok();
 }
@@ -172,7 +106,7 @@ Status Rig::ClosedOrLost() {
 
 Status Rig::MakeEndpoints() {
   Dds& d = *dds_;
-  const dds_entity_t p = d.scope.participant.handle();
+  const dds_entity_t p = d.participant->handle();
   MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kSensors, &d.sensors_topic));
   MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kEstimate, &d.estimate_topic));
   MPDRIG_RETURN_IF_ERROR(MakeTopic(p, dds::topics::kPressureProfile, &d.profile_topic));
@@ -184,8 +118,8 @@ Status Rig::MakeEndpoints() {
   // One waitset over every reader, so a wait wakes on whatever arrives first.
   d.waitset = dds::Entity(dds_create_waitset(p));
   if (d.waitset.handle() < 0) return dds::Check(d.waitset.handle(), "dds_create_waitset");
-  MPDRIG_RETURN_IF_ERROR(
-      MakeReader(d.scope.sub(), d.status_topic, dds::StatusQos(), options_, &d.status));
+  MPDRIG_RETURN_IF_ERROR(MakeReader(*d.participant, d.scope.subscriber, d.status_topic,
+                                    dds::StatusQos(), options_, &d.status));
   return Attach(d.status->handle());
 }
 
@@ -199,42 +133,61 @@ Status Rig::Attach(dds_entity_t reader) {
 // a recorder, else the newest 8 (a slow reader must not hold back a real-time rig).
 Status Rig::MakeStreamReaders(bool keep_all) {
   Dds& d = *dds_;
-  const dds_entity_t sub = d.scope.sub();
-  MPDRIG_RETURN_IF_ERROR(
-      MakeReader(sub, d.sensors_topic, dds::SensorQos(keep_all), options_, &d.sensors));
+  const dds_entity_t sub = d.scope.subscriber;
+  MPDRIG_RETURN_IF_ERROR(MakeReader(*d.participant, sub, d.sensors_topic, dds::SensorQos(keep_all),
+                                    options_, &d.sensors));
   MPDRIG_RETURN_IF_ERROR(Attach(d.sensors->handle()));
   if (options_.read_estimates) {
-    MPDRIG_RETURN_IF_ERROR(
-        MakeReader(sub, d.estimate_topic, dds::SensorQos(keep_all), options_, &d.estimates));
+    MPDRIG_RETURN_IF_ERROR(MakeReader(*d.participant, sub, d.estimate_topic,
+                                      dds::SensorQos(keep_all), options_, &d.estimates));
     MPDRIG_RETURN_IF_ERROR(Attach(d.estimates->handle()));
   }
   if (options_.read_profiles) {
-    MPDRIG_RETURN_IF_ERROR(
-        MakeReader(sub, d.profile_topic, dds::SensorQos(false), options_, &d.profiles));
+    MPDRIG_RETURN_IF_ERROR(MakeReader(*d.participant, sub, d.profile_topic, dds::SensorQos(false),
+                                      options_, &d.profiles));
     MPDRIG_RETURN_IF_ERROR(Attach(d.profiles->handle()));
   }
   return Status::Ok();
 }
 
-Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Interrupt& interrupt) {
+namespace {
+
+Status CheckRigOptions(const RigOptions& options) {
   if (options.rig_id.empty()) return Status::Error("the rig id is empty");
-  if (options.domain < 0 || options.domain > 232) {
-    return Status::Error("DDS domain " + std::to_string(options.domain) + " is not in 0..232");
-  }
   // At most a day: the timeout becomes DDS nanoseconds (int64) in places.
   if (!(options.timeout_s >= 0.0 && options.timeout_s <= 86400.0)) {
     return Status::Error(
         "the timeout must be a number of seconds in [0, 86400] (0: wait for ever)");
   }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Rig>> Rig::Connect(const RigOptions& options, const Interrupt& interrupt) {
+  MPDRIG_RETURN_IF_ERROR(CheckRigOptions(options));
+  auto participant = Participant::Join({.domain = options.domain,
+                                        .dds_config = options.dds_config,
+                                        .security_dir = options.security_dir});
+  if (!participant.ok()) return participant.status();
+  return Connect(*participant, options, interrupt);
+}
+
+Result<std::unique_ptr<Rig>> Rig::Connect(const std::shared_ptr<Participant>& participant,
+                                          const RigOptions& given, const Interrupt& interrupt) {
+  MPDRIG_RETURN_IF_ERROR(CheckRigOptions(given));
+  if (!participant) return Status::Error("no participant");
+  RigOptions options = given;  // the participant's domain and identity, whatever `given` says
+  options.domain = participant->options().domain;
+  options.dds_config = participant->options().dds_config;
+  options.security_dir = participant->options().security_dir;
   std::unique_ptr<Rig> rig(new Rig(options));
   Dds& d = *rig->dds_;
-  Status error = Status::Ok();
-  d.domain = SharedDomain(options.domain, ClientConfig(options.dds_config), &error);
-  if (!d.domain) return error;
+  d.participant = participant;
   // With security the rig's topics are in its partition (make-class's permissions name it).
-  auto scope = dds::CreateClientScope(options.domain, options.security_dir, options.rig_id);
+  auto scope = participant->ScopeOf(options.rig_id);
   if (!scope.ok()) return scope.status();
-  d.scope = std::move(scope).value();
+  d.scope = *scope;
   MPDRIG_RETURN_IF_ERROR(rig->MakeEndpoints());
   // A recorder's readers do not depend on the clock: made before the rig is found, they miss
   // none of its first samples.
@@ -270,8 +223,7 @@ Status Rig::TakeSensors() {
     if (verdict == clients::RigWatch::Verdict::kLost) lost_ = why;
     if (verdict != clients::RigWatch::Verdict::kAccept) return;
     last_sample_wall_s_ = WallSeconds();
-    Sensors sample = FromWire(s);
-    sample.published_s = 1e-9 * static_cast<double>(info.source_timestamp);
+    Sensors sample = FromWire(s, info);
     sample.received_s = last_sample_wall_s_;
     queue_.push_back(sample);
     if (queue_.size() > kQueueLimit) queue_.pop_front();
@@ -287,18 +239,7 @@ Status Rig::TakeEstimates() {
   const std::string& id = options_.rig_id;
   auto took = d.estimates->TakeEach([&](const mpdrig_RigEstimate& e, const dds_sample_info_t&) {
     if (id != e.rig_id) return;
-    Estimate out;
-    out.sample_counter = e.sample_counter;
-    out.time_s = e.sim_time_s;
-    out.observer_time_s = e.observer_time_s;
-    out.BHP_est_barg = e.BHP_est_barg;
-    out.piston_velocity_est_mps = e.piston_velocity_est_mps;
-    out.piston_position_est_m = e.piston_position_est_m;
-    out.FT4_est_lpm = e.FT4_est_lpm;
-    out.disturbance_frequency_hz = e.disturbance_frequency_hz;
-    out.frequency_source = e.frequency_source == mpdrig_FREQUENCY_PISTON_SINE ? "piston_sine"
-                           : e.frequency_source == mpdrig_FREQUENCY_TRACKED   ? "tracked"
-                                                                              : "unlocked";
+    Estimate out = FromWire(e);
     estimates_.push_back(std::move(out));
     if (estimates_.size() > kEstimateLimit) estimates_.pop_front();
   });
@@ -311,13 +252,7 @@ Status Rig::TakeProfiles() {
   const std::string& id = options_.rig_id;
   auto took = d.profiles->TakeEach([&](const mpdrig_PressureProfile& p, const dds_sample_info_t&) {
     if (id != p.rig_id) return;
-    Profile out;
-    out.sample_counter = p.sample_counter;
-    out.time_s = p.sim_time_s;
-    out.position_m = FromSequence(p.position_m);
-    out.pressure_barg = FromSequence(p.pressure_barg);
-    out.pressure_est_barg = FromSequence(p.pressure_est_barg);
-    profile_ = std::move(out);
+    profile_ = FromWire(p);
   });
   return took.ok() ? Status::Ok() : Fail(Failure::kError, took.status().message());
 }
@@ -329,22 +264,7 @@ Status Rig::TakeStatus() {
         if (id != s.rig_id) return;
         // A disposal that finds the last status unread marks that sample instead of adding one.
         if (info.instance_state == DDS_IST_NOT_ALIVE_DISPOSED) ended_ = true;
-        RigStatus out;
-        out.clock = s.clock == mpdrig_CLOCK_REALTIME ? "realtime"
-                    : s.clock == mpdrig_CLOCK_FAST   ? "fast"
-                                                     : "lockstep";
-        out.sim_time_s = s.sim_time_s;
-        out.real_time_factor = s.real_time_factor;
-        out.deadline_misses = s.deadline_misses;
-        out.rejected_commands = s.rejected_commands;
-        out.last_rejection = s.last_rejection;
-        out.last_completed_step_request = s.last_completed_step_request;
-        out.warnings = FromSequence(s.warnings);
-        out.active_effects = FromSequence(s.active_effects);
-        out.actuator_owners = FromSequence(s.actuator_owners);
-        out.sensor_noise = s.sensor_noise;
-        out.atmospheric_pressure_pa = s.atmospheric_pressure_pa;
-        rig_status_ = std::move(out);
+        rig_status_ = FromWire(s);
       },
       {}, std::numeric_limits<int>::max(),
       [&](const mpdrig_RigStatus& s) {
@@ -521,12 +441,14 @@ Status Rig::SendCommand(int topic_index, const T& sample, const Interrupt& inter
   Dds& d = *dds_;
   dds::Entity& writer = d.command_writers[topic_index];
   if (writer.handle() <= 0) {
-    dds::Entity created(dds_create_writer(d.scope.pub(), d.command_topics[topic_index].handle(),
+    dds::Entity created(dds_create_writer(d.scope.publisher, d.command_topics[topic_index].handle(),
                                           dds::CommandQos(options_.strength).get(), nullptr));
     if (created.handle() < 0) {
-      return Fail(Failure::kError, EndpointError(dds::Check(created.handle(), "dds_create_writer"),
-                                                 options_, "commanding")
-                                       .message());
+      return Fail(Failure::kError,
+                  d.participant
+                      ->EndpointError(dds::Check(created.handle(), "dds_create_writer"),
+                                      options_.rig_id, "commanding")
+                      .message());
     }
     writer = std::move(created);
     const Status matched =
@@ -671,10 +593,12 @@ Result<Sensors> Rig::Step(std::uint32_t steps, const Interrupt& interrupt) {
 Status Rig::MakeStepWriter(const Interrupt& interrupt) {
   Dds& d = *dds_;
   if (d.steps) return Status::Ok();
-  auto steps = dds::Writer<mpdrig_StepRequest>::Create(d.scope.pub(), d.step_topic.handle(),
+  auto steps = dds::Writer<mpdrig_StepRequest>::Create(d.scope.publisher, d.step_topic.handle(),
                                                        dds::RequestQos());
   if (!steps.ok()) {
-    return Fail(Failure::kError, EndpointError(steps.status(), options_, "stepping").message());
+    return Fail(
+        Failure::kError,
+        d.participant->EndpointError(steps.status(), options_.rig_id, "stepping").message());
   }
   d.steps.emplace(std::move(steps).value());
   const Status matched = AwaitMatch(d.steps->handle(), dds::topics::kStepRequest.name, interrupt);

@@ -9,6 +9,9 @@
 //   auto s = (*rig)->Step(1);               // lockstep: advance one period, return its sample
 //   (*rig)->Choke(30.0);                    // a command, applied at the rig's next step
 //
+// A program with several rigs connects each through one Participant (participant.h):
+// Rig::Connect(participant, options).
+//
 // Rules it keeps for its user:
 //   - Commands use dds::CommandQos(strength): exclusive ownership, transient-local, a 1 s
 //     liveliness lease. A command writer is made on the first command of its kind and waits for
@@ -42,6 +45,7 @@
 #include <string>
 #include <vector>
 
+#include "clients/client/participant.h"
 #include "clients/rig_watch.h"
 #include "model/common/status.h"
 
@@ -112,6 +116,11 @@ struct RigStatus {
   double sim_time_s = 0.0;
   double real_time_factor = 0.0;
   std::uint64_t deadline_misses = 0;
+  // Real time: the sensor periods the late ticks skipped, the longest stall [s of wall time] and
+  // the rig time of the last one (-1: never).
+  std::uint64_t lost_periods = 0;
+  double longest_stall_s = 0.0;
+  double last_stall_sim_time_s = -1.0;
   std::uint64_t rejected_commands = 0;
   std::string last_rejection;
   std::uint64_t last_completed_step_request = 0;
@@ -142,6 +151,11 @@ class Rig {
   // Joins the domain and waits up to options.timeout_s for the rig's status (transient-local: a
   // running service has one for each of its rigs), which says the rig exists and its clock.
   static Result<std::unique_ptr<Rig>> Connect(const RigOptions& options,
+                                              const Interrupt& interrupt = {});
+  // The same through a participant the program holds (participant.h): several rigs on one.
+  // The participant's domain, configuration and identity hold, not those of `options`.
+  static Result<std::unique_ptr<Rig>> Connect(const std::shared_ptr<Participant>& participant,
+                                              const RigOptions& options,
                                               const Interrupt& interrupt = {});
   ~Rig();
   Rig(const Rig&) = delete;

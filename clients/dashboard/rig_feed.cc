@@ -2,61 +2,22 @@
 
 #include <algorithm>
 #include <array>
-#include <cmath>
-#include <limits>
+#include <chrono>
 #include <utility>
 
+#include "clients/client/participant.h"
+#include "clients/client/rig_streams.h"
+#include "clients/client/shadow_client.h"
 #include "clients/dashboard/json_out.h"
-#include "mpdrig.h"
-#include "service/dds/dds.h"
-#include "service/dds/security.h"
-#include "service/dds/topics.h"
 
 namespace mpdrig::dashboard {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-// One RigSensors sample as held (the wire's lab units), with when it was written.
-struct SensorsView {
-  std::uint64_t counter = 0;
-  double t = 0.0;
-  double piston_m = kNaN, choke_deg = kNaN, P1 = kNaN, P2 = kNaN, C1 = kNaN, C2 = kNaN;
-  double PT[10] = {kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
-  double FT1 = kNaN, FT2 = kNaN, FT3 = kNaN, FT4 = kNaN;
-  dds_time_t written_ns = 0;
-};
-
-SensorsView FromWire(const mpdrig_RigSensors& s, const dds_sample_info_t& info) {
-  SensorsView v;
-  v.counter = s.sample_counter;
-  v.t = s.sim_time_s;
-  v.piston_m = s.piston_position_m;
-  v.choke_deg = s.choke_position_deg;
-  v.P1 = s.P1_barg;
-  v.P2 = s.P2_barg;
-  std::copy(std::begin(s.PT_barg), std::end(s.PT_barg), std::begin(v.PT));
-  v.C1 = s.C1_barg;
-  v.C2 = s.C2_barg;
-  v.FT1 = s.FT1_lpm;
-  v.FT2 = s.FT2_lpm;
-  v.FT3 = s.FT3_lpm;
-  v.FT4 = s.FT4_lpm;
-  v.written_ns = info.source_timestamp;
-  return v;
+// Now on the writers' clock (s since 1970), for a sample's age.
+double WallClockS() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
-
-struct EstimateView {
-  double t = 0.0, bhp = kNaN, piston_m = kNaN, velocity = kNaN, FT4 = kNaN, freq_hz = kNaN;
-  std::string source;
-};
-
-struct ProfileView {
-  std::uint64_t counter = 0;
-  double t = 0.0;
-  std::vector<double> x, p, p_est;
-};
 
 // PT1..PT10 of one sample, kept for a few seconds so that the profile chart can show the rig,
 // the observer and the shadow at one instant: the shadow trails the rig by a few samples, and
@@ -72,57 +33,6 @@ template <typename T>
 void PushRing(std::deque<T>* ring, T item, std::size_t size) {
   ring->push_back(std::move(item));
   while (ring->size() > size) ring->pop_front();
-}
-
-struct StatusView {
-  std::string clock;
-  double t = 0.0, rtf = 0.0, longest_stall_s = 0.0;
-  std::uint64_t deadline_misses = 0, lost_periods = 0, rejected = 0;
-  std::string last_rejection, noise;
-  std::vector<std::string> warnings, effects, owners;
-};
-
-struct ShadowStatusView {
-  double t = 0.0, window_s = 0.0, error = kNaN, last_change_t = -1.0, error_at_change = kNaN;
-  std::vector<std::string> channels, effects, parameters, available;
-  std::vector<double> nrmse;
-  std::string last_change, last_rejection, fit_state;
-  std::uint64_t rejected = 0, last_command_id = 0;
-};
-
-std::vector<std::string> Strings(const dds_sequence_string& seq) {
-  std::vector<std::string> out;
-  out.reserve(seq._length);
-  for (std::uint32_t i = 0; i < seq._length; ++i) out.emplace_back(seq._buffer[i]);
-  return out;
-}
-
-std::vector<double> Doubles(const dds_sequence_double& seq) {
-  return std::vector<double>(seq._buffer, seq._buffer + seq._length);
-}
-
-const char* ClockName(mpdrig_ClockMode clock) {
-  switch (clock) {
-    case mpdrig_CLOCK_REALTIME:
-      return "realtime";
-    case mpdrig_CLOCK_FAST:
-      return "fast";
-    case mpdrig_CLOCK_LOCKSTEP:
-      return "lockstep";
-  }
-  return "unknown";
-}
-
-const char* SourceName(mpdrig_FrequencySource source) {
-  switch (source) {
-    case mpdrig_FREQUENCY_PISTON_SINE:
-      return "piston sine";
-    case mpdrig_FREQUENCY_TRACKED:
-      return "tracked";
-    case mpdrig_FREQUENCY_UNLOCKED:
-      return "unlocked";
-  }
-  return "unknown";
 }
 
 // A thinned time series for one chart: one point per frame at most, the newest `history_s` of
@@ -161,111 +71,74 @@ class Series {
   std::deque<Point> points_;
 };
 
-Json SensorsJson(const SensorsView& s, dds_time_t now) {
-  return {{"counter", s.counter},
-          {"t", JsonNumber(s.t)},
-          {"piston_m", JsonNumber(s.piston_m)},
-          {"choke_deg", JsonNumber(s.choke_deg)},
-          {"P1", JsonNumber(s.P1)},
-          {"P2", JsonNumber(s.P2)},
-          {"C1", JsonNumber(s.C1)},
-          {"C2", JsonNumber(s.C2)},
-          {"FT1", JsonNumber(s.FT1)},
-          {"FT2", JsonNumber(s.FT2)},
-          {"FT3", JsonNumber(s.FT3)},
-          {"FT4", JsonNumber(s.FT4)},
-          {"age_ms", JsonNumber(static_cast<double>(now - s.written_ns) * 1e-6)},
-          {"PT", JsonNumbers(std::vector<double>(std::begin(s.PT), std::end(s.PT)))}};
+Json SensorsJson(const client::Sensors& s, double now_s) {
+  return {{"counter", s.sample_counter},
+          {"t", JsonNumber(s.time_s)},
+          {"piston_m", JsonNumber(s.piston_position_m)},
+          {"choke_deg", JsonNumber(s.choke_position_deg)},
+          {"P1", JsonNumber(s.P1_barg)},
+          {"P2", JsonNumber(s.P2_barg)},
+          {"C1", JsonNumber(s.C1_barg)},
+          {"C2", JsonNumber(s.C2_barg)},
+          {"FT1", JsonNumber(s.FT1_lpm)},
+          {"FT2", JsonNumber(s.FT2_lpm)},
+          {"FT3", JsonNumber(s.FT3_lpm)},
+          {"FT4", JsonNumber(s.FT4_lpm)},
+          {"age_ms", JsonNumber((now_s - s.published_s) * 1e3)},
+          {"PT", JsonNumbers(std::vector<double>(s.PT_barg.begin(), s.PT_barg.end()))}};
 }
 
-std::optional<std::string> ActionOf(const std::string& action, mpdrig_ShadowAction* wire) {
-  if (action == "effect_on")
-    *wire = mpdrig_SHADOW_EFFECT_ON;
-  else if (action == "effect_off")
-    *wire = mpdrig_SHADOW_EFFECT_OFF;
-  else if (action == "set")
-    *wire = mpdrig_SHADOW_SET;
-  else if (action == "reset")
-    *wire = mpdrig_SHADOW_RESET;
-  else if (action == "fit_now")
-    *wire = mpdrig_SHADOW_FIT_NOW;
-  else
-    return "unknown action '" + action + "' (effect_on, effect_off, set, reset, fit_now)";
-  return std::nullopt;
-}
-
-EstimateView EstimateFromWire(const mpdrig_RigEstimate& w) {
-  return EstimateView{w.sim_time_s,
-                      w.BHP_est_barg,
-                      w.piston_position_est_m,
-                      w.piston_velocity_est_mps,
-                      w.FT4_est_lpm,
-                      w.disturbance_frequency_hz,
-                      SourceName(w.frequency_source)};
-}
-
-StatusView StatusFromWire(const mpdrig_RigStatus& w) {
-  StatusView st;
-  st.clock = ClockName(w.clock);
-  st.t = w.sim_time_s;
-  st.rtf = w.real_time_factor;
-  st.deadline_misses = w.deadline_misses;
-  st.lost_periods = w.lost_periods;
-  st.longest_stall_s = w.longest_stall_s;
-  st.rejected = w.rejected_commands;
-  st.last_rejection = w.last_rejection;
-  st.noise = w.sensor_noise;
-  st.warnings = Strings(w.warnings);
-  st.effects = Strings(w.active_effects);
-  st.owners = Strings(w.actuator_owners);
-  return st;
-}
-
-ShadowStatusView ShadowStatusFromWire(const mpdrig_ShadowStatus& w) {
-  ShadowStatusView st;
-  st.t = w.sim_time_s;
-  st.window_s = w.window_s;
-  st.error = w.error;
-  st.channels = Strings(w.channels);
-  st.nrmse = Doubles(w.nrmse);
-  st.effects = Strings(w.active_effects);
-  st.parameters = Strings(w.parameters);
-  st.available = Strings(w.available_effects);
-  st.last_change = w.last_change;
-  st.last_change_t = w.last_change_sim_time_s;
-  st.error_at_change = w.error_at_last_change;
-  st.rejected = w.rejected_commands;
-  st.last_rejection = w.last_rejection;
-  st.last_command_id = w.last_command_id;
-  st.fit_state = w.fit_state;
-  return st;
+// The actions the page offers (a fit is cancelled from shadow_ctl).
+Result<client::ShadowAction> ActionOf(const std::string& action) {
+  for (const char* offered : {"effect_on", "effect_off", "set", "reset", "fit_now"}) {
+    if (action == offered) return client::ShadowActionNamed(action);
+  }
+  return Status::Error("unknown action '" + action +
+                       "' (effect_on, effect_off, set, reset, fit_now)");
 }
 
 }  // namespace
 
 struct RigFeed::DomainHolder {
-  dds::Domain domain;
+  std::shared_ptr<client::ClientDomain> domain;  // configured while the feed lives
 };
 
+// The DDS side of a watched period, on the client library: one participant (with
+// FeedOptions::security_dir, each rig's endpoints in its partition), the rigs' streams, and a
+// shadow command handle per rig (made when the rig is first seen, so it has matched the shadow
+// by the time a browser sends a command).
 struct RigFeed::Session {
-  dds::ClientScope scope;  // first: destroyed last (deleting it deletes its children)
-  std::vector<dds::Entity> topics;
-  std::optional<dds::Reader<mpdrig_RigSensors>> sensors, shadow_sensors;
-  std::optional<dds::Reader<mpdrig_RigEstimate>> estimate;
-  std::optional<dds::Reader<mpdrig_PressureProfile>> profile;
-  std::optional<dds::Reader<mpdrig_RigStatus>> status;
-  std::optional<dds::Reader<mpdrig_ShadowStatus>> shadow_status;
-  std::optional<dds::Writer<mpdrig_ShadowCommand>> shadow_command;
+  std::shared_ptr<client::Participant> participant;  // first: the others go before it
+  std::unique_ptr<client::RigStreams> streams;
+  std::map<std::string, std::unique_ptr<client::Shadow>> shadows;
+
+  // The rig's shadow handle, made on the first call; nullptr (and `error` set) if it cannot be.
+  client::Shadow* ShadowOf(const std::string& rig_id, const std::string& shadow_id,
+                           std::string* error) {
+    auto& shadow = shadows[rig_id];
+    if (!shadow) {
+      auto opened = client::Shadow::Open(participant, rig_id, shadow_id, /*read_status=*/false);
+      if (!opened.ok()) {
+        *error = opened.status().message();
+        shadows.erase(rig_id);
+        return nullptr;
+      }
+      shadow = std::move(opened).value();
+      auto writer = shadow->AwaitCommandReader(0.0);  // the writer now, to match meanwhile
+      if (!writer.ok()) *error = writer.status().message();
+    }
+    return shadow.get();
+  }
 };
 
 struct RigFeed::RigView {
-  std::optional<SensorsView> sensors, shadow;
-  std::optional<EstimateView> estimate;
-  std::optional<StatusView> status;
-  std::optional<ShadowStatusView> shadow_status;
-  std::deque<ProfileView> profiles;    // the newest few, for the aligned snapshot
-  std::deque<PtAt> rig_pt, shadow_pt;  // the newest few seconds of PT1..PT10
-  std::uint64_t samples = 0;           // sensor samples taken
+  std::optional<client::Sensors> sensors, shadow;
+  std::optional<client::Estimate> estimate;
+  std::optional<client::RigStatus> status;
+  std::optional<client::ShadowStatus> shadow_status;
+  std::deque<client::Profile> profiles;  // the newest few, for the aligned snapshot
+  std::deque<PtAt> rig_pt, shadow_pt;    // the newest few seconds of PT1..PT10
+  std::uint64_t samples = 0;             // sensor samples taken
   // Charts: rig {PT1, piston, choke, FT2}, estimate {BHP}, shadow {PT1}, error {error, nrmse...}.
   Series rig_series, estimate_series, shadow_series, error_series;
   std::vector<std::string> error_channels;
@@ -274,46 +147,24 @@ struct RigFeed::RigView {
 
 namespace {
 
-// Creates topic `name` and a reader of it into `*reader`; the topic is kept in `topics`.
-template <typename T>
-Status OpenReader(std::optional<dds::Reader<T>>* reader, const dds::ClientScope& scope,
-                  std::vector<dds::Entity>* topics, const dds::TopicSpec& spec) {
-  const char* name = spec.name;
-  auto topic = dds::CreateTopic(scope.participant.handle(), spec);
-  if (!topic.ok()) return topic.status().Within(name);
-  auto created = dds::Reader<T>::Create(scope.sub(), topic->handle(), dds::ReaderQos(spec));
-  topics->push_back(std::move(topic).value());
-  if (!created.ok()) return created.status().Within(name);
-  reader->emplace(std::move(created).value());
-  return Status::Ok();
-}
-
-// The DDS entities of a watched period: one participant (with FeedOptions::security_dir, its
-// subscriber and publisher in the rig's partition), a reader per topic, the command writer.
+// Joins the domain, opens the rigs' streams and the named rigs' shadow command handles.
 Result<std::unique_ptr<RigFeed::Session>> OpenSession(const FeedOptions& options) {
   auto session = std::make_unique<RigFeed::Session>();
-  auto scope =
-      dds::CreateClientScope(options.domain, options.security_dir,
-                             options.security_dir.empty() ? std::string() : options.rigs.front());
-  if (!scope.ok()) return scope.status();
-  session->scope = std::move(scope).value();
-  const dds::ClientScope& p = session->scope;
-  auto* topics = &session->topics;
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->sensors, p, topics, dds::topics::kSensors));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->estimate, p, topics, dds::topics::kEstimate));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->profile, p, topics, dds::topics::kPressureProfile));
-  MPDRIG_RETURN_IF_ERROR(OpenReader(&session->status, p, topics, dds::topics::kStatus));
-  MPDRIG_RETURN_IF_ERROR(
-      OpenReader(&session->shadow_sensors, p, topics, dds::topics::kShadowSensors));
-  MPDRIG_RETURN_IF_ERROR(
-      OpenReader(&session->shadow_status, p, topics, dds::topics::kShadowStatus));
-  auto command_topic = dds::CreateTopic(p.participant.handle(), dds::topics::kShadowCommand);
-  if (!command_topic.ok()) return command_topic.status();
-  auto writer = dds::Writer<mpdrig_ShadowCommand>::Create(p.pub(), command_topic->handle(),
-                                                          dds::RequestQos());
-  if (!writer.ok()) return writer.status();
-  session->topics.push_back(std::move(command_topic).value());
-  session->shadow_command.emplace(std::move(writer).value());
+  auto participant = client::Participant::Join({.domain = options.domain,
+                                                .dds_config = options.dds_config,
+                                                .security_dir = options.security_dir});
+  if (!participant.ok()) return participant.status();
+  session->participant = std::move(participant).value();
+  auto streams = client::RigStreams::Open(session->participant,
+                                          {.rigs = options.rigs, .shadow_id = options.shadow_id});
+  if (!streams.ok()) return streams.status();
+  session->streams = std::move(streams).value();
+  for (const std::string& rig_id : options.rigs) {
+    std::string error;
+    if (session->ShadowOf(rig_id, options.shadow_id, &error) == nullptr) {
+      return Status::Error(error);
+    }
+  }
   return session;
 }
 
@@ -329,13 +180,14 @@ Result<std::unique_ptr<RigFeed>> RigFeed::Create(const FeedOptions& options) {
       return Status::Error(
           "--security shows one rig, in its partition: give its id once with --rig");
     }
-    MPDRIG_RETURN_IF_ERROR(dds::CheckSecureRigId(options.rigs.front()));
-    auto files = dds::LoadSecurityDirectory(options.security_dir);
-    if (!files.ok()) return files.status().Within("--security");
+    MPDRIG_RETURN_IF_ERROR(client::Participant::Check({.domain = options.domain,
+                                                       .dds_config = options.dds_config,
+                                                       .security_dir = options.security_dir},
+                                                      options.rigs));
   }
-  auto domain = dds::Domain::Create(
-      options.domain, options.dds_config.empty() ? dds::LoopbackConfig() : options.dds_config);
-  if (!domain.ok()) return domain.status().Within("DDS domain " + std::to_string(options.domain));
+  // Configured now (nothing on the wire until a browser watches), and kept while the feed lives.
+  auto domain = client::ClientDomain::Configure(options.domain, options.dds_config);
+  if (!domain.ok()) return domain.status();
   std::unique_ptr<RigFeed> feed(new RigFeed(options));
   feed->domain_ = std::make_unique<DomainHolder>(DomainHolder{std::move(domain).value()});
   feed->thread_ = std::thread([f = feed.get()] { f->Run(); });
@@ -393,11 +245,6 @@ void RigFeed::Run() {
   }
 }
 
-bool RigFeed::Wanted(const char* rig_id) const {
-  return options_.rigs.empty() ||
-         std::find(options_.rigs.begin(), options_.rigs.end(), rig_id) != options_.rigs.end();
-}
-
 RigFeed::RigView& RigFeed::View(const std::string& rig_id) {
   auto& view = views_[rig_id];
   if (!view) view = std::make_unique<RigView>();
@@ -406,53 +253,46 @@ RigFeed::RigView& RigFeed::View(const std::string& rig_id) {
 
 void RigFeed::Drain() {
   Session& s = *session_;
-  std::uint64_t taken = 0;
-  auto count = [&](const Result<int>& n) {
-    if (n.ok()) {
-      taken += static_cast<std::uint64_t>(*n);
-    } else {
-      health_.error = n.status().message();  // shown by the page (GET /api/rigs)
-    }
-  };
-  count(s.sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
-    if (!Wanted(w.rig_id)) return;
-    RigView& v = View(w.rig_id);
-    v.sensors = FromWire(w, info);
-    PushRing(&v.rig_pt, PtAt{w.sample_counter, std::to_array(w.PT_barg)}, kPtRing);
+  client::RigStreams::Visitor visit;
+  visit.sensors = [&](const std::string& rig_id, const client::Sensors& x) {
+    RigView& v = View(rig_id);
+    v.sensors = x;
+    PushRing(&v.rig_pt, PtAt{x.sample_counter, x.PT_barg}, kPtRing);
     v.fresh_sensors = true;
     ++v.samples;
-  }));
-  count(s.estimate->TakeEach([&](const mpdrig_RigEstimate& w, const dds_sample_info_t&) {
-    if (!Wanted(w.rig_id)) return;
-    RigView& v = View(w.rig_id);
-    v.estimate = EstimateFromWire(w);
+  };
+  visit.estimate = [&](const std::string& rig_id, const client::Estimate& e) {
+    RigView& v = View(rig_id);
+    v.estimate = e;
     v.fresh_estimate = true;
-  }));
-  count(s.profile->TakeEach([&](const mpdrig_PressureProfile& w, const dds_sample_info_t&) {
-    if (!Wanted(w.rig_id)) return;
-    PushRing(&View(w.rig_id).profiles,
-             ProfileView{w.sample_counter, w.sim_time_s, Doubles(w.position_m),
-                         Doubles(w.pressure_barg), Doubles(w.pressure_est_barg)},
-             kProfileRing);
-  }));
-  count(s.status->TakeEach([&](const mpdrig_RigStatus& w, const dds_sample_info_t&) {
-    if (!Wanted(w.rig_id)) return;
-    View(w.rig_id).status = StatusFromWire(w);
-  }));
-  count(s.shadow_sensors->TakeEach([&](const mpdrig_RigSensors& w, const dds_sample_info_t& info) {
-    if (!Wanted(w.rig_id)) return;
-    RigView& v = View(w.rig_id);
-    v.shadow = FromWire(w, info);
-    PushRing(&v.shadow_pt, PtAt{w.sample_counter, std::to_array(w.PT_barg)}, kPtRing);
+  };
+  visit.profile = [&](const std::string& rig_id, const client::Profile& p) {
+    PushRing(&View(rig_id).profiles, p, kProfileRing);
+  };
+  visit.status = [&](const std::string& rig_id, const client::RigStatus& st) {
+    View(rig_id).status = st;
+  };
+  visit.shadow_sensors = [&](const std::string& rig_id, const client::Sensors& x) {
+    RigView& v = View(rig_id);
+    v.shadow = x;
+    PushRing(&v.shadow_pt, PtAt{x.sample_counter, x.PT_barg}, kPtRing);
     v.fresh_shadow = true;
-  }));
-  count(s.shadow_status->TakeEach([&](const mpdrig_ShadowStatus& w, const dds_sample_info_t&) {
-    if (!Wanted(w.rig_id) || options_.shadow_id != w.shadow_id) return;
-    RigView& v = View(w.rig_id);
-    v.shadow_status = ShadowStatusFromWire(w);
+  };
+  visit.shadow_status = [&](const client::ShadowStatus& st) {
+    RigView& v = View(st.rig_id);
+    v.shadow_status = st;
     v.fresh_error = true;
-  }));
-  health_.samples_taken += taken;
+  };
+  const client::RigStreams::Taken taken = s.streams->Take(visit);
+  if (!taken.error.empty()) health_.error = taken.error;  // shown by the page (GET /api/rigs)
+  // A rig seen for the first time gets its shadow command handle now (see Session).
+  for (const auto& [id, view] : views_) {
+    std::string error;
+    if (s.ShadowOf(id, options_.shadow_id, &error) == nullptr || !error.empty()) {
+      health_.error = error;
+    }
+  }
+  health_.samples_taken += taken.samples;
   ++health_.frames;
 
   AddHistoryPoints();
@@ -462,25 +302,28 @@ void RigFeed::Drain() {
 void RigFeed::AddHistoryPoints() {
   for (auto& [id, v] : views_) {
     if (v->fresh_sensors) {
-      const SensorsView& x = *v->sensors;
-      v->rig_series.Add(next_seq_++, x.t, {x.PT[0], x.piston_m, x.choke_deg, x.FT2},
+      const client::Sensors& x = *v->sensors;
+      v->rig_series.Add(next_seq_++, x.time_s,
+                        {x.PT_barg[0], x.piston_position_m, x.choke_position_deg, x.FT2_lpm},
                         options_.history_s);
     }
     if (v->fresh_estimate) {
-      v->estimate_series.Add(next_seq_++, v->estimate->t, {v->estimate->bhp}, options_.history_s);
+      v->estimate_series.Add(next_seq_++, v->estimate->time_s, {v->estimate->BHP_est_barg},
+                             options_.history_s);
     }
     if (v->fresh_shadow) {
-      v->shadow_series.Add(next_seq_++, v->shadow->t, {v->shadow->PT[0]}, options_.history_s);
+      v->shadow_series.Add(next_seq_++, v->shadow->time_s, {v->shadow->PT_barg[0]},
+                           options_.history_s);
     }
     if (v->fresh_error) {
-      const ShadowStatusView& st = *v->shadow_status;
+      const client::ShadowStatus& st = *v->shadow_status;
       if (st.channels != v->error_channels) {  // another shadow, or other channels: start over
         v->error_series.Clear();
         v->error_channels = st.channels;
       }
       std::vector<double> values{st.error};
       values.insert(values.end(), st.nrmse.begin(), st.nrmse.end());
-      v->error_series.Add(next_seq_++, st.t, std::move(values), options_.history_s);
+      v->error_series.Add(next_seq_++, st.sim_time_s, std::move(values), options_.history_s);
     }
     v->fresh_sensors = v->fresh_estimate = v->fresh_shadow = v->fresh_error = false;
   }
@@ -505,38 +348,51 @@ FeedHealth RigFeed::Health() const {
 
 namespace {
 
-Json StatusJson(const StatusView& st) {
+Json StatusJson(const client::RigStatus& st) {
   return {{"clock", st.clock},
-          {"t", JsonNumber(st.t)},
-          {"rtf", JsonNumber(st.rtf)},
+          {"t", JsonNumber(st.sim_time_s)},
+          {"rtf", JsonNumber(st.real_time_factor)},
           {"deadline_misses", st.deadline_misses},
           {"lost_periods", st.lost_periods},
           {"longest_stall_s", JsonNumber(st.longest_stall_s)},
-          {"rejected", st.rejected},
+          {"rejected", st.rejected_commands},
           {"last_rejection", st.last_rejection},
-          {"noise", st.noise},
+          {"noise", st.sensor_noise},
           {"warnings", st.warnings},
-          {"effects", st.effects},
-          {"owners", st.owners}};
+          {"effects", st.active_effects},
+          {"owners", st.actuator_owners}};
 }
 
-Json ShadowStatusJson(const ShadowStatusView& st) {
-  return {{"t", JsonNumber(st.t)},
+Json ShadowStatusJson(const client::ShadowStatus& st) {
+  return {{"t", JsonNumber(st.sim_time_s)},
           {"window_s", JsonNumber(st.window_s)},
           {"error", JsonNumber(st.error)},
-          {"last_change_t", JsonNumber(st.last_change_t)},
-          {"error_at_change", JsonNumber(st.error_at_change)},
-          {"rejected", st.rejected},
+          {"last_change_t", JsonNumber(st.last_change_sim_time_s)},
+          {"error_at_change", JsonNumber(st.error_at_last_change)},
+          {"rejected", st.rejected_commands},
           // A command id is a 64-bit number: as a string, since JavaScript's numbers hold 53 bits.
           {"last_command_id", std::to_string(st.last_command_id)},
           {"channels", st.channels},
-          {"effects", st.effects},
+          {"effects", st.active_effects},
           {"parameters", st.parameters},
-          {"available", st.available},
+          {"available", st.available_effects},
           {"nrmse", JsonNumbers(st.nrmse)},
           {"last_change", st.last_change},
           {"last_rejection", st.last_rejection},
           {"fit_state", st.fit_state}};
+}
+
+// The observer's estimate; its frequency source as the page names it ("piston sine").
+Json EstimateJson(const client::Estimate& e) {
+  std::string source = e.frequency_source;
+  std::replace(source.begin(), source.end(), '_', ' ');
+  return {{"t", JsonNumber(e.time_s)},
+          {"bhp", JsonNumber(e.BHP_est_barg)},
+          {"piston_m", JsonNumber(e.piston_position_est_m)},
+          {"velocity", JsonNumber(e.piston_velocity_est_mps)},
+          {"FT4", JsonNumber(e.FT4_est_lpm)},
+          {"freq_hz", JsonNumber(e.disturbance_frequency_hz)},
+          {"source", source}};
 }
 
 // The pressure along the pipe at one instant for the rig, the observer and the shadow: the newest
@@ -544,27 +400,25 @@ Json ShadowStatusJson(const ShadowStatusView& st) {
 // shadow's PT1..PT10 of that same sample; null before the first profile.
 Json AlignedProfileJson(const RigFeed::RigView& v) {
   if (v.profiles.empty()) return nullptr;
-  const ProfileView* chosen = &v.profiles.back();
+  const client::Profile* chosen = &v.profiles.back();
   if (!v.shadow_pt.empty()) {
     const std::uint64_t reached = v.shadow_pt.back().counter;
     for (auto it = v.profiles.rbegin(); it != v.profiles.rend(); ++it) {
       chosen = &*it;
-      if (it->counter <= reached) break;
+      if (it->sample_counter <= reached) break;
     }
   }
   auto pt_at = [&](const std::deque<PtAt>& ring) -> std::vector<double> {
     for (auto it = ring.rbegin(); it != ring.rend(); ++it) {
-      if (it->counter == chosen->counter) return {it->PT.begin(), it->PT.end()};
-      if (it->counter < chosen->counter) break;
+      if (it->counter == chosen->sample_counter) return {it->PT.begin(), it->PT.end()};
+      if (it->counter < chosen->sample_counter) break;
     }
     return {};
   };
-  return {{"t", JsonNumber(chosen->t)},
-          {"x", JsonNumbers(chosen->x)},
-          {"p", JsonNumbers(chosen->p)},
-          {"p_est", JsonNumbers(chosen->p_est)},
-          {"rig_PT", JsonNumbers(pt_at(v.rig_pt))},
-          {"shadow_PT", JsonNumbers(pt_at(v.shadow_pt))}};
+  return {
+      {"t", JsonNumber(chosen->time_s)},         {"x", JsonNumbers(chosen->position_m)},
+      {"p", JsonNumbers(chosen->pressure_barg)}, {"p_est", JsonNumbers(chosen->pressure_est_barg)},
+      {"rig_PT", JsonNumbers(pt_at(v.rig_pt))},  {"shadow_PT", JsonNumbers(pt_at(v.shadow_pt))}};
 }
 
 }  // namespace
@@ -578,22 +432,13 @@ std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) c
     return JsonText(out);
   }
   const RigView& v = *found->second;
-  const dds_time_t now = dds_time();
+  const double now = WallClockS();
   out["known"] = true;
   out["samples"] = v.samples;
   out["seq"] = next_seq_ - 1;
   if (v.sensors) out["sensors"] = SensorsJson(*v.sensors, now);
   if (v.shadow) out["shadow"] = SensorsJson(*v.shadow, now);
-  if (v.estimate) {
-    const EstimateView& e = *v.estimate;
-    out["estimate"] = {{"t", JsonNumber(e.t)},
-                       {"bhp", JsonNumber(e.bhp)},
-                       {"piston_m", JsonNumber(e.piston_m)},
-                       {"velocity", JsonNumber(e.velocity)},
-                       {"FT4", JsonNumber(e.FT4)},
-                       {"freq_hz", JsonNumber(e.freq_hz)},
-                       {"source", e.source}};
-  }
+  if (v.estimate) out["estimate"] = EstimateJson(*v.estimate);
   if (Json profile = AlignedProfileJson(v); !profile.is_null()) out["profile"] = std::move(profile);
   if (v.status) out["status"] = StatusJson(*v.status);
   if (v.shadow_status) out["shadow_status"] = ShadowStatusJson(*v.shadow_status);
@@ -608,12 +453,9 @@ std::string RigFeed::StateJson(const std::string& rig_id, std::uint64_t since) c
 Result<std::uint64_t> RigFeed::SendShadowCommand(const std::string& rig_id,
                                                  const std::string& action,
                                                  const std::string& argument) {
-  mpdrig_ShadowAction wire_action{};
-  if (auto bad = ActionOf(action, &wire_action)) return Status::Error(*bad);
-  const bool needs_argument = wire_action == mpdrig_SHADOW_EFFECT_ON ||
-                              wire_action == mpdrig_SHADOW_EFFECT_OFF ||
-                              wire_action == mpdrig_SHADOW_SET;
-  if (needs_argument && argument.empty())
+  auto wire_action = ActionOf(action);
+  if (!wire_action.ok()) return wire_action.status();
+  if (client::ShadowActionNeedsArgument(*wire_action) && argument.empty())
     return Status::Error(action + " needs an argument (an effect name, or KEY=VALUE for set)");
   if (rig_id.empty()) return Status::Error("no rig chosen");
   Touch();
@@ -623,23 +465,12 @@ Result<std::uint64_t> RigFeed::SendShadowCommand(const std::string& rig_id,
     {
       std::lock_guard lock(mu_);
       if (session_) {
-        dds_publication_matched_status_t matched{};
-        const dds_entity_t writer = session_->shadow_command->handle();
-        const Status got = dds::Check(dds_get_publication_matched_status(writer, &matched),
-                                      "dds_get_publication_matched_status");
-        if (!got.ok()) return got;
-        if (matched.current_count > 0) {
-          mpdrig_ShadowCommand command{};
-          std::string id_text = rig_id, shadow_text = options_.shadow_id, argument_text = argument;
-          command.rig_id = id_text.data();
-          command.shadow_id = shadow_text.data();
-          command.command_id = static_cast<std::uint64_t>(
-              std::chrono::system_clock::now().time_since_epoch().count());
-          command.action = wire_action;
-          command.argument = argument_text.data();
-          MPDRIG_RETURN_IF_ERROR(session_->shadow_command->Write(command));
-          return command.command_id;
-        }
+        std::string error;
+        client::Shadow* shadow = session_->ShadowOf(rig_id, options_.shadow_id, &error);
+        if (shadow == nullptr) return Status::Error(error);
+        auto matched = shadow->AwaitCommandReader(0.0);
+        if (!matched.ok()) return matched.status();
+        if (*matched) return shadow->Send(*wire_action, argument);
       }
     }
     if (attempt >= 40) break;

@@ -1,8 +1,9 @@
 // The dashboard's view of the rigs on a DDS domain: it reads the topics of idl/mpdrig.idl (the
 // rigs' sensors, the observer's estimate, the pressure profile, the rig status, and a shadow
 // model's sensors and status), keeps the newest of each per rig plus a thinned history for the
-// charts, and writes the shadow's model commands. Only the topics: it works the same against a
-// virtual rig, a playback or the lab's rig behind a bridge.
+// charts, and writes the shadow's model commands. On the client library (clients/client:
+// RigStreams and Shadow handles through one Participant for every rig shown). Only the topics:
+// it works the same against a virtual rig, a playback or the lab's rig behind a bridge.
 //
 // Two rules keep it cheap:
 //   - Watched only: the DDS participant and its readers exist only while a browser asks (a
@@ -89,7 +90,6 @@ class RigFeed {
   void Run();
   void Drain();             // takes every topic into the views (mu_ held)
   void AddHistoryPoints();  // after Drain: each fresh series its newest point (mu_ held)
-  bool Wanted(const char* rig_id) const;
   RigView& View(const std::string& rig_id);
 
   FeedOptions options_;

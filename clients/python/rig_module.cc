@@ -236,6 +236,12 @@ void BindStatus(py::module_& m) {
       .def_readonly("sim_time_s", &RigStatus::sim_time_s, "rig time [s]")
       .def_readonly("real_time_factor", &RigStatus::real_time_factor)
       .def_readonly("deadline_misses", &RigStatus::deadline_misses)
+      .def_readonly("lost_periods", &RigStatus::lost_periods,
+                    "real time: the sensor periods the late ticks skipped")
+      .def_readonly("longest_stall_s", &RigStatus::longest_stall_s,
+                    "real time: the longest stall [s of wall time]")
+      .def_readonly("last_stall_sim_time_s", &RigStatus::last_stall_sim_time_s,
+                    "real time: the rig time of the last stall (-1: never)")
       .def_readonly("rejected_commands", &RigStatus::rejected_commands,
                     "commands the rig refused so far (NaN, out of range, unknown rig)")
       .def_readonly("last_rejection", &RigStatus::last_rejection,

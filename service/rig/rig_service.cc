@@ -4,119 +4,26 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <deque>
 #include <limits>
-#include <map>
-#include <mutex>
 #include <optional>
 #include <sstream>
-#include <string_view>
 #include <thread>
 #include <utility>
 
+#include "service/rig/command_intake.h"
+#include "service/rig/lockstep_queue.h"
 #include "service/rig/log_playback.h"
 #include "service/rig/pacer.h"
+#include "service/rig/private_rigs.h"
+#include "service/rig/rig_status.h"
 #include "service/rig/wire.h"
 
 namespace mpdrig::service {
 
 using Clock = std::chrono::steady_clock;
 
-// The most bytes of an unknown rig id that a status repeats.
-constexpr std::size_t kMaxReportedIdBytes = 64;
-
-// 'id', or its first kMaxReportedIdBytes (not cutting a UTF-8 character) and its length.
-std::string ReportedId(const char* rig_id) {
-  const std::string_view id(rig_id);
-  if (id.size() <= kMaxReportedIdBytes) return "'" + std::string(id) + "'";
-  std::size_t end = kMaxReportedIdBytes;
-  while (end > 0 && (static_cast<unsigned char>(id[end]) & 0xC0) == 0x80) --end;
-  return "'" + std::string(id.substr(0, end)) + "...' (" + std::to_string(id.size()) + " bytes)";
-}
-
-// Commands for rig ids this service does not run never reach a reader's cache: a topic filter
-// drops them before Cyclone makes an instance of their key, so a stranger who writes to many
-// distinct ids costs the service nothing per id (an instance held while its writer lives, and a
-// "no writers" sample for each when the writer goes, all taken in one tick, before). The filter
-// still counts each refusal and keeps the last id (bounded, ReportedId) for the status.
-// Cyclone calls the filter on its receive threads: the tally is under a mutex.
-class UnknownRigGate {
- public:
-  UnknownRigGate(const char* topic, std::vector<std::string> known)
-      : topic_(topic), known_(std::move(known)) {}
-
-  const char* topic() const { return topic_; }
-  // A rig made while the service runs (a student's private rig).
-  void Allow(std::string rig_id) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    known_.push_back(std::move(rig_id));
-  }
-
-  // A dds_topic_filter_sample_arg_fn for the command type T (its key field is rig_id).
-  template <typename T>
-  static bool Accept(const void* sample, void* gate) {
-    return static_cast<UnknownRigGate*>(gate)->Admit(static_cast<const T*>(sample)->rig_id);
-  }
-
-  struct Refused {
-    std::uint64_t count = 0;
-    std::string reported_id;  // the last one, as ReportedId gives it
-  };
-  // The refusals since the last call.
-  Refused Drain() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return std::exchange(refused_, Refused{});
-  }
-
- private:
-  bool Admit(const char* rig_id) {
-    const char* id = rig_id != nullptr ? rig_id : "";
-    // Every served id passes CheckRigId: one longer than kMaxRigIdBytes is no rig of ours, told
-    // after reading kMaxRigIdBytes + 1 bytes of it, not all of it.
-    const std::size_t length = strnlen(id, kMaxRigIdBytes + 1);
-    std::lock_guard<std::mutex> lock(mutex_);
-    for (const std::string& known : known_) {
-      if (length <= kMaxRigIdBytes && known.size() == length && known.compare(0, length, id) == 0)
-        return true;
-    }
-    std::string reported = ReportedId(id);
-    ++refused_.count;
-    refused_.reported_id = std::move(reported);
-    return false;
-  }
-
-  const char* topic_;
-  std::vector<std::string> known_;  // under mutex_: Cyclone's receive threads read it
-  std::mutex mutex_;
-  Refused refused_;
-};
-
-// The most samples of one command topic a real-time tick takes; the rest wait for the next tick,
-// so no burst (e.g. many instances losing their writer together) stalls one tick. A rig has one
-// instance per command topic, so legitimate traffic is far below it.
-constexpr int kMaxCommandsPerTick = 256;
-
-// A dispose or unregister carries only the key, and Cyclone applies topic filters to samples with
-// data only: a stranger who disposes many distinct unknown ids still makes each command reader
-// hold an instance per id while the stranger's writer lives (measured, bench/unknown_id_flood.sh
-// with DISPOSE=1: 100 000 ids, RSS 16 -> 76 MB). The service refuses and reports each such
-// dispose, but does not bound the instances: with a resource limit on the readers, Cyclone
-// rejects the excess and its reliable delivery then retries the rejected sample, which held up
-// every other writer's commands (measured: a controller's command from another process was not
-// delivered within 10 s while a stranger disposed 2000 ids). Where strangers can join the
-// domain, --security keeps them out.
-
-// Lockstep: the most steps one rig runs before the next rig with pending requests gets its turn.
-constexpr std::uint64_t kLockstepSliceSteps = 100;
-// Lockstep: the most rig time one step request may ask for. A request cannot be cancelled, and
-// a rig's later requests (its own controller's) wait behind it: 2^32 - 1 steps ran about 15 h
-// while the rig's controller failed. An hour of rig time (360 000 steps at the lab's 100 Hz,
-// about 10-20 s of wall time here) is far beyond any one control step and any experiment a
-// client would not split; a longer one is refused on the status with the reason.
-constexpr double kMaxStepRequestRigTimeS = 3600.0;
-// While a long request runs, its rig's status goes out this often [s of wall time], so that
-// clients and dashboards see the rig time move (and any refusal) before the request completes.
+// Lockstep: while a long request runs, its rig's status goes out this often [s of wall time], so
+// that clients and dashboards see the rig time move (and any refusal) before the request completes.
 constexpr double kLockstepStatusEveryS = 0.5;
 
 struct RigService::Impl {
@@ -133,9 +40,10 @@ struct RigService::Impl {
   RealTimePacer::Stalls stalls() const { return pacer ? pacer->stalls() : RealTimePacer::Stalls{}; }
   Clock::time_point started;
 
-  // One per command topic (and step requests); declared before the DDS entities, so they
-  // outlive the readers whose topic filters point at them.
-  std::vector<std::unique_ptr<UnknownRigGate>> gates;
+  // Commands in (command_intake.h), with the topic filters of the command and step topics:
+  // declared before the DDS entities, so it outlives the readers whose filters point at it.
+  std::optional<CommandIntake> intake;
+  std::optional<PrivateRigs> private_rigs;
 
   // Declared parent-first, so children are deleted before their participant and domain.
   std::optional<dds::Domain> domain;
@@ -152,10 +60,7 @@ struct RigService::Impl {
     std::optional<dds::Writer<mpdrig_RigEstimate>> estimate;
     std::optional<dds::Writer<mpdrig_PressureProfile>> profile;
     std::optional<dds::Writer<mpdrig_RigStatus>> status;
-    std::optional<dds::Reader<mpdrig_ChokeCommand>> choke;
-    std::optional<dds::Reader<mpdrig_PistonCommand>> piston;
-    std::optional<dds::Reader<mpdrig_PumpCommand>> pump;
-    std::optional<dds::Reader<mpdrig_OutletCommand>> outlet;
+    CommandReaders commands;  // choke, piston, pump, outlet
     std::optional<dds::Reader<mpdrig_StepRequest>> steps;
     std::optional<dds::Reader<mpdrig_RigRequest>> requests;  // private rigs (security)
     // Since when a reader of these sensors has left something unacknowledged (ProbeReaders);
@@ -217,6 +122,7 @@ struct RigService::Impl {
     const dds_entity_t p = participant.handle();
     auto set = std::make_unique<Endpoints>();
     set->rig = rig;
+    set->commands.partition_rig = rig;
     dds_entity_t pub = p;
     dds_entity_t sub = p;
     if (rig >= 0) {
@@ -250,242 +156,50 @@ struct RigService::Impl {
     return Status::Ok();
   }
 
-  // Private rigs students asked for (security): "<student>.1" .. "<student>.N" within the
-  // limits; each in its own partition, which only that student's permissions name.
+  // Where a sample of `reader` came in: its set's partition, and its writer.
+  static CommandOrigin OriginOf(const Endpoints& set, dds_entity_t reader,
+                                const dds_sample_info_t& info) {
+    const dds_instance_handle_t publication = info.publication_handle;
+    return CommandOrigin{set.rig,
+                         [reader, publication] { return DescribeWriter(reader, publication); }};
+  }
+
+  // Private rigs students asked for (security), each made as private_rigs.h says, with its
+  // endpoints in its own partition and its first status.
   Status TakeRigRequests() {
-    if (options.private_rigs == 0) return Status::Ok();
+    if (!private_rigs->enabled()) return Status::Ok();
     std::vector<std::pair<std::size_t, std::uint32_t>> asked;  // requesting rig, how many
     for (std::size_t i = 0; i < endpoints.size(); ++i) {
       Endpoints& set = *endpoints[i];
       auto taken =
           set.requests->TakeEach([&](const mpdrig_RigRequest& r, const dds_sample_info_t& info) {
-            if (!FromItsPartition(set, dds::topics::kRigRequest.name, r.rig_id,
-                                  set.requests->handle(), info.publication_handle))
+            if (!intake->FromItsPartition(dds::topics::kRigRequest.name, r.rig_id,
+                                          OriginOf(set, set.requests->handle(), info)))
               return;
             asked.push_back({static_cast<std::size_t>(set.rig), r.private_rigs});
           });
       if (!taken.ok()) return taken.status();
     }
     for (auto [index, count] : asked) {
-      const std::string student = rigs[index].rig_id();
-      if (student.find('.') != std::string::npos) {
-        (void)rigs[index].Refuse(std::string(dds::topics::kRigRequest.name) +
-                                 " refused: " + student + " is a private rig itself");
-        MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
-        continue;
-      }
-      if (count > options.private_rigs) {
-        (void)rigs[index].Refuse(std::string(dds::topics::kRigRequest.name) + " for " +
-                                 std::to_string(count) + " private rigs refused beyond " +
-                                 std::to_string(options.private_rigs) +
-                                 ": this service allows that many per student (--private-rigs)");
-        count = options.private_rigs;
-      }
-      for (std::uint32_t k = 1; k <= count; ++k) {
-        const std::string id = student + "." + std::to_string(k);
-        if (Find(id.c_str()) != nullptr) continue;
-        if (options.max_rigs > 0 && rigs.size() >= options.max_rigs) {
-          (void)rigs[index].Refuse("private rig " + id +
-                                   " refused: this service runs its limit of " +
-                                   std::to_string(options.max_rigs) + " rigs (--max-rigs)");
-          break;
-        }
-        auto rig = options.make_rig(id);
-        if (!rig.ok()) {
-          (void)rigs[index].Refuse("private rig " + id + ": " + rig.status().message());
-          break;
-        }
-        rigs.push_back(std::move(rig).value());
-        for (const auto& gate : gates) gate->Allow(rigs.back().rig_id());
+      MPDRIG_RETURN_IF_ERROR(private_rigs->Grant(rigs, index, count, [this](std::size_t made) {
+        intake->Allow(rigs[made].rig_id());
         observers.emplace_back();
         observer_failed.push_back(false);
         last_step_request.push_back(0);
-        MPDRIG_RETURN_IF_ERROR(AddEndpoints(static_cast<int>(rigs.size() - 1)));
-        rigs.back().NoteEvent("private rig of " + student + ", made on its request");
-        rigs[index].NoteEvent("private rig " + id + " runs");
-        MPDRIG_RETURN_IF_ERROR(PublishStatus(rigs.size() - 1));
-      }
+        MPDRIG_RETURN_IF_ERROR(AddEndpoints(static_cast<int>(made)));
+        return PublishStatus(made);
+      }));
       MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
     }
     return Status::Ok();
   }
 
-  // With security, a command arrives in its writer's partition, which its permissions allow:
-  // one for another rig (a student's command to a classmate's rig) is refused, with its writer.
-  bool FromItsPartition(const Endpoints& set, const char* topic, const char* rig_id,
-                        dds_entity_t reader, dds_instance_handle_t publication) {
-    if (set.rig < 0 || rigs[static_cast<std::size_t>(set.rig)].rig_id() == rig_id) return true;
-    RigHost& own = rigs[static_cast<std::size_t>(set.rig)];
-    const std::string reason =
-        std::string(topic) + " for rig " + ReportedId(rig_id) + " refused: it came in rig '" +
-        own.rig_id() + "''s partition " + dds::RigPartition(own.rig_id()) + " (" +
-        DescribeWriter(reader, publication) + "); a client commands only its partition's rig";
-    (void)own.Refuse(reason);
-    if (RigHost* target = Find(rig_id)) (void)target->Refuse(reason);
-    return false;
-  }
-  // An instance whose writers are gone matters only in its own rig's partition.
-  static bool OwnInstance(const Endpoints& set, const std::vector<RigHost>& rigs,
-                          const char* rig_id) {
-    return set.rig < 0 || rigs[static_cast<std::size_t>(set.rig)].rig_id() == rig_id;
-  }
-
-  // Who commands each rig's actuators: "choke" -> "strength 20, writer 1a2b...", per rig index.
-  std::vector<std::map<std::string, std::string>> owners;
-
-  // The writer of an applied command, from Cyclone's discovery data: its ownership strength
-  // and GUID (the owner under exclusive ownership is the strongest live writer).
-  static std::string DescribeWriter(dds_entity_t reader, dds_instance_handle_t publication) {
-    dds_builtintopic_endpoint_t* endpoint = dds_get_matched_publication_data(reader, publication);
-    if (endpoint == nullptr) return "unknown writer";
-    int32_t strength = 0;
-    if (endpoint->qos != nullptr) (void)dds_qget_ownership_strength(endpoint->qos, &strength);
-    char guid[2 * sizeof(endpoint->key.v) + 1];
-    for (std::size_t i = 0; i < sizeof(endpoint->key.v); ++i) {
-      std::snprintf(guid + 2 * i, 3, "%02x", endpoint->key.v[i]);
-    }
-    dds_builtintopic_free_endpoint(endpoint);
-    return "strength " + std::to_string(strength) + ", writer " + guid;
-  }
-  void NoteOwner(const char* rig_id, const char* actuator, dds_entity_t reader,
-                 const dds_sample_info_t& info) {
-    for (std::size_t i = 0; i < rigs.size(); ++i) {
-      if (rigs[i].rig_id() == rig_id) {
-        if (owners.size() < rigs.size()) owners.resize(rigs.size());
-        owners[i][actuator] = DescribeWriter(reader, info.publication_handle);
-      }
-    }
-  }
-  void NoteNoOwner(const char* rig_id, const char* actuator) {
-    for (std::size_t i = 0; i < rigs.size(); ++i) {
-      if (rigs[i].rig_id() == rig_id) {
-        if (owners.size() < rigs.size()) owners.resize(rigs.size());
-        owners[i][actuator] = "none";
-      }
-    }
-  }
-
-  RigHost* Find(const char* rig_id) {
-    for (RigHost& rig : rigs) {
-      if (rig.rig_id() == rig_id) return &rig;
-    }
-    return nullptr;
-  }
-
-  // A command for a rig this service does not run: every rig's status reports it, with at most
-  // kMaxReportedIdBytes of the id (a stranger's 10 MB id would otherwise go out in every status).
-  // `count` such commands, the last for the id `reported_id` (ReportedId's form).
-  void RefuseUnknown(const char* topic, const std::string& reported_id, std::uint64_t count = 1) {
-    std::string serving;
-    for (const RigHost& rig : rigs) serving += (serving.empty() ? "" : ", ") + rig.rig_id();
-    const std::string reason = std::string(topic) + " for unknown rig " + reported_id +
-                               " refused (this service runs: " + serving + ")";
-    for (RigHost& rig : rigs) (void)rig.Refuse(reason, count);
-  }
-
-  // Reports what the topic filters refused since the last call; true if there was any.
-  bool RefuseFiltered() {
-    bool any = false;
-    for (const auto& gate : gates) {
-      const UnknownRigGate::Refused refused = gate->Drain();
-      if (refused.count == 0) continue;
-      RefuseUnknown(gate->topic(), refused.reported_id, refused.count);
-      any = true;
-    }
-    return any;
-  }
-
-  // Applies every pending command. Refusals are recorded by the rigs themselves.
+  // Applies every pending command (command_intake.h). Refusals are recorded by the rigs.
   Status TakeCommands() {
-    RefuseFiltered();
-    for (auto& set : endpoints) MPDRIG_RETURN_IF_ERROR(TakeCommands(*set));
+    intake->RefuseFiltered();
+    for (auto& set : endpoints)
+      MPDRIG_RETURN_IF_ERROR(service::TakeCommands(set->commands, *intake));
     return Status::Ok();
-  }
-  Status TakeCommands(Endpoints& endpoints_set) {
-    auto& choke = endpoints_set.choke;
-    auto& pump = endpoints_set.pump;
-    auto& outlet = endpoints_set.outlet;
-    auto& piston = endpoints_set.piston;
-    auto apply = [this](const char* topic, const char* rig_id, const auto& set) {
-      RigHost* rig = Find(rig_id);
-      if (rig == nullptr) {  // the topic filter lets none through; kept for safety
-        RefuseUnknown(topic, ReportedId(rig_id));
-        return;
-      }
-      (void)set(*rig);  // a refusal is counted and kept by the rig
-    };
-    // No choke controller left for a rig: the configured safe opening, or keep the last one.
-    auto choke_lost = [this, &endpoints_set](const mpdrig_ChokeCommand& c) {
-      if (!OwnInstance(endpoints_set, rigs, c.rig_id)) return;
-      NoteNoOwner(c.rig_id, "choke");
-      RigHost* rig = Find(c.rig_id);
-      if (rig == nullptr) return;
-      if (std::isnan(options.safe_choke_deg)) {
-        rig->NoteEvent("no choke controller left: the choke keeps its last command");
-      } else if (rig->SetChokeDeg(options.safe_choke_deg).ok()) {
-        rig->NoteEvent("no choke controller left: safe state, choke to " +
-                       std::to_string(options.safe_choke_deg) + " deg");
-      }
-    };
-    // A dispose of an unknown rig's instance (filters do not see it): refused and reported.
-    auto disposed = [this](const char* topic) {
-      return [this, topic](const auto& c) {
-        if (Find(c.rig_id) == nullptr) RefuseUnknown(topic, ReportedId(c.rig_id));
-      };
-    };
-    auto taken = choke->TakeEach(
-        [&](const mpdrig_ChokeCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, dds::topics::kChokeCommand.name, c.rig_id,
-                                choke->handle(), info.publication_handle))
-            return;
-          NoteOwner(c.rig_id, "choke", choke->handle(), info);
-          apply(dds::topics::kChokeCommand.name, c.rig_id,
-                [&](RigHost& r) { return r.SetChokeDeg(c.opening_deg); });
-        },
-        choke_lost, kMaxCommandsPerTick, disposed(dds::topics::kChokeCommand.name));
-    if (!taken.ok()) return taken.status();
-    taken = pump->TakeEach(
-        [&](const mpdrig_PumpCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, dds::topics::kPumpCommand.name, c.rig_id,
-                                pump->handle(), info.publication_handle))
-            return;
-          NoteOwner(c.rig_id, "pump", pump->handle(), info);
-          apply(dds::topics::kPumpCommand.name, c.rig_id,
-                [&](RigHost& r) { return r.SetPumpLpm(c.flow_lpm); });
-        },
-        {}, kMaxCommandsPerTick, disposed(dds::topics::kPumpCommand.name));
-    if (!taken.ok()) return taken.status();
-    taken = outlet->TakeEach(
-        [&](const mpdrig_OutletCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, dds::topics::kOutletCommand.name, c.rig_id,
-                                outlet->handle(), info.publication_handle))
-            return;
-          NoteOwner(c.rig_id, "outlet", outlet->handle(), info);
-          apply(dds::topics::kOutletCommand.name, c.rig_id,
-                [&](RigHost& r) { return r.SetOutletBarg(c.pressure_barg); });
-        },
-        {}, kMaxCommandsPerTick, disposed(dds::topics::kOutletCommand.name));
-    if (!taken.ok()) return taken.status();
-    // No piston controller left: the heave generator stops where it is.
-    auto piston_lost = [this, &endpoints_set](const mpdrig_PistonCommand& c) {
-      if (!OwnInstance(endpoints_set, rigs, c.rig_id)) return;
-      NoteNoOwner(c.rig_id, "piston");
-      RigHost* rig = Find(c.rig_id);
-      if (rig == nullptr) return;
-      (void)rig->SetPiston(PistonCommandIn{});  // hold
-      rig->NoteEvent("no piston controller left: safe state, piston holds");
-    };
-    taken = piston->TakeEach(
-        [&](const mpdrig_PistonCommand& c, const dds_sample_info_t& info) {
-          if (!FromItsPartition(endpoints_set, dds::topics::kPistonCommand.name, c.rig_id,
-                                piston->handle(), info.publication_handle))
-            return;
-          NoteOwner(c.rig_id, "piston", piston->handle(), info);
-          apply(dds::topics::kPistonCommand.name, c.rig_id,
-                [&](RigHost& r) { return r.SetPiston(FromWire(c)); });
-        },
-        piston_lost, kMaxCommandsPerTick, disposed(dds::topics::kPistonCommand.name));
-    return taken.ok() ? Status::Ok() : taken.status();
   }
 
   Status TickAndPublish(RigHost& rig) {
@@ -559,75 +273,19 @@ struct RigService::Impl {
   }
 
   Status PublishStatus(std::size_t index) {
-    const RigHost& rig = rigs[index];
-    mpdrig_RigStatus wire{};
-    wire.rig_id = const_cast<char*>(rig.rig_id().c_str());
-    wire.clock = options.clock == ClockMode::kRealtime ? mpdrig_CLOCK_REALTIME
-                 : options.clock == ClockMode::kFast   ? mpdrig_CLOCK_FAST
-                                                       : mpdrig_CLOCK_LOCKSTEP;
-    wire.sim_time_s = rig.time_s();
-    const double wall_s = std::chrono::duration<double>(Clock::now() - started).count();
-    wire.real_time_factor = wall_s > 0.0 ? rig.time_s() / wall_s : 0.0;
-    const RealTimePacer::Stalls stall_account = stalls();
-    wire.deadline_misses = stall_account.deadline_misses;
-    wire.lost_periods = stall_account.lost_periods;
-    wire.longest_stall_s = stall_account.longest_s;
-    wire.last_stall_sim_time_s = stall_account.last_sim_time_s;
-    wire.atmospheric_pressure_pa = rig.params().atmospheric_pressure_pa;
-    wire.rejected_commands = rig.counters().rejected_commands;
-    wire.last_rejection = const_cast<char*>(rig.counters().last_rejection.c_str());
-    wire.last_completed_step_request = last_step_request[index];
-    // Warnings: leaving the model's range, falling behind real time, and the last event (e.g. a
-    // safe state taken).
-    std::string range_warning = rig.range_event() ? rig.range_event()->Describe() : "";
-    std::string stall_warning = stall_account.Warning();
-    std::string event = rig.counters().last_event;
     Endpoints& out = EndpointsOf(index);
-    std::string reader_warning = StoppedReaderWarning(out);
-    out.stopped_reader_published = !reader_warning.empty();
-    char* warnings[4];
-    std::uint32_t count = 0;
-    if (!range_warning.empty()) warnings[count++] = range_warning.data();
-    if (!stall_warning.empty()) warnings[count++] = stall_warning.data();
-    if (!reader_warning.empty()) warnings[count++] = reader_warning.data();
-    if (!event.empty()) warnings[count++] = event.data();
-    wire.warnings._length = wire.warnings._maximum = count;
-    wire.warnings._buffer = count > 0 ? warnings : nullptr;
-    wire.warnings._release = false;
-    // The physical effects this rig runs with (`serve --effect`, the config file).
-    std::vector<std::string> effects;
-    if (options.hide_effects && !rig.params().effects.empty()) {
-      effects.push_back("a hidden effect is active");
-    }
-    for (const EffectSetting& effect : rig.params().effects) {
-      if (options.hide_effects) break;
-      std::string text = effect.name;
-      for (const auto& [key, value] : effect.values) {
-        text += " " + key + "=" + std::to_string(value);
-      }
-      effects.push_back(std::move(text));
-    }
-    std::vector<char*> effect_names;
-    for (std::string& text : effects) effect_names.push_back(text.data());
-    wire.active_effects._length = wire.active_effects._maximum =
-        static_cast<std::uint32_t>(effect_names.size());
-    wire.active_effects._buffer = effect_names.empty() ? nullptr : effect_names.data();
-    wire.active_effects._release = false;
-    // Who commands each actuator ("choke: strength 20, writer <guid>"; "none" once lost).
-    std::vector<std::string> owner_texts;
-    if (index < owners.size()) {
-      for (const auto& [actuator, owner] : owners[index])
-        owner_texts.push_back(actuator + ": " + owner);
-    }
-    std::vector<char*> owner_ptrs;
-    for (std::string& text : owner_texts) owner_ptrs.push_back(text.data());
-    wire.actuator_owners._length = wire.actuator_owners._maximum =
-        static_cast<std::uint32_t>(owner_ptrs.size());
-    wire.actuator_owners._buffer = owner_ptrs.empty() ? nullptr : owner_ptrs.data();
-    wire.actuator_owners._release = false;
-    const std::string sensor_noise = rig.DescribeSensorNoise();
-    wire.sensor_noise = const_cast<char*>(sensor_noise.c_str());
-    return out.status->Write(wire);
+    StatusContext context;
+    context.clock = options.clock;
+    context.wall_s = std::chrono::duration<double>(Clock::now() - started).count();
+    context.stalls = stalls();
+    context.last_completed_step_request = last_step_request[index];
+    context.stopped_reader_warning = StoppedReaderWarning(out);
+    context.actuator_owners = intake->Owners(index);
+    context.hide_effects = options.hide_effects;
+    out.stopped_reader_published = !context.stopped_reader_warning.empty();
+    const RigStatusReport report = ReportStatus(rigs[index], context);
+    StatusBuffers buffers;
+    return out.status->Write(ToWire(report, &buffers));
   }
 
   // A run that ended as asked (a stop, the duration, a playback's last row) disposes each rig's
@@ -710,25 +368,19 @@ struct RigService::Impl {
     return PublishAllStatus();
   }
 
-  // Lockstep: each rig has a queue of step requests; the rigs with work are served in turn, at
-  // most kLockstepSliceSteps steps each, so one long request (up to an hour of rig time) neither
-  // starves another rig nor delays a stop by more than one step. A request's commands are taken
-  // when it starts; it completes (last_completed_step_request, status) after its last step.
+  // Lockstep: the step requests are queued and served in turns (lockstep_queue.h); a request's
+  // commands are taken when it starts, and its completion goes out on the rig's status.
   Status RunLockstep(const std::atomic<bool>& stop) {
     MPDRIG_RETURN_IF_ERROR(AwaitSensorReaders());
     MPDRIG_RETURN_IF_ERROR(PublishAllStatus());  // clients see the rigs are up
-    struct Pending {
-      std::uint64_t id = 0;
-      std::uint64_t remaining = 0;
-      bool started = false;
+    struct Request {
+      std::string rig_id;
+      std::uint64_t id = 0, steps = 0;
     };
-    std::vector<std::deque<Pending>> queues(rigs.size());
+    LockstepQueue queue(rigs.front().sensor_period_s());
     std::vector<Clock::time_point> last_status_wall(rigs.size(), Clock::now());
-    auto busy = [&queues] {
-      return std::any_of(queues.begin(), queues.end(), [](const auto& q) { return !q.empty(); });
-    };
     while (!stop.load()) {
-      if (!busy()) {
+      if (!queue.busy()) {
         const dds_return_t ready =
             dds_waitset_wait(step_waitset.handle(), nullptr, 0, DDS_MSECS(50));
         if (ready < 0) return dds::Check(ready, "dds_waitset_wait");
@@ -740,75 +392,57 @@ struct RigService::Impl {
           const bool stopped = StoppedReaderSeconds(*set) > 0.0;
           readers_changed = readers_changed || stopped != set->stopped_reader_published;
         }
-        if (RefuseFiltered() || readers_changed) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
+        if (intake->RefuseFiltered() || readers_changed) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
         if (ready == 0) continue;
       }
       MPDRIG_RETURN_IF_ERROR(TakeRigRequests());
-      queues.resize(rigs.size());
       last_status_wall.resize(rigs.size(), Clock::now());
-      std::vector<std::pair<std::string, Pending>> requests;
+      std::vector<Request> requests;
       bool refused = false;  // from another rig's partition (security), or an unknown rig's dispose
       for (auto& set : endpoints) {
         auto& steps = set->steps;
         auto taken = steps->TakeEach(
             [&](const mpdrig_StepRequest& r, const dds_sample_info_t& info) {
-              if (!FromItsPartition(*set, dds::topics::kStepRequest.name, r.rig_id, steps->handle(),
-                                    info.publication_handle)) {
+              if (!intake->FromItsPartition(dds::topics::kStepRequest.name, r.rig_id,
+                                            OriginOf(*set, steps->handle(), info))) {
                 refused = true;
                 return;
               }
-              requests.push_back({r.rig_id, Pending{r.request_id, r.steps, false}});
+              requests.push_back({r.rig_id, r.request_id, r.steps});
             },
             {}, std::numeric_limits<int>::max(),
             // A dispose of an unknown rig's request (the filter does not see it), as the
             // command topics refuse theirs.
             [&](const mpdrig_StepRequest& r) {
-              if (Find(r.rig_id) != nullptr) return;
-              RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(r.rig_id));
-              refused = true;
+              if (intake->Disposed(dds::topics::kStepRequest.name, r.rig_id)) refused = true;
             });
         if (!taken.ok()) return taken.status();
       }
       if (refused) MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
-      for (auto& [rig_id, request] : requests) {
-        RigHost* rig = Find(rig_id.c_str());
+      for (const Request& request : requests) {
+        RigHost* rig = intake->Find(request.rig_id.c_str());
         if (rig == nullptr) {  // the topic filter lets none through; kept for safety
           MPDRIG_RETURN_IF_ERROR(TakeCommands());
-          RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(rig_id.c_str()));
+          intake->RefuseUnknown(dds::topics::kStepRequest.name, ReportedId(request.rig_id.c_str()));
           MPDRIG_RETURN_IF_ERROR(PublishAllStatus());
           continue;
         }
         const std::size_t index = static_cast<std::size_t>(rig - rigs.data());
-        const double max_steps = std::floor(kMaxStepRequestRigTimeS / rig->sensor_period_s());
-        if (static_cast<double>(request.remaining) > max_steps) {
-          char reason[300];
-          std::snprintf(reason, sizeof reason,
-                        "%s %llu of %llu steps refused: more than %.0f s of rig time (%.0f steps "
-                        "at this rate) in one request; send several",
-                        dds::topics::kStepRequest.name, static_cast<unsigned long long>(request.id),
-                        static_cast<unsigned long long>(request.remaining), kMaxStepRequestRigTimeS,
-                        max_steps);
-          (void)rig->Refuse(reason);
+        if (auto refused_why = queue.Add(index, request.id, request.steps)) {
+          (void)rig->Refuse(*refused_why);
           MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
-          continue;
         }
-        queues[index].push_back(request);
       }
       for (std::size_t index = 0; index < rigs.size() && !stop.load(); ++index) {
-        if (queues[index].empty()) continue;
-        Pending& request = queues[index].front();
-        if (!request.started) {
-          MPDRIG_RETURN_IF_ERROR(TakeCommands());
-          request.started = true;
-        }
-        const std::uint64_t slice = std::min(request.remaining, kLockstepSliceSteps);
-        for (std::uint64_t i = 0; i < slice && !stop.load(); ++i) {
+        const std::optional<LockstepQueue::Turn> turn = queue.NextTurn(index);
+        if (!turn) continue;
+        if (turn->starts) MPDRIG_RETURN_IF_ERROR(TakeCommands());
+        std::uint64_t ran = 0;
+        for (; ran < turn->steps && !stop.load(); ++ran) {
           MPDRIG_RETURN_IF_ERROR(TickAndPublish(rigs[index]));
-          --request.remaining;
         }
-        if (request.remaining == 0) {
-          last_step_request[index] = request.id;
-          queues[index].pop_front();
+        if (const std::optional<std::uint64_t> completed = queue.Ran(index, ran)) {
+          last_step_request[index] = *completed;
           MPDRIG_RETURN_IF_ERROR(PublishStatus(index));
           last_status_wall[index] = Clock::now();
         } else if (std::chrono::duration<double>(Clock::now() - last_status_wall[index]).count() >=
@@ -844,18 +478,18 @@ Status RigService::Impl::CreateEndpoints(dds_entity_t pub, dds_entity_t sub, boo
   auto choke =
       dds::Reader<mpdrig_ChokeCommand>::Create(sub, choke_topic.handle(), dds::CommandQos());
   if (!choke.ok()) return choke.status();
-  set->choke.emplace(std::move(choke).value());
+  set->commands.choke.emplace(std::move(choke).value());
   auto piston =
       dds::Reader<mpdrig_PistonCommand>::Create(sub, piston_topic.handle(), dds::CommandQos());
   if (!piston.ok()) return piston.status();
-  set->piston.emplace(std::move(piston).value());
+  set->commands.piston.emplace(std::move(piston).value());
   auto pump = dds::Reader<mpdrig_PumpCommand>::Create(sub, pump_topic.handle(), dds::CommandQos());
   if (!pump.ok()) return pump.status();
-  set->pump.emplace(std::move(pump).value());
+  set->commands.pump.emplace(std::move(pump).value());
   auto outlet =
       dds::Reader<mpdrig_OutletCommand>::Create(sub, outlet_topic.handle(), dds::CommandQos());
   if (!outlet.ok()) return outlet.status();
-  set->outlet.emplace(std::move(outlet).value());
+  set->commands.outlet.emplace(std::move(outlet).value());
   auto steps = dds::Reader<mpdrig_StepRequest>::Create(sub, step_topic.handle(), dds::RequestQos());
   if (!steps.ok()) return steps.status();
   set->steps.emplace(std::move(steps).value());
@@ -907,6 +541,8 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   impl->last_step_request.assign(impl->rigs.size(), 0);
   impl->observers.resize(impl->rigs.size());
   impl->observer_failed.assign(impl->rigs.size(), false);
+  impl->intake.emplace(&impl->rigs, options.safe_choke_deg);
+  impl->private_rigs.emplace(options.private_rigs, options.max_rigs, options.make_rig);
   const double rate_hz = 1.0 / impl->rigs.front().sensor_period_s();
   MPDRIG_RETURN_IF_ERROR(options.Validate(rate_hz));
   if (options.security) {
@@ -950,12 +586,10 @@ Result<std::unique_ptr<RigService>> RigService::Create(std::vector<RigHost> rigs
   MPDRIG_RETURN_IF_ERROR(topic(dds::topics::kStepRequest, &impl->step_topic));
   // Filters on the command and step topics, set before their readers are created (Cyclone
   // applies a topic's filter to the readers made from it afterwards).
-  std::vector<std::string> known;
-  for (const RigHost& rig : impl->rigs) known.push_back(rig.rig_id());
-  auto gate = [&impl, &known](const char* name, dds_topic_filter_sample_arg_fn accept,
-                              const dds::Entity& on) -> Status {
-    impl->gates.push_back(std::make_unique<UnknownRigGate>(name, known));
-    return dds::Check(dds_set_topic_filter_and_arg(on.handle(), accept, impl->gates.back().get()),
+  auto gate = [&impl](const char* name, dds_topic_filter_sample_arg_fn accept,
+                      const dds::Entity& on) -> Status {
+    UnknownRigGate* gate = impl->intake->AddGate(name);
+    return dds::Check(dds_set_topic_filter_and_arg(on.handle(), accept, gate),
                       "dds_set_topic_filter_and_arg");
   };
   MPDRIG_RETURN_IF_ERROR(gate(dds::topics::kChokeCommand.name,

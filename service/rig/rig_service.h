@@ -41,12 +41,11 @@
 #include "model/common/status.h"
 #include "service/dds/dds.h"
 #include "service/dds/security.h"
+#include "service/rig/clock_mode.h"
 #include "service/rig/rig_host.h"
 #include "service/rig/rig_observer.h"
 
 namespace mpdrig::service {
-
-enum class ClockMode { kRealtime, kFast, kLockstep };
 
 struct ServeOptions {
   ClockMode clock = ClockMode::kRealtime;

@@ -142,4 +142,43 @@ mpdrig_PressureProfile ToWire(const std::string& rig_id, std::uint64_t sample_co
   return wire;
 }
 
+namespace {
+
+// A sequence<string> that points into `texts` through `pointers` (DDS only reads it).
+dds_sequence_string StringSequence(const std::vector<std::string>& texts,
+                                   std::vector<char*>* pointers) {
+  pointers->clear();
+  for (const std::string& text : texts) pointers->push_back(const_cast<char*>(text.c_str()));
+  dds_sequence_string sequence{};
+  sequence._length = sequence._maximum = static_cast<std::uint32_t>(pointers->size());
+  sequence._buffer = pointers->empty() ? nullptr : pointers->data();
+  sequence._release = false;
+  return sequence;
+}
+
+}  // namespace
+
+mpdrig_RigStatus ToWire(const RigStatusReport& report, StatusBuffers* buffers) {
+  mpdrig_RigStatus wire{};
+  wire.rig_id = const_cast<char*>(report.rig_id.c_str());  // written, never freed or changed
+  wire.clock = report.clock == ClockMode::kRealtime ? mpdrig_CLOCK_REALTIME
+               : report.clock == ClockMode::kFast   ? mpdrig_CLOCK_FAST
+                                                    : mpdrig_CLOCK_LOCKSTEP;
+  wire.sim_time_s = report.sim_time_s;
+  wire.real_time_factor = report.real_time_factor;
+  wire.deadline_misses = report.deadline_misses;
+  wire.lost_periods = report.lost_periods;
+  wire.longest_stall_s = report.longest_stall_s;
+  wire.last_stall_sim_time_s = report.last_stall_sim_time_s;
+  wire.atmospheric_pressure_pa = report.atmospheric_pressure_pa;
+  wire.rejected_commands = report.rejected_commands;
+  wire.last_rejection = const_cast<char*>(report.last_rejection.c_str());
+  wire.last_completed_step_request = report.last_completed_step_request;
+  wire.warnings = StringSequence(report.warnings, &buffers->warnings);
+  wire.active_effects = StringSequence(report.active_effects, &buffers->active_effects);
+  wire.actuator_owners = StringSequence(report.actuator_owners, &buffers->actuator_owners);
+  wire.sensor_noise = const_cast<char*>(report.sensor_noise.c_str());
+  return wire;
+}
+
 }  // namespace mpdrig::service

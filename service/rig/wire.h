@@ -14,6 +14,7 @@
 #include "service/dds/topics.h"
 #include "service/rig/rig_host.h"
 #include "service/rig/rig_observer.h"
+#include "service/rig/rig_status.h"
 
 namespace mpdrig::service {
 
@@ -51,5 +52,12 @@ mpdrig_PressureProfile ToWire(const std::string& rig_id, std::uint64_t sample_co
                               const std::vector<double>& pressure_pa,
                               const std::vector<double>& estimated_pa,
                               double atmospheric_pressure_pa, ProfileBuffers* buffers);
+
+// A rig's status (rig_status.h); the wire struct points into `report` and `buffers`, which must
+// outlive it. An empty sequence has no buffer.
+struct StatusBuffers {
+  std::vector<char*> warnings, active_effects, actuator_owners;
+};
+mpdrig_RigStatus ToWire(const RigStatusReport& report, StatusBuffers* buffers);
 
 }  // namespace mpdrig::service

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <string>
 #include <thread>
@@ -15,7 +16,10 @@
 
 #include <gtest/gtest.h>
 
+#include "clients/client/participant.h"
 #include "clients/client/rig_client.h"
+#include "clients/client/rig_streams.h"
+#include "clients/client/shadow_client.h"
 #include "tests/support/process.h"
 #include "tests/support/test_domain.h"
 
@@ -240,6 +244,82 @@ TEST(RigClient, AStoppedOrKilledReaderDoesNotHoldUpALockstepRig) {
   EXPECT_TRUE(step_both(2000));
   EXPECT_EQ(serve.Wait(0.0), testing::ChildProcess::kNoExit) << "the service ended";
   stopped->Kill();
+}
+
+// One participant holds several rigs (the dashboard shows many through one; a controller may
+// command two): two lockstep rigs of one service, each stepped and commanded through its own
+// Rig on the one participant, a command reaching only its rig; a read-only RigStreams on the
+// same participant sees both rigs' statuses and samples; closing one Rig leaves the other
+// working.
+TEST(ClientParticipant, OneParticipantHoldsSeveralRigs) {
+  const int domain = testing::ClaimTestDomain();
+  ASSERT_GT(domain, 0);
+  testing::ChildProcess serve({MPDRIG_EXE, "serve", "--clock", "lockstep", "--rate-hz", "100",
+                               "--rig", "r1", "--rig", "r2", "--domain", std::to_string(domain),
+                               "--sensor-noise", "lab", "--pump-lpm", "5", "--choke-deg", "31"},
+                              testing::ChildOptions::Quiet());
+  ASSERT_TRUE(serve.started()) << serve.error();
+  client::ParticipantOptions joining;
+  joining.domain = domain;
+  auto participant = client::Participant::Join(joining);
+  ASSERT_TRUE(participant.ok()) << participant.status().message();
+  auto streams = client::RigStreams::Open(*participant, {});
+  ASSERT_TRUE(streams.ok()) << streams.status().message();
+  client::RigOptions options;
+  options.domain = domain;
+  options.timeout_s = 20.0;
+  options.rig_id = "r1";
+  auto r1 = client::Rig::Connect(*participant, options);
+  ASSERT_TRUE(r1.ok()) << r1.status().message();
+  options.rig_id = "r2";
+  auto r2 = client::Rig::Connect(*participant, options);
+  ASSERT_TRUE(r2.ok()) << r2.status().message();
+
+  // The choke's actuator lag is 0.1 s: after 3 s its position is the command's, within the
+  // lab's 0.1 deg sensor noise (5 sigma: 0.5 deg).
+  ASSERT_TRUE((*r1)->Choke(45.0).ok());
+  auto a = (*r1)->Step(300);
+  auto b = (*r2)->Step(300);
+  ASSERT_TRUE(a.ok()) << a.status().message();
+  ASSERT_TRUE(b.ok()) << b.status().message();
+  EXPECT_NEAR(a->choke_position_deg, 45.0, 0.5);
+  EXPECT_NEAR(b->choke_position_deg, 31.0, 0.5) << "r1's command reached r2";
+
+  std::map<std::string, std::uint64_t> samples;
+  std::map<std::string, std::string> clocks;
+  client::RigStreams::Visitor visit;
+  visit.sensors = [&](const std::string& id, const client::Sensors&) { ++samples[id]; };
+  visit.status = [&](const std::string& id, const client::RigStatus& s) { clocks[id] = s.clock; };
+  for (int i = 0; i < 100 && (clocks.size() < 2 || samples.size() < 2); ++i) {
+    const client::RigStreams::Taken taken = (*streams)->Take(visit);
+    EXPECT_TRUE(taken.error.empty()) << taken.error;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  EXPECT_EQ(clocks["r1"], "lockstep");
+  EXPECT_EQ(clocks["r2"], "lockstep");
+  EXPECT_GT(samples["r1"], 0u);
+  EXPECT_GT(samples["r2"], 0u);
+
+  (*r1)->Close();
+  auto again = (*r2)->Step(10);
+  ASSERT_TRUE(again.ok()) << again.status().message();
+  EXPECT_EQ(again->sample_counter, b->sample_counter + 10);
+  joining.domain = 300;
+  EXPECT_FALSE(client::Participant::Join(joining).ok()) << "no such DDS domain id";
+}
+
+TEST(ClientShadow, ActionsAreNamedAndAnUnknownOneListsThem) {
+  auto on = client::ShadowActionNamed("effect_on");
+  ASSERT_TRUE(on.ok());
+  EXPECT_EQ(*on, client::ShadowAction::kEffectOn);
+  EXPECT_TRUE(client::ShadowActionNeedsArgument(*on));
+  auto cancel = client::ShadowActionNamed("fit_cancel");
+  ASSERT_TRUE(cancel.ok());
+  EXPECT_FALSE(client::ShadowActionNeedsArgument(*cancel));
+  auto bad = client::ShadowActionNamed("explode");
+  ASSERT_FALSE(bad.ok());
+  EXPECT_EQ(bad.status().message(),
+            "unknown action 'explode' (effect_on, effect_off, set, reset, fit_now, fit_cancel)");
 }
 
 }  // namespace

@@ -64,6 +64,9 @@ class Status:
     sim_time_s: float
     real_time_factor: float
     deadline_misses: int
+    lost_periods: int  # real time: the sensor periods the late ticks skipped
+    longest_stall_s: float  # real time: the longest stall [s of wall time]
+    last_stall_sim_time_s: float  # real time: the rig time of the last stall (-1: never)
     rejected_commands: int
     last_rejection: str
     last_completed_step_request: int
