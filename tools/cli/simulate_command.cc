@@ -39,6 +39,7 @@ struct SimulateArgs {
   std::string sensor_noise = "lab";
   std::uint64_t noise_seed = 1;
   bool rate_given = false;
+  bool model_given = false;
   // The NTNU rig's inputs given on the command line (--piston, --choke-deg, --pump-lpm,
   // --outlet-barg, --inputs): refused on a reservoir - pipe - valve rig, which its closure law
   // drives.
@@ -211,10 +212,20 @@ riglog::Metadata RunMetadata(const SimulateArgs& args, const RigParams& params, 
   return metadata;
 }
 
-int RunSimulate(const SimulateArgs& args) {
+// The pipe law of a reservoir - pipe - valve rig unless --model says otherwise: the linear law
+// (thesis 7.0), the water-hammer equations of that literature (Wylie & Streeter 1993; Bergant &
+// Simpson 1999), which neglect the convective terms. With the quasi-linear law the front that
+// reaches the valve is interpolated over a node (its characteristics move at u +- c), and in the
+// vapour zone behind a cavity, where nothing couples the two grid-points of a liquid segment, that
+// half-arrived value stays. On the 1999 apparatus (200 cells) the first cavity at the valve then
+// lasted 6 % less after a 0.1 ms closure, and 60 ms instead of 0.30 s after the 9 ms one.
+constexpr const char* kValveRigModel = "linear";
+
+int RunSimulate(SimulateArgs args) {
   const std::string name = "simulate";
   auto params = args.model.LoadParams();
   if (!params.ok()) return Fail(name, params.status());
+  if (!params->layout.is_ntnu_rig() && !args.model_given) args.model.model = kValveRigModel;
   auto options = args.model.LoadSimulationOptions();
   if (!options.ok()) return Fail(name, options.status());
   options->stop_on_range_violation = !args.allow_negative_pressure;
@@ -300,7 +311,8 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
       "with U = m for the piston and deg for the choke.\n"
       "A config with `reservoir`, `valve` and `steady_flow` (docs/bergant-simpson.md) is the\n"
       "reservoir - pipe - valve rig: its valve's closure law drives it, from steady flow, and\n"
-      "it writes 10 kHz unless --rate-hz says otherwise:\n"
+      "it writes 10 kHz unless --rate-hz says otherwise, with the linear pipe law unless\n"
+      "--model says otherwise:\n"
       "  mpdrig simulate --config docs/examples/bergant-simpson-1999.pbtxt --duration 0.8 \\\n"
       "                  --pressure-at 37.23 --sensor-noise none --out valve.csv");
   args->model.AddAll(command);
@@ -346,6 +358,7 @@ void AddSimulateCommand(CLI::App* app, int* exit_code) {
   command->add_option("--out", args->out_path, "output rig log ('-' for stdout)")->required();
   command->callback([args, exit_code, command, rate]() {
     args->rate_given = rate->count() > 0;
+    args->model_given = command->get_option("--model")->count() > 0;
     args->ntnu_inputs_given.clear();
     for (const char* flag :
          {"--inputs", "--piston", "--choke-deg", "--pump-lpm", "--outlet-barg"}) {
