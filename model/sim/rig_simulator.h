@@ -25,7 +25,7 @@
 
 #include "model/boundary/choke.h"
 #include "model/boundary/piston.h"
-#include "model/boundary/reservoir.h"
+#include "model/pipe/reservoir_inlet.h"
 #include "model/common/status.h"
 #include "model/common/units.h"
 #include "model/core/rig_channels.h"

@@ -1,4 +1,4 @@
-#include "model/boundary/reservoir.h"
+#include "model/pipe/reservoir_inlet.h"
 
 #include "model/common/root_finding.h"
 
