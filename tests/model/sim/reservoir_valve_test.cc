@@ -57,9 +57,10 @@ struct Trace {
   std::vector<double> time_s, valve_pa, inlet_m3ps, outlet_m3ps, cavity_m3, stored_m3, lowest_pa;
 };
 
-Trace RunRig(const RigParams& params, double duration_s, int cells = 200) {
+Trace RunRig(const RigParams& params, double duration_s, int cells = 200,
+             PipeModel model = PipeModel::kLinear) {
   SimulationOptions options;
-  options.model = PipeModel::kLinear;
+  options.model = model;
   options.cells = cells;
   Trace trace;
   auto created = RigSimulator::Create(params, options, RigInputs{});
@@ -247,6 +248,24 @@ TEST(ReservoirValve, FirstCavityLivesAsTheWaveSolutionAndTheRigidColumnSay) {
       EXPECT_NEAR(hold.close_s - hold.open_s, rigid, 0.02 * rigid);
     }
   }
+}
+
+// The same with the quasi-linear law, the NTNU rig's default. Its characteristics move at u +- c,
+// so the foot of the one arriving next to the valve can lie beyond the valve's node; it was read
+// there from the valve's side (velocity 0) and the cavity collapsed after 2L/c (57 ms instead of
+// 0.33 s). The law's odd-even pattern in the vapour zone (docs/bergant-simpson.md) shortens the
+// cavity by 6 %: within 10 %.
+TEST(ReservoirValve, FirstCavityWithTheQuasiLinearLawOutlivesItsRoundTrip) {
+  const RigParams params = FrictionlessLevelInstantaneous(kSevere, 1.4);
+  const double c = params.wave_speed_mps;
+  const double p_v = VapourPressure(params);
+  const double round_trip = 2 * params.pipe_length_m / c;
+  const Trace trace = RunRig(params, 0.5, 200, PipeModel::kQuasiLinear);
+  const Hold hold = FirstHold(trace, p_v);
+  ASSERT_GT(hold.close_s, 0.0);
+  const double du = (ReservoirPressure(params) - p_v) / (params.density_kgpm3 * c);
+  const double life = WaveSolutionCavityLife(1.4, du, round_trip);
+  EXPECT_NEAR(hold.close_s - hold.open_s, life, 0.1 * life);
 }
 
 // The severe case as the example config has it (friction f2 = 0.557 1/m, the pipe rising 2.03 m
