@@ -13,10 +13,11 @@
 //     change plus the cavities.
 // The tests use the linear law (thesis 7.0), the literature's water-hammer equations, which is
 // what `mpdrig simulate` runs this rig with.
+#include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
