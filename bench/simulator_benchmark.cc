@@ -14,6 +14,10 @@
 //     this CPU (ArithmeticLimitNsPerCellStep). N = 10000 too, where the per-step work at the ends
 //     (the choke's Newton iteration, the inputs) is spread over more cells.
 //
+//   BM_BergantSimpsonSevere/N:<cells>  the reservoir - pipe - valve rig of
+//     docs/examples/bergant-simpson-1999.pbtxt (V0 = 1.4 m/s, column separation), 0.8 s of rig
+//     time written at 10 kHz, the linear law: what `mpdrig simulate` runs for that config.
+//
 // Frequency-response accuracy is reported by bench/accuracy_report.cc (bench/README.md).
 #include <benchmark/benchmark.h>
 
@@ -26,6 +30,7 @@
 #include <vector>
 
 #include "model/common/units.h"
+#include "model/config/rig_config.h"
 #include "model/params/rig_params.h"
 #include "model/sim/rig_simulator.h"
 
@@ -182,7 +187,42 @@ void BM_Step(benchmark::State& state, Case c) {
   }
 }
 
+void BM_BergantSimpsonSevere(benchmark::State& state, int cells) {
+  auto params =
+      LoadRigConfig(std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt");
+  if (!params.ok()) {
+    state.SkipWithError(params.status().message().c_str());
+    return;
+  }
+  SimulationOptions options;
+  options.model = PipeModel::kLinear;
+  options.cells = cells;
+  InputSignals inputs;
+  inputs.piston_position_m = [](double) { return 0.0; };
+  inputs.rig = [](double) { return RigInputs{}; };
+  std::vector<double> times;
+  for (int k = 0; k <= 8000; ++k) times.push_back(k * 1e-4);
+  long steps = 0;
+  for (auto _ : state) {
+    auto run = SimulateEach(*params, options, inputs, times, [](const RigSample&) {});
+    if (!run.ok()) {
+      state.SkipWithError(run.status().message().c_str());
+      return;
+    }
+    steps = run->steps;
+  }
+  state.counters["steps"] = static_cast<double>(steps);
+  state.counters["rtf"] = benchmark::Counter(0.8 * state.iterations(), benchmark::Counter::kIsRate);
+}
+
 void RegisterAll() {
+  for (int cells : {16, 200}) {
+    benchmark::RegisterBenchmark(("BM_BergantSimpsonSevere/N:" + std::to_string(cells)).c_str(),
+                                 BM_BergantSimpsonSevere, cells)
+        ->Unit(benchmark::kMillisecond)
+        ->UseRealTime()
+        ->MinTime(0.5);
+  }
   const PipeModel models[] = {PipeModel::kQuasiLinear, PipeModel::kLinear};
   const PipeScheme schemes[] = {PipeScheme::kCharacteristics, PipeScheme::kMethodOfLines};
   const int cell_counts[] = {10, 100, 1000};

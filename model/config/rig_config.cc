@@ -55,6 +55,75 @@ std::string ShortestText(double value) {
   return std::string(buffer, result.ptr);
 }
 
+// The layout's blocks (reservoir, valve, steady_flow) onto `layout`; each error at the block
+// (or the valve's point) where it was written. A file without them keeps `layout` as it was.
+Status ReadLayout(const config::RigConfig& message, const pb::TextFormat::ParseInfoTree& locations,
+                  const std::string& source_name, RigLayout* layout) {
+  const pb::Descriptor* descriptor = message.GetDescriptor();
+  const auto position = [&](const char* field_name) {
+    const pb::TextFormat::ParseLocation where =
+        locations.GetLocation(descriptor->FindFieldByName(field_name), -1);
+    return source_name + ":" + std::to_string(where.line + 1) + ":" +
+           std::to_string(where.column + 1);
+  };
+  const bool reservoir = message.has_reservoir();
+  const bool valve = message.has_valve();
+  const bool steady = message.has_steady_flow();
+  if (!reservoir && !valve && !steady) return Status::Ok();
+  if (!reservoir || !valve || !steady) {
+    const char* given = reservoir ? "reservoir" : (valve ? "valve" : "steady_flow");
+    return Status::Error(position(given) +
+                         ": `reservoir`, `valve` and `steady_flow` go together (the reservoir - "
+                         "pipe - valve rig starting from steady flow); give all three");
+  }
+  RigLayout read;
+  read.inlet = RigLayout::Inlet::kReservoir;
+  read.outlet = RigLayout::Outlet::kValve;
+  read.reservoir_head_m = message.reservoir().head_m();
+  read.steady_velocity_mps = message.steady_flow().velocity_mps();
+  const config::Valve& v = message.valve();
+  read.valve.closure_time_s = v.closure_time_s();
+  read.valve.start_s = v.start_s();
+  read.valve.exponent = v.has_exponent() ? v.exponent() : 1.0;
+  read.valve.downstream_head_m = v.downstream_head_m();
+  for (const config::ValveOpeningPoint& point : v.point()) {
+    read.valve.points.push_back({point.time_s(), point.opening()});
+  }
+  if (!read.valve.points.empty() && (v.closure_time_s() != 0.0 || v.has_exponent())) {
+    return Status::Error(position("valve") +
+                         ": give the valve either `point`s or `closure_time_s` (and `exponent`), "
+                         "not both");
+  }
+  // A bad point at the line where it was written.
+  const pb::TextFormat::ParseInfoTree* valve_tree =
+      locations.GetTreeForNested(descriptor->FindFieldByName("valve"), -1);
+  const pb::FieldDescriptor* point_field = config::Valve::descriptor()->FindFieldByName("point");
+  for (std::size_t i = 0; i < read.valve.points.size(); ++i) {
+    ValveClosure prefix = read.valve;
+    prefix.points.resize(i + 1);
+    Status status = prefix.Validate();
+    if (!status.ok()) {
+      std::string where = position("valve");
+      if (valve_tree != nullptr) {
+        const pb::TextFormat::ParseLocation at =
+            valve_tree->GetLocation(point_field, static_cast<int>(i));
+        where =
+            source_name + ":" + std::to_string(at.line + 1) + ":" + std::to_string(at.column + 1);
+      }
+      return status.Within(where);
+    }
+  }
+  if (Status status = read.Validate(); !status.ok()) {
+    const std::string message_text = status.message();
+    const char* block = message_text.find("reservoir") == 0     ? "reservoir"
+                        : message_text.find("steady_flow") == 0 ? "steady_flow"
+                                                                : "valve";
+    return status.Within(position(block));
+  }
+  *layout = read;
+  return Status::Ok();
+}
+
 }  // namespace
 
 Result<RigParams> ParseRigConfig(const std::string& text, const std::string& source_name,
@@ -75,7 +144,10 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
   const pb::Reflection* reflection = message.GetReflection();
   for (int i = 0; i < descriptor->field_count(); ++i) {
     const pb::FieldDescriptor* field = descriptor->field(i);
-    if (field->is_repeated() || !reflection->HasField(message, field)) continue;
+    if (field->is_repeated() || field->cpp_type() == pb::FieldDescriptor::CPPTYPE_MESSAGE ||
+        !reflection->HasField(message, field)) {
+      continue;  // lists and the layout's blocks are read below
+    }
     const ParamInfo* info = FindParam(field->name());
     MPDRIG_CHECK(info != nullptr);  // rig_params_test keeps the proto and the table in sync
     const double value = reflection->GetDouble(message, field);
@@ -141,6 +213,7 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
     }
     params.effects.push_back(std::move(setting));
   }
+  MPDRIG_RETURN_IF_ERROR(ReadLayout(message, locations, source_name, &params.layout));
   MPDRIG_RETURN_IF_ERROR(params.Validate().Within(source_name));
   return params;
 }
@@ -177,6 +250,24 @@ std::string FormatRigConfig(const RigParams& params) {
       out << " param { key: \"" << key << "\" value: " << ShortestText(value) << " }";
     }
     out << " }\n";
+  }
+  const RigLayout& layout = params.layout;
+  if (!layout.is_ntnu_rig()) {
+    const ValveClosure& valve = layout.valve;
+    out << "\n# The rig's layout: reservoir - pipe - valve, from steady flow (rig_layout.h).\n"
+        << "reservoir { head_m: " << ShortestText(layout.reservoir_head_m) << " }\n"
+        << "valve {";
+    if (valve.points.empty()) {
+      out << " closure_time_s: " << ShortestText(valve.closure_time_s)
+          << " start_s: " << ShortestText(valve.start_s)
+          << " exponent: " << ShortestText(valve.exponent);
+    }
+    for (const ValveOpeningPoint& point : valve.points) {
+      out << " point { time_s: " << ShortestText(point.time_s)
+          << " opening: " << ShortestText(point.opening) << " }";
+    }
+    out << " downstream_head_m: " << ShortestText(valve.downstream_head_m) << " }\n"
+        << "steady_flow { velocity_mps: " << ShortestText(layout.steady_velocity_mps) << " }\n";
   }
   return out.str();
 }

@@ -115,7 +115,7 @@ Status RigParams::Validate() const {
   for (std::size_t i = 0; i < choke_characteristic.size(); ++i) {
     MPDRIG_RETURN_IF_ERROR(ValidateChokePoint(i));
   }
-  return Status::Ok();
+  return layout.Validate();
 }
 
 Status RigParams::ValidateChokePoint(std::size_t index) const {

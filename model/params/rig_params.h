@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "model/common/status.h"
+#include "model/params/rig_layout.h"
 
 namespace mpdrig {
 
@@ -67,6 +68,10 @@ struct RigParams {
 
   // --- Surroundings ----------------------------------------------------------------------------
   double atmospheric_pressure_pa = 101325.0;  // converts the lab's gauge pressures
+
+  // --- What sits at the ends of the pipe (rig_layout.h): the NTNU rig unless the config says
+  // otherwise (a reservoir and a valve). Not a scalar of ParamTable(): not fitted, not --set.
+  RigLayout layout;
 
   // --- Physical effects beyond the thesis's model, in the order given (model/effects/) ----------
   std::vector<EffectSetting> effects;

@@ -578,7 +578,10 @@ inline double CharacteristicsSolver::GeneralAlphaFoot(const GeneralStep& step, i
                                                       double* u_foot) const {
   const double s_here = speed_up_[i] * step.r;
   const double s_near = speed_up_[i - 1] * step.r;
-  const double sigma = s_here / (1.0 + s_here - s_near);
+  // Next to the inlet the foot cannot lie beyond node 0: clamped to its pipe side (alpha_right_),
+  // never the boundary's outer side, which a cavity there separates from the pipe.
+  const double sigma =
+      i == 1 ? std::min(s_here / (1.0 + s_here - s_near), 1.0) : s_here / (1.0 + s_here - s_near);
   if (sigma <= 1.0) {
     *u_foot = (1.0 - sigma) * u_left_[i] + sigma * u_right_[i - 1];
     return (1.0 - sigma) * alpha_left_[i] + sigma * alpha_right_[i - 1];
@@ -595,7 +598,9 @@ inline double CharacteristicsSolver::GeneralBetaFoot(const GeneralStep& step, in
   const int n = config_.cells;
   const double s_here = speed_down_[i] * step.r;
   const double s_near = speed_down_[i + 1] * step.r;
-  const double sigma = s_here / (1.0 + s_here - s_near);
+  // Next to the outlet: clamped to node N's pipe side (beta_left_), as at the inlet.
+  const double sigma = i == n - 1 ? std::min(s_here / (1.0 + s_here - s_near), 1.0)
+                                  : s_here / (1.0 + s_here - s_near);
   if (sigma <= 1.0) {
     *u_foot = (1.0 - sigma) * u_right_[i] + sigma * u_left_[i + 1];
     return (1.0 - sigma) * beta_right_[i] + sigma * beta_left_[i + 1];

@@ -78,11 +78,24 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
   RigSimulator simulator(params, options, std::move(pipe).value());
   simulator.effects_ = std::move(effects).value();
   std::vector<const PipeExtension*> extensions;
+  if (params.layout.inlet == RigLayout::Inlet::kReservoir) {
+    simulator.reservoir_ = std::make_unique<ReservoirInlet>(
+        params.atmospheric_pressure_pa +
+        params.density_kgpm3 * params.gravity_mps2 * params.layout.reservoir_head_m);
+    extensions.push_back(simulator.reservoir_.get());
+    MPDRIG_RETURN_IF_ERROR(simulator.pipe_->SetExtensions(extensions).Within("reservoir inlet"));
+  }
   for (std::size_t i = 0; i < simulator.effects_.size(); ++i) {
     extensions.push_back(simulator.effects_[i].get());
     MPDRIG_RETURN_IF_ERROR(
         simulator.pipe_->SetExtensions(extensions).Within("effect " + params.effects[i].name));
     simulator.filters_sensors_ |= simulator.effects_[i]->filters_sensors();
+  }
+  if (!params.layout.is_ntnu_rig()) {
+    simulator.start_time_s_ = start_time_s;
+    simulator.last_inputs_.rig = in;
+    MPDRIG_RETURN_IF_ERROR(simulator.StartFromSteadyFlow());
+    return simulator;
   }
   // With a pump that answers the choke pressure (pump_curve), the initial pump flow and choke
   // pressure settle together: the fixed point of q = pump(p(q)), damped, from the command.
@@ -111,6 +124,46 @@ Result<RigSimulator> RigSimulator::Create(const RigParams& params, const Simulat
   for (auto& effect : simulator.effects_) effect->Initialize(*simulator.pipe_, initial);
   simulator.sensor_values_ = initial;
   return simulator;
+}
+
+// The scheme's own steady state at V0 (exact for the linear model): along both characteristics
+// W(p) + u and -W(p) + u change by -dt (f(V0) + g sin(gamma)) per cell (6.1.16-17, 7.0.10-11),
+// so with u = V0 everywhere W falls by that per cell from the reservoir's p(0); the valve's G_0
+// then passes V0 at p(L) by the orifice equation (5.3.2): G_0 = A V0 sqrt(rho_L / (p(L) - p_d)).
+Status RigSimulator::StartFromSteadyFlow() {
+  const RigLayout& layout = params_.layout;
+  const PipeConfig& config = pipe_->config();
+  const PipeLaw& law = pipe_->law();
+  const double v0 = layout.steady_velocity_mps;
+  const double drop = pipe_->time_step_s() * (config.Friction(v0) + config.gravity_slope_mps2);
+  const double w0 = law.PressureTerm(reservoir_->pressure_pa());
+  std::vector<double> pressure(config.cells + 1), velocity(config.cells + 1, v0);
+  for (int i = 0; i <= config.cells; ++i) {
+    pressure[i] = law.PressureFromDifference(2.0 * (w0 - i * drop));
+  }
+  valve_downstream_pressure_pa_ =
+      params_.atmospheric_pressure_pa +
+      params_.density_kgpm3 * params_.gravity_mps2 * layout.valve.downstream_head_m;
+  const double valve_drop_pa = pressure.back() - valve_downstream_pressure_pa_;
+  if (!(valve_drop_pa > 0.0) || !(pressure.back() > 0.0)) {
+    std::ostringstream out;
+    out.precision(4);
+    out << "no steady flow of " << v0 << " m/s from the reservoir to the valve: friction and the "
+        << "rise leave p(L) = " << pressure.back() / 1e5 << " bar(a), not above the downstream "
+        << valve_downstream_pressure_pa_ / 1e5
+        << " bar(a); raise the reservoir head, lower the valve's downstream_head_m or V0";
+    return Status::Error(out.str());
+  }
+  valve_full_g_m2_ = config.area_m2 * v0 * std::sqrt(config.choke_density_kgpm3 / valve_drop_pa);
+  pipe_->SetState(pressure, velocity);
+  choke_opening_frac_ = layout.valve.RelativeOpening(start_time_s_);
+  boundary_.inlet_velocity_mps = v0;
+  boundary_.choke = {valve_full_g_m2_ * choke_opening_frac_, 0.0, valve_downstream_pressure_pa_};
+  last_inputs_.piston_velocity_mps = 0.0;
+  const ChannelValues initial = ModelChannels();
+  for (auto& effect : effects_) effect->Initialize(*pipe_, initial);
+  sensor_values_ = initial;
+  return Status::Ok();
 }
 
 std::vector<double> PipeProfile::AtNodes(const std::vector<double>& values, int cells) {
@@ -174,18 +227,24 @@ Status RigSimulator::Step(const StepInputs& inputs) {
     return Status::Error(out.str());
   }
   const double dt = pipe_->time_step_s();
-  const double reference = std::clamp(in.choke_opening_frac, 0.0, 1.0);
-  choke_opening_frac_ = options_.choke_input == ChokeInput::kReference
-                            ? actuator_.Advance(choke_opening_frac_, reference, dt)
-                            : reference;
-
   PipeStepInputs step;
   step.start = boundary_;
-  step.end.inlet_velocity_mps = piston_.InletVelocityMps(inputs.piston_velocity_mps);
-  step.end.choke.flow_coefficient_m2 = characteristic_.FlowCoefficientM2(choke_opening_frac_);
-  step.end.choke.pump_flow_m3ps =
-      DeliveredPumpFlow(in.pump_flow_m3ps, pipe_->PressureAt(params_.pipe_length_m));
-  step.end.choke.outlet_pressure_pa = in.outlet_pressure_pa;
+  if (has_valve()) {
+    // The valve's closure law at the step's end; the reservoir closes the inlet.
+    choke_opening_frac_ = params_.layout.valve.RelativeOpening(next_step_end_s());
+    step.end.inlet_velocity_mps = 0.0;
+    step.end.choke = {valve_full_g_m2_ * choke_opening_frac_, 0.0, valve_downstream_pressure_pa_};
+  } else {
+    const double reference = std::clamp(in.choke_opening_frac, 0.0, 1.0);
+    choke_opening_frac_ = options_.choke_input == ChokeInput::kReference
+                              ? actuator_.Advance(choke_opening_frac_, reference, dt)
+                              : reference;
+    step.end.inlet_velocity_mps = piston_.InletVelocityMps(inputs.piston_velocity_mps);
+    step.end.choke.flow_coefficient_m2 = characteristic_.FlowCoefficientM2(choke_opening_frac_);
+    step.end.choke.pump_flow_m3ps =
+        DeliveredPumpFlow(in.pump_flow_m3ps, pipe_->PressureAt(params_.pipe_length_m));
+    step.end.choke.outlet_pressure_pa = in.outlet_pressure_pa;
+  }
 
   RangeViolation violation;
   MPDRIG_RETURN_IF_ERROR(pipe_->Step(step, &violation));
@@ -244,7 +303,8 @@ ChannelValues RigSimulator::ModelChannels() const {
     const double x = length * k / (kPipeTransmitterCount - 1);
     v[Index(Channel::kPT1) + k] = pipe_->PressureAt(x);
   }
-  v[Index(Channel::kC1)] = last_inputs_.rig.outlet_pressure_pa;
+  v[Index(Channel::kC1)] =
+      has_valve() ? valve_downstream_pressure_pa_ : last_inputs_.rig.outlet_pressure_pa;
   v[Index(Channel::kC2)] = pipe_->PressureAt(length);
   v[Index(Channel::kFT1)] = area * u_outlet;
   v[Index(Channel::kFT2)] = q_b;

@@ -8,6 +8,11 @@
 // Initial state (thesis 6.5, generalised): the steady state for the initial inputs, with the pipe
 // at rest, all pump flow through the choke, so p(L) = p_0 + rho_L q_b |q_b| / G(u_c)^2 (5.3.2),
 // and the hydrostatic profile below it (6.5.3).
+//
+// The ends are the rig's layout (RigParams::layout, model/params/rig_layout.h): the NTNU rig by
+// default; or a reservoir (ReservoirInlet, the pipe's inlet hook) and a valve (the choke's orifice
+// with G = tau(t) G_0 and no pump), starting from steady flow V0. With the valve, the step
+// inputs' piston and choke are not used: the layout's closure law drives the run.
 #pragma once
 
 #include <algorithm>
@@ -20,6 +25,7 @@
 
 #include "model/boundary/choke.h"
 #include "model/boundary/piston.h"
+#include "model/pipe/reservoir_inlet.h"
 #include "model/common/status.h"
 #include "model/common/units.h"
 #include "model/core/rig_channels.h"
@@ -154,6 +160,9 @@ class RigSimulator {
   ChannelValues ModelChannels() const;
   // The pump's delivered flow for its command, through the effects that change it.
   double DeliveredPumpFlow(double commanded_m3ps, double choke_pressure_pa) const;
+  // Reservoir - pipe - valve (RigParams::layout): the steady flow V0 in the pipe, G_0 of the valve.
+  Status StartFromSteadyFlow();
+  bool has_valve() const { return params_.layout.outlet == RigLayout::Outlet::kValve; }
 
   RigParams params_;
   SimulationOptions options_;
@@ -170,6 +179,10 @@ class RigSimulator {
   bool filters_sensors_ = false;
   ChannelValues sensor_values_{};  // after the sensor filters (when filters_sensors_)
   std::optional<RangeEvent> first_range_event_;
+  // Reservoir - pipe - valve layout only.
+  std::unique_ptr<ReservoirInlet> reservoir_;
+  double valve_full_g_m2_ = 0.0;               // G_0: the open valve passes V0 at the steady p(L)
+  double valve_downstream_pressure_pa_ = 0.0;  // p_d
 };
 
 // Samples a RigSimulator at arbitrary, non-decreasing times: it steps the simulator on its own

@@ -423,6 +423,28 @@ TEST_F(CliTest, SimulateRequiresADrive) {
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 
+// The reservoir - pipe - valve rig of docs/bergant-simpson.md, as the page runs it: its valve's
+// pressure as p_37.23m_barg every 0.1 ms, with the linear law; the NTNU rig's inputs refused.
+TEST_F(CliTest, SimulateRunsTheReservoirPipeValveRig) {
+  const std::string config =
+      Quote(std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt");
+  const RunResult run = Run("simulate --config " + config +
+                            " --duration 0.8 --pressure-at 37.23 --sensor-noise none --out " +
+                            Quote(Path("valve.csv")));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  auto log = riglog::ReadRigLog(Path("valve.csv"));
+  ASSERT_TRUE(log.ok()) << log.status().message();
+  const std::string text = ReadFile(Path("valve.csv"));
+  EXPECT_TRUE(Contains(text, "# model: linear, 200 cells")) << text.substr(0, 400);
+  EXPECT_TRUE(Contains(text, "p_37.23m_barg")) << text.substr(0, 400);
+  EXPECT_TRUE(Contains(text, "\n0.0001,")) << "rows every 0.1 ms";
+  const RunResult piston =
+      Run("simulate --config " + config + " --piston 0 --out " + Quote(Path("Z.csv")));
+  EXPECT_EQ(piston.exit_code, 1);
+  EXPECT_TRUE(Contains(piston.err, "--piston does not apply")) << piston.err;
+  EXPECT_FALSE(fs::exists(Path("Z.csv")));
+}
+
 TEST_F(CliTest, SimulateRefusesBothInputsAndPiston) {
   const std::string original_path = SimulateSine("X.csv");
   const RunResult run = Run("simulate --inputs " + Quote(original_path) +
