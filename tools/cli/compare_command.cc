@@ -33,7 +33,7 @@ int RunCompare(const CompareArgs& args) {
   if (args.json_path.empty() && args.report_path.empty()) {
     return Fail(name, Status::Error("give --json OUT.json and/or --report OUT.html"));
   }
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("compare");
   if (!params.ok()) return Fail(name, params.status());
   auto sim_options = args.model.LoadSimulationOptions();
   if (!sim_options.ok()) return Fail(name, sim_options.status());

@@ -27,7 +27,7 @@ constexpr double kDurationS = 60.0;
 constexpr double kRateHz = 100.0;
 
 int RunDemo(const DemoArgs& args) {
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("demo");
   if (!params.ok()) return Fail("demo", params.status());
   auto options = args.model.LoadSimulationOptions();
   if (!options.ok()) return Fail("demo", options.status());

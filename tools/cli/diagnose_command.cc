@@ -150,7 +150,7 @@ void PrintSummary(const Diagnosis& d, double elapsed_s, FILE* summary) {
 int RunDiagnose(DiagnoseArgs args) {
   const std::string name = "diagnose";
   const auto started = std::chrono::steady_clock::now();
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("diagnose");
   if (!params.ok()) return Fail(name, params.status());
   auto simulation = args.model.LoadSimulationOptions();
   if (!simulation.ok()) return Fail(name, simulation.status());

@@ -145,7 +145,7 @@ void PrintSummary(const FitResult& fit, const std::vector<FitParameter>& paramet
 
 int RunFit(const FitArgs& args) {
   const std::string name = "fit";
-  auto start = args.model.LoadParams();
+  auto start = args.model.LoadNtnuRigParams("fit");
   if (!start.ok()) return Fail(name, start.status());
   auto simulation = args.model.LoadSimulationOptions();
   if (!simulation.ok()) return Fail(name, simulation.status());

@@ -96,7 +96,7 @@ std::string FitJson(const ResonanceFitResult& fit, const ResonanceFitArgs& args,
 Result<ResonanceInputs> LoadResonanceInputs(const ModelOptions& model, const std::string& path,
                                             const std::string& method, double outlet_barg) {
   ResonanceInputs inputs;
-  auto start = model.LoadParams();
+  auto start = model.LoadNtnuRigParams("fit --resonances");
   if (!start.ok()) return start.status();
   inputs.start = *start;
   auto simulation = model.LoadSimulationOptions();

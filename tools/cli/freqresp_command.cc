@@ -49,7 +49,7 @@ Result<ChokeSetting> ParseChoke(const std::string& text) {
 
 int RunFreqresp(const FreqrespArgs& args) {
   const std::string name = "freqresp";
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("freqresp");
   if (!params.ok()) return Fail(name, params.status());
   Result<ChokeSetting> choke = ChokeSetting::Closed();
   std::string setting;  // what the summary calls it

@@ -32,7 +32,7 @@ std::string Describe(const observer::ObserverOptions& o) {
 
 int RunGains(const GainsArgs& args) {
   const std::string name = "gains";
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("gains");
   if (!params.ok()) return Fail(name, params.status());
   if (args.pole.size() != 2) return Fail(name, Status::Error("--pole takes two numbers: RE IM"));
   observer::ObserverOptions options_value;

@@ -65,6 +65,16 @@ Result<RigParams> ModelOptions::LoadParams() const {
   return params;
 }
 
+Result<RigParams> ModelOptions::LoadNtnuRigParams(std::string_view command) const {
+  auto params = LoadParams();
+  if (!params.ok() || params->layout.is_ntnu_rig()) return params;
+  return Status::Error(
+      (config_path.empty() ? std::string("the configuration") : "--config " + config_path) +
+      " describes " + params->layout.Describe() + ": `mpdrig " + std::string(command) +
+      "` works on the NTNU rig only (its piston, choke and pump); that rig runs "
+      "in `mpdrig simulate --config`, driven by its valve's closure law");
+}
+
 Result<SimulationOptions> ModelOptions::LoadSimulationOptions() const {
   SimulationOptions options;
   options.model = model == "linear" ? PipeModel::kLinear : PipeModel::kQuasiLinear;

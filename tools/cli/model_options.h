@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -36,6 +37,10 @@ struct ModelOptions {
 
   // The config file, then the effects, then the overrides (so --set can reach an effect).
   Result<RigParams> LoadParams() const;
+  // LoadParams, refusing a rig other than the NTNU rig (RigParams::layout: a reservoir - pipe -
+  // valve rig runs only in `mpdrig simulate`, driven by its valve's closure law): `command` needs
+  // the NTNU rig's piston, choke and pump, or its analytic model, which that rig does not have.
+  Result<RigParams> LoadNtnuRigParams(std::string_view command) const;
   Result<SimulationOptions> LoadSimulationOptions() const;
   // "quasilinear, 200 cells, characteristics (dt 5.29 ms)"
   std::string Describe(const RigParams& params) const;

@@ -182,7 +182,7 @@ Status AddEstimateColumns(const std::vector<observer::ObserverEstimate>& estimat
 
 int RunObserve(const ObserverArgs& args) {
   const std::string name = "observe";
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("observe");
   if (!params.ok()) return Fail(name, params.status());
   auto options = MakeOptions(args);
   if (!options.ok()) return Fail(name, options.status());

@@ -84,7 +84,7 @@ struct RigTemplate {
 };
 
 Result<RigTemplate> MakeRigTemplate(const ServeArgs& args) {
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("serve");
   if (!params.ok()) return params.status();
   if (!args.hidden_effect.empty()) {
     MPDRIG_RETURN_IF_ERROR(

@@ -37,7 +37,7 @@ struct ShadowArgs {
 
 int RunShadow(const ShadowArgs& args) {
   const std::string name = "shadow";
-  auto params = args.model.LoadParams();
+  auto params = args.model.LoadNtnuRigParams("shadow");
   if (!params.ok()) return Fail(name, params.status());
   auto simulation = args.model.LoadSimulationOptions();
   if (!simulation.ok()) return Fail(name, simulation.status());

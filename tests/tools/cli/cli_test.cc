@@ -445,6 +445,27 @@ TEST_F(CliTest, SimulateRunsTheReservoirPipeValveRig) {
   EXPECT_FALSE(fs::exists(Path("Z.csv")));
 }
 
+// The commands that replay a log through the NTNU rig's inputs, or use its analytic model,
+// refuse a reservoir - pipe - valve configuration rather than ignore its valve and run the NTNU
+// rig in its place.
+TEST_F(CliTest, LogCommandsRefuseTheReservoirPipeValveRig) {
+  const std::string config =
+      Quote(std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt");
+  const std::string log = SimulateSine("X.csv");
+  for (const std::string& command : std::vector<std::string>{
+           "compare " + Quote(log) + " --json " + Quote(Path("c.json")),
+           "fit " + Quote(log) + " --params wave_speed_mps --json " + Quote(Path("f.json")),
+           "diagnose " + Quote(log), "freqresp --analytic --out " + Quote(Path("r.csv")),
+           "gains --disturbance-hz 0.2 --out " + Quote(Path("g.csv"))}) {
+    const RunResult run = Run(command + " --config " + config);
+    EXPECT_EQ(run.exit_code, 1) << command;
+    EXPECT_TRUE(Contains(run.err, "works on the NTNU rig only") &&
+                Contains(run.err, "bergant-simpson-1999.pbtxt") &&
+                Contains(run.err, "mpdrig simulate --config"))
+        << command << ": " << run.err;
+  }
+}
+
 TEST_F(CliTest, SimulateRefusesBothInputsAndPiston) {
   const std::string original_path = SimulateSine("X.csv");
   const RunResult run = Run("simulate --inputs " + Quote(original_path) +
