@@ -92,6 +92,24 @@ struct Drive {
   std::string description;  // the log's `drive` metadata
 };
 
+// A run of `params` driven by `signals`, sampled at `rate_hz` from 0 to `duration_s`.
+Drive SampledDrive(const RigParams& params, const SimulationOptions& options, InputSignals signals,
+                   double duration_s, double rate_hz) {
+  const long count = std::lround(duration_s * rate_hz);
+  std::vector<double> output_times;
+  for (long i = 0; i <= count; ++i) output_times.push_back(i / rate_hz);
+  Drive drive;
+  drive.span_s = output_times.back() - output_times.front();
+  drive.run = [params, options, signals = std::move(signals),
+               output_times = std::move(output_times)](
+                  const std::function<void(const RigSample&)>& sink,
+                  const std::function<void(double)>& progress) {
+    return SimulateEach(params, options, signals, output_times, sink, progress);
+  };
+  drive.atmosphere_pa = params.atmospheric_pressure_pa;
+  return drive;
+}
+
 // The inputs of a measured log (--inputs). A log that starts mid-heave starts after a warm-up,
 // where its pressures say so, and its choke and FT2 levels are corrected from its pressures, as
 // compare's. The log is read twice and never held (log_file_replay.h): 1e6 rows took 522 MB
@@ -140,18 +158,7 @@ Result<Drive> DriveFromProfiles(const SimulateArgs& args, const RigParams& param
     in.outlet_pressure_pa = outlet;
     return in;
   };
-  const long count = std::lround(args.duration_s * args.rate_hz);
-  std::vector<double> output_times;
-  for (long i = 0; i <= count; ++i) output_times.push_back(i / args.rate_hz);
-  Drive drive;
-  drive.span_s = output_times.back() - output_times.front();
-  drive.run = [params, options = *options, signals = std::move(signals),
-               output_times = std::move(output_times)](
-                  const std::function<void(const RigSample&)>& sink,
-                  const std::function<void(double)>& progress) {
-    return SimulateEach(params, options, signals, output_times, sink, progress);
-  };
-  drive.atmosphere_pa = params.atmospheric_pressure_pa;
+  Drive drive = SampledDrive(params, *options, std::move(signals), args.duration_s, args.rate_hz);
   drive.description = "piston " + piston_profile->Describe() + " m, choke " +
                       choke_profile->Describe() + " deg (through the actuator)";
   return drive;
@@ -177,18 +184,7 @@ Result<Drive> DriveValveRig(const SimulateArgs& args, const RigParams& params,
     in.outlet_pressure_pa = atmosphere;
     return in;
   };
-  const long count = std::lround(args.duration_s * rate_hz);
-  std::vector<double> output_times;
-  for (long i = 0; i <= count; ++i) output_times.push_back(i / rate_hz);
-  Drive drive;
-  drive.span_s = output_times.back() - output_times.front();
-  drive.run = [params, options = *options, signals = std::move(signals),
-               output_times = std::move(output_times)](
-                  const std::function<void(const RigSample&)>& sink,
-                  const std::function<void(double)>& progress) {
-    return SimulateEach(params, options, signals, output_times, sink, progress);
-  };
-  drive.atmosphere_pa = params.atmospheric_pressure_pa;
+  Drive drive = SampledDrive(params, *options, std::move(signals), args.duration_s, rate_hz);
   drive.description = params.layout.Describe();
   return drive;
 }
