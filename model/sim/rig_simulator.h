@@ -25,13 +25,13 @@
 
 #include "model/boundary/choke.h"
 #include "model/boundary/piston.h"
-#include "model/pipe/reservoir_inlet.h"
 #include "model/common/status.h"
 #include "model/common/units.h"
 #include "model/core/rig_channels.h"
 #include "model/effects/effect.h"
 #include "model/params/rig_params.h"
 #include "model/pipe/pipe_solver.h"
+#include "model/pipe/reservoir_inlet.h"
 
 namespace mpdrig {
 
