@@ -74,6 +74,7 @@ class Status:
     active_effects: list[str]
     actuator_owners: list[str]
     sensor_noise: str
+    atmospheric_pressure_pa: float  # the rig's atmosphere (a playback: its log's) [Pa]
 
 class Rig:
     def __init__(self, rig_id: str = "rig-1", domain: int = 0, *, strength: int = 0,
