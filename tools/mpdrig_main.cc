@@ -1,31 +1,65 @@
-// mpdrig: the command-line front end of the virtual MPD heave rig. main only parses flags and
-// hands over to one subcommand (tools/cli/).
+// mpdrig: the command-line front end of the virtual MPD heave rig. The commands that need only
+// the model's core (program.h) run here; any other command line, `--help` and mistakes included,
+// is handed unchanged to mpdrig-all beside this program (execv: same process, same pid, same
+// arguments), which holds every command. Why two programs: tools/CMakeLists.txt.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <string>
+#include <system_error>
 
 #include "tools/cli/commands.h"
+#include "tools/cli/program.h"
 
-int main(int argc, char** argv) {
-  CLI::App app(
-      "mpdrig - virtual twin of the NTNU MPD heave lab rig (900 m copper pipe, heave generator,\n"
-      "choke and back-pressure pump). Model of J. M. Anestad's thesis (2013). Pressures in the\n"
-      "lab's units (bar gauge) at the edges; run `mpdrig <command> --help` for each command.",
-      "mpdrig");
+namespace {
+
+bool IsCoreCommand(const char* name) {
+  return std::ranges::find(mpdrig::cli::kCoreCommands, std::string_view(name)) !=
+         std::end(mpdrig::cli::kCoreCommands);
+}
+
+int RunCoreCommand(int argc, char** argv) {
+  CLI::App app(mpdrig::cli::kProgramDescription, "mpdrig");
   app.require_subcommand(1);
   int exit_code = 0;
-  mpdrig::cli::AddDemoCommand(&app, &exit_code);
   mpdrig::cli::AddSimulateCommand(&app, &exit_code);
   mpdrig::cli::AddFreqrespCommand(&app, &exit_code);
   mpdrig::cli::AddParamsCommand(&app, &exit_code);
-  mpdrig::cli::AddServeCommand(&app, &exit_code);
-  mpdrig::cli::AddCompareCommand(&app, &exit_code);
-  mpdrig::cli::AddObserveCommand(&app, &exit_code);
-  mpdrig::cli::AddGainsCommand(&app, &exit_code);
   mpdrig::cli::AddEffectsCommand(&app, &exit_code);
-  mpdrig::cli::AddDiagnoseCommand(&app, &exit_code);
-  mpdrig::cli::AddFitCommand(&app, &exit_code);
   mpdrig::cli::AddTravelTimeCommand(&app, &exit_code);
-  mpdrig::cli::AddRevealCommand(&app, &exit_code);
-  mpdrig::cli::AddShadowCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
+}
+
+// Replaces this process with mpdrig-all from this program's own directory (not from PATH: a
+// build tree's mpdrig must run that tree's commands).
+int HandOver(char** argv) {
+  std::error_code error;
+  const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (error) {
+    std::cerr << "mpdrig: cannot find this program's directory (/proc/self/exe: " << error.message()
+              << ")\n";
+    return 127;
+  }
+  const std::string all = (self.parent_path() / mpdrig::cli::kAllCommandsProgram).string();
+  execv(all.c_str(), argv);
+  const int exec_errno = errno;
+  std::cerr << "mpdrig: cannot run " << all << ": " << std::strerror(exec_errno)
+            << "\n  (this program runs only";
+  for (const std::string_view name : mpdrig::cli::kCoreCommands) std::cerr << ' ' << name;
+  std::cerr << "; every command is in " << mpdrig::cli::kAllCommandsProgram
+            << ", built and installed beside it)\n";
+  return 127;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc >= 2 && IsCoreCommand(argv[1])) return RunCoreCommand(argc, argv);
+  return HandOver(argv);
 }

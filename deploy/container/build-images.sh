@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Builds the container images from a host build of mpdrig (deploy/build.sh):
 #   localhost/mpdrig-base:bookworm   Debian 12 from debootstrap (base-image.sh; cached)
-#   localhost/mpdrig:latest          runtime: mpdrig, bhp_controller, rig_echo, rig_request + their libraries
+#   localhost/mpdrig:latest          runtime: mpdrig (and mpdrig-all, which holds the commands the
+#                                    mpdrig front hands over), bhp_controller, rig_echo, rig_request
+#                                    + their libraries
 # and prints the runtime image's size. podman caches the library layer, so a rebuild after a
 # code change copies the binaries only.
 #
@@ -22,7 +24,7 @@ source "$here/podman-env.sh"
 dev=0
 [[ "${1:-}" == --dev ]] && dev=1
 
-exes=("$build/tools/mpdrig" "$build/clients/bhp_controller" "$build/clients/rig_echo"
+exes=("$build/tools/mpdrig" "$build/tools/mpdrig-all" "$build/clients/bhp_controller" "$build/clients/rig_echo"
       "$build/clients/rig_request")
 for exe in "${exes[@]}"; do
   [[ -x "$exe" ]] || { echo "build-images.sh: $exe not built (deploy/build.sh)" >&2; exit 1; }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -152,6 +153,57 @@ TEST_F(CliTest, EachCommandHelpShowsItsKeyOptions) {
 TEST_F(CliTest, NoOrUnknownCommandFails) {
   EXPECT_NE(Run("").exit_code, 0);
   EXPECT_NE(Run("bogus").exit_code, 0);
+}
+
+// --- the front and mpdrig-all (tools/CMakeLists.txt) ----------------------------------------
+
+// What the front is for: a `simulate` that loads neither DDS nor the least-squares stack. Its
+// shared libraries, as the dynamic loader resolves them (ldd), must not include any of them.
+TEST_F(CliTest, TheFrontLoadsOnlyTheModelCore) {
+  if (testing::kUnderAddressSanitizer)
+    GTEST_SKIP() << "the sanitizer build links the front's libraries shared";
+  FILE* pipe = ::popen(("ldd " + Quote(MPDRIG_EXE)).c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string libraries;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) libraries.append(buffer, read);
+  ASSERT_EQ(::pclose(pipe), 0) << libraries;
+  for (const char* heavy : {"libddsc", "libglog", "libcholmod", "liblapack", "libprotobuf",
+                            "libsundials", "libfftw3", "libstdc++", "libcrypto"}) {
+    EXPECT_FALSE(Contains(libraries, heavy)) << heavy << " in\n" << libraries;
+  }
+}
+
+// Every other command line goes to mpdrig-all with the same arguments and comes back with its
+// exit code; without mpdrig-all beside it, the front says what is missing and fails.
+TEST_F(CliTest, TheFrontHandsOtherCommandsToMpdrigAll) {
+  const RunResult fit_help = Run("fit --help");
+  EXPECT_EQ(fit_help.exit_code, 0) << fit_help.err;
+  EXPECT_TRUE(Contains(fit_help.out, "--params")) << fit_help.out;
+  const RunResult bad = Run("compare no-such-log.csv");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_TRUE(Contains(bad.err, "no-such-log.csv")) << bad.err;
+
+  const fs::path lone = dir_ / "lone";
+  fs::create_directories(lone);
+  fs::copy_file(MPDRIG_EXE, lone / "mpdrig");
+  const std::string command = Quote((lone / "mpdrig").string()) + " serve --help 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buffer[4096];
+  std::size_t read = 0;
+  while ((read = std::fread(buffer, 1, sizeof buffer, pipe)) > 0) out.append(buffer, read);
+  const int status = ::pclose(pipe);
+  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 127) << out;
+  EXPECT_TRUE(Contains(out, "mpdrig-all")) << out;
+  // The front's own commands do not need it.
+  const std::string simulate = Quote((lone / "mpdrig").string()) +
+                               " simulate --piston sine:amp_m=0.1,freq_hz=0.2 --duration 1 --out " +
+                               Quote(Path("lone.csv")) + " >/dev/null 2>&1";
+  EXPECT_EQ(std::system(simulate.c_str()), 0);
+  EXPECT_TRUE(fs::exists(Path("lone.csv")));
 }
 
 // --- params --------------------------------------------------------------------------------
