@@ -7,10 +7,14 @@ both hidden effects were named (selected, or `equivalent` to the verdict), any e
 is not there (the two inlet compliances name each other: one lumped V/K in the heave band), and
 how visible each hidden effect is beyond its partner.
 
-Visibility of B beyond A: the noise-free log with both effects against the noise-free log with A
-alone (same seed, base parameters, excitation and strengths), its RMS difference on the output
-channel where it is largest, in units of that channel's noise RMS (the noisy log against its own
-noise-free twin). A pair counts toward the done-when where both are visible at >= --visible.
+Visibility of B beyond A: the model with both effects against the model with A alone, both
+replaying the noise-free log's own inputs (`mpdrig simulate --inputs`, the log's base parameters
+and strengths, synth's 50 cells), their RMS difference on the output channel where it is largest,
+in units of that channel's noise RMS (the noisy log against its own noise-free twin); without
+column_separation the replay may go below zero absolute (--allow-negative-pressure). A pair
+counts toward the done-when where both are visible at >= --visible. (Not synth's log with A alone:
+synth chooses a low-pressure operating point for logs with column_separation, so A alone would be
+another experiment, and a cavity that never opens in the log would count as visible.)
 
   python3 bench/diagnose_pairs.py --seeds 1-1 --jobs 1
   python3 bench/diagnose_pairs.py --pairs sensor_lag+unsteady_friction,choke_inertia+pump_curve --seeds 1-3
@@ -79,6 +83,19 @@ def hidden_specs(log_path):
     raise RuntimeError(f"{log_path}: no '# hidden:' line")
 
 
+def base_settings(log_path):
+    """The `# hidden:` line's base parameters as simulate --set flags."""
+    for line in open(log_path):
+        if line.startswith("# hidden:"):
+            m = re.search(r"wave speed ([0-9.eE+-]+) m/s, f1 ([0-9.eE+-]+) 1/s, "
+                          r"choke leak ([0-9.eE+-]+) m\^2", line)
+            if not m:
+                raise RuntimeError(f"{log_path}: no base parameters in '# hidden:'")
+            return ["--set", f"wave_speed_mps={m.group(1)}", "--set",
+                    f"friction_f1_per_s={m.group(2)}", "--set", f"choke_leak_m2={m.group(3)}"]
+    raise RuntimeError(f"{log_path}: no '# hidden:' line")
+
+
 def run_case(mpdrig, work, pair, seed, index, duration, rate, reuse, keep_logs):
     name = f"{pair[0]}+{pair[1]}_{seed}"
     exc_name, exc_flags = excitation(index, duration)
@@ -92,21 +109,27 @@ def run_case(mpdrig, work, pair, seed, index, duration, rate, reuse, keep_logs):
                         "--sensor-noise", "lab", "--out", noisy, "--truth-out", truth],
                        check=True, capture_output=True, text=True)
     specs = hidden_specs(noisy)
-    singles = []
-    for spec in specs:
-        out = work / f"{name}_only_{spec.split(':')[0]}.csv"
-        if not done and not have_logs:
-            subprocess.run([mpdrig, "synth", "--effect", spec, *common, "--sensor-noise", "none",
-                            "--out", out], check=True, capture_output=True, text=True)
-        singles.append(read_log(out))
-    both, noisy_cols = read_log(truth), read_log(noisy)
-    channels = [c for c in both if c not in INPUTS]
-    noise = {c: rms([a - b for a, b in zip(noisy_cols[c], both[c])]) for c in channels}
-    # Visibility of effect k beyond its partner: both against the partner alone.
+    base = base_settings(noisy)
+
+    def replay(effect_specs, label):
+        out = work / f"{name}_replay_{label}.csv"
+        command = [mpdrig, "simulate", "--inputs", truth, "--cells", "50", "--sensor-noise",
+                   "none", "--allow-negative-pressure", "--out", out, *base]
+        for spec in effect_specs:
+            command += ["--effect", spec]
+        subprocess.run(command, check=True, capture_output=True, text=True)
+        return read_log(out)
+
+    replayed_both = replay(specs, "both")
+    singles = [replay([spec], "only_" + spec.split(":")[0]) for spec in specs]
+    truth_cols, noisy_cols = read_log(truth), read_log(noisy)
+    channels = [c for c in truth_cols if c not in INPUTS]
+    noise = {c: rms([a - b for a, b in zip(noisy_cols[c], truth_cols[c])]) for c in channels}
+    # Visibility of effect k beyond its partner: both against the partner alone, same inputs.
     visibility = []
     for k in range(2):
         partner = singles[1 - k]
-        visibility.append(max(rms([a - b for a, b in zip(both[c], partner[c])]) / noise[c]
+        visibility.append(max(rms([a - b for a, b in zip(replayed_both[c], partner[c])]) / noise[c]
                               for c in channels if noise[c] > 0))
     if not done:
         start = time.time()
