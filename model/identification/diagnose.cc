@@ -1151,6 +1151,7 @@ Status SelectEffects(const DiagnoseRun& run, const Baseline& baseline, Diagnosis
       candidate.round = static_cast<int>(diagnosis->selected.size()) + 1;
     }
     PolishLeaders(run, *reference, &ranked, polishing);
+    diagnosis->later_rounds.push_back(ranked);
     if (ranked.empty() || !ranked.front().significant) {
       if (!ranked.empty()) diagnosis->next = ranked.front();
       diagnosis->selection_end =

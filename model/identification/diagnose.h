@@ -231,6 +231,11 @@ struct Diagnosis {
   // The best candidate of the round that ended the selection (not significant), with its
   // detectability measured against the model selected so far; none where no round tried one.
   std::optional<CandidateResult> next;
+  // Every selection round after the first, in order (rounds[0] is round 2): its candidates ranked
+  // best first, measured against the model with the effects selected before the round (the
+  // round-1 ranking is `candidates`). The round that ended the selection is the last; its first
+  // candidate is `next`.
+  std::vector<std::vector<CandidateResult>> later_rounds;
   std::string selection_end;  // why the selection ended ("no candidate significant", ...)
   // What the best model (the base model with the effects selected) leaves (step 6).
   std::optional<ResidualSignature> residual;

@@ -198,6 +198,19 @@ std::string DiagnosisJson(const Diagnosis& d, const std::string& log_path) {
   out["selected"] = std::move(selected);
   out["next"] =
       d.next ? CandidateJson(*d.next, d.selected.empty() ? b : d.selected.back()) : Json(nullptr);
+  // Each later round's ranking, against the model selected before it.
+  Json rounds = Json::array();
+  for (std::size_t r = 0; r < d.later_rounds.size(); ++r) {
+    const CandidateResult& reference = r < d.selected.size() ? d.selected[r] : d.selected.back();
+    Json ranked = Json::array();
+    for (const CandidateResult& c : d.later_rounds[r])
+      ranked.push_back(CandidateJson(c, reference));
+    rounds.push_back({{"round", static_cast<int>(r) + 2},
+                      {"reference", reference.effect},
+                      {"reference_error", JsonNumber(reference.error)},
+                      {"candidates", std::move(ranked)}});
+  }
+  out["later_rounds"] = std::move(rounds);
   out["selection_end"] = d.selection_end;
   Json failed = Json::array();
   for (const auto& f : d.failed) {

@@ -124,6 +124,7 @@ TEST(DiagnoseWithRegimes, PumpStopInBothPartsNothingSelectedNoiseLeft) {
     EXPECT_TRUE(d.selected.empty()) << d.selected.front().effect;
     EXPECT_FALSE(d.residual->above_noise);
     ExpectNeverWorseThanTheBaseModel(d);
+    ExpectEveryRoundReported(d);
   }
 }
 
@@ -140,6 +141,7 @@ TEST(DiagnoseWithRegimes, AnOffsetOnlyWhileThePumpIsStoppedIsMissed) {
     EXPECT_TRUE(Contains(r.findings, "regimes: concentrated while pump stopped"));
     EXPECT_TRUE(Contains(r.findings, "steady there"));
     ExpectNeverWorseThanTheBaseModel(d);
+    ExpectEveryRoundReported(d);
   }
 }
 
@@ -157,6 +159,7 @@ TEST(DiagnoseWithoutRegimes, AGainErrorOfOneTransmitterIsMissed) {
     EXPECT_TRUE(Contains(r.findings, "channels: PT6 (500 m)"));
     EXPECT_TRUE(Contains(r.findings, "along the pipe: one transmitter, PT6 (500 m)"));
     ExpectNeverWorseThanTheBaseModel(d);
+    ExpectEveryRoundReported(d);
   }
 }
 

@@ -136,6 +136,7 @@ TEST_P(DiagnoseWithoutHiddenEffect, NoCandidateIsSignificant) {
     ASSERT_TRUE(c.diagnosis.next.has_value());
     EXPECT_FALSE(c.diagnosis.next->strength_key.empty());
     ExpectNeverWorseThanTheBaseModel(c.diagnosis);
+    ExpectEveryRoundReported(c.diagnosis);
   }
 }
 
@@ -184,6 +185,7 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
       // What ended it: the next candidate, not significant against the model with the effect.
       EXPECT_TRUE(d.next.has_value() && !d.next->significant && d.next->round == 2);
       ExpectNeverWorseThanTheBaseModel(d);
+      ExpectEveryRoundReported(d);
     }
     // The same log without the effect: same seed, same excitation and noise (column_separation's
     // logs are the low-pressure runs).

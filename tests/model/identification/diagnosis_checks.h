@@ -28,4 +28,31 @@ inline void ExpectNeverWorseThanTheBaseModel(const Diagnosis& d) {
   }
 }
 
+// Every selection round after the first is reported (Diagnosis::later_rounds): one per effect
+// selected after the verdict, plus the round that ended the selection where one did; each ranks
+// the effect it selected first, and the ending round's first candidate is `next`.
+inline void ExpectEveryRoundReported(const Diagnosis& d) {
+  if (d.selected.empty()) {
+    EXPECT_TRUE(d.later_rounds.empty());
+    return;
+  }
+  const bool ended_in_a_round = d.selection_end == "no candidate significant" ||
+                                d.selection_end == "no candidate could be fitted";
+  ASSERT_EQ(d.later_rounds.size(), d.selected.size() - 1 + (ended_in_a_round ? 1 : 0))
+      << d.selection_end;
+  for (std::size_t r = 0; r < d.later_rounds.size(); ++r) {
+    for (const CandidateResult& c : d.later_rounds[r]) {
+      EXPECT_EQ(c.round, static_cast<int>(r) + 2) << c.effect;
+    }
+    if (r + 1 < d.selected.size()) {
+      ASSERT_FALSE(d.later_rounds[r].empty());
+      EXPECT_EQ(d.later_rounds[r].front().effect, d.selected[r + 1].effect);
+    }
+  }
+  if (ended_in_a_round && !d.later_rounds.back().empty()) {
+    ASSERT_TRUE(d.next.has_value());
+    EXPECT_EQ(d.next->effect, d.later_rounds.back().front().effect);
+  }
+}
+
 }  // namespace mpdrig

@@ -162,6 +162,7 @@ TEST_P(SelectionOfTwoHiddenEffects, NamesBoth) {
   ASSERT_FALSE(selected.empty());
   EXPECT_EQ(run.diagnosis.verdict, std::optional<std::string>(selected.front()));
   ExpectNeverWorseThanTheBaseModel(run.diagnosis);
+  ExpectEveryRoundReported(run.diagnosis);
 }
 
 INSTANTIATE_TEST_SUITE_P(Pairs, SelectionOfTwoHiddenEffects,

@@ -56,6 +56,9 @@ TEST(DiagnoseCommandTest, FindsAHiddenSensorLagAndWritesJsonAndReport) {
         // Forward selection: the verdict first, then what ended it.
         "\"selected\":[{\"effect\":\"sensor_lag\"",
         "\"selection_end\":", "\"next\":", "\"failed\":[", "\"round\":1",
+        // Round 2 (choke_inertia against the model with the lag), which ended the selection.
+        "\"later_rounds\":[{\"round\":2,\"reference\":\"sensor_lag\"",
+        "\"reference_error\":", "\"candidates\":[{\"effect\":\"choke_inertia\",\"round\":2",
         // What the best model leaves, against the noise floor; the regimes and the split.
         "\"residual\":{\"model\":\"base model + sensor_lag\"",
         "\"misses\":", "\"noise_floor_method\":", "\"findings\":[", "\"bands\":[",
