@@ -178,15 +178,22 @@ def main():
         sys.exit(f"error: {mpdrig} not built (./deploy/build.sh)")
     work = pathlib.Path(args.work or tempfile.mkdtemp(prefix="pairs_"))
     work.mkdir(parents=True, exist_ok=True)
-    if args.pairs == "all":
-        pairs = [p for p in itertools.combinations(CATALOGUE, 2)
+    all_pairs = [p for p in itertools.combinations(CATALOGUE, 2)
                  if not any(set(p) <= e for e in EXCLUSIVE)]
+    if args.pairs == "all":
+        pairs = all_pairs
     else:
         pairs = [tuple(p.split("+")) for p in args.pairs.split(",")]
+
+    def position(pair):  # in the whole list, so that a subset gets each pair's own excitation
+        for i, p in enumerate(all_pairs):
+            if set(p) == set(pair):
+                return i
+        return len(all_pairs)
     first, last = (int(x) for x in args.seeds.split("-"))
     # The excitation rotates along the pairs and shifts by one per seed: each pair meets another.
-    cases = [(pair, seed, i + seed - 1) for seed in range(first, last + 1)
-             for i, pair in enumerate(pairs)]
+    cases = [(pair, seed, position(pair) + seed - 1) for seed in range(first, last + 1)
+             for pair in pairs]
     print(f"{len(cases)} logs, work dir {work}", file=sys.stderr)
     out = open(work / "pairs.txt", "w")
 

@@ -226,7 +226,7 @@ struct Diagnosis {
   // candidate. Each entry's params are every parameter of the model at that step (base and
   // effects), its error the scoring error after adding it, its improvement and significance
   // against the model before it. (An entry's fit is replaced where the next round's search of
-  // the same model fits the fitting data better.)
+  // the same model fits the fitting data better and scores no worse on the scoring data.)
   std::vector<CandidateResult> selected;
   // The best candidate of the round that ended the selection (not significant), with its
   // detectability measured against the model selected so far; none where no round tried one.
