@@ -96,6 +96,31 @@ def base_settings(log_path):
     raise RuntimeError(f"{log_path}: no '# hidden:' line")
 
 
+def below_detectability(d, effect, spec):
+    """True where the diagnosis's last estimate of `effect`'s detectability lies beyond the
+    strength `spec` (NAME:key=value) hides, False where within it, None where not known."""
+    entry = None
+    rounds = d.get("later_rounds") or []
+    for candidate in (rounds[-1]["candidates"] if rounds else []):
+        if candidate["effect"] == effect:
+            entry = candidate
+    if entry is None and d.get("next") and d["next"]["effect"] == effect:
+        entry = d["next"]
+    if entry is None:
+        entry = next((c for c in d.get("candidates", []) if c["effect"] == effect), None)
+    if entry is None or "strength_key" not in entry or ":" not in spec:
+        return None
+    key = entry["strength_key"].split(".", 1)[1]
+    values = dict(kv.split("=") for kv in spec.split(":", 1)[1].split(","))
+    if key not in values:
+        return None
+    hidden = float(values[key])
+    threshold = entry.get("detectable_from")
+    if threshold is None:  # not detectable at this noise even at the scan's limit
+        return True
+    return hidden > threshold if entry.get("strength_inverse") else hidden < threshold
+
+
 def run_case(mpdrig, work, pair, seed, index, duration, rate, reuse, keep_logs):
     name = f"{pair[0]}+{pair[1]}_{seed}"
     exc_name, exc_flags = excitation(index, duration)
@@ -151,7 +176,14 @@ def run_case(mpdrig, work, pair, seed, index, duration, rate, reuse, keep_logs):
              if not any(same(s, h) for h in pair)
              and not (i == 0 and any(same(h, e) for h in pair for e in equivalent))]
     steps = [d["baseline"]["error"]] + [s["error"] for s in d.get("selected", [])]
+    # For each hidden effect not named: did diagnose's own detectability estimate (the weakest
+    # strength this log could show, `detectable_from`, against the model it was last measured
+    # against) put its threshold beyond the hidden strength? True, False, or None (not known).
+    truth = {spec.split(":")[0]: spec for spec in specs}
+    below = [None if n else below_detectability(d, h, truth.get(h, "")) for h, n in
+             zip(pair, named)]
     return dict(pair=pair, seed=seed, exc=exc_name, visibility=visibility, selected=selected,
+                below=below,
                 named=named, false=false, steps=steps, wall=wall)
 
 
@@ -243,6 +275,15 @@ def main():
             per_effect[h][1] += 1
     emit("named where both visible, per effect: " +
          ", ".join(f"{h} {n}/{t}" for h, (n, t) in sorted(per_effect.items())))
+    missed = [(h, b) for r in visible for h, b in zip(r["pair"], r["below"]) if b is not None]
+    below_count = {}
+    for h, b in missed:
+        below_count.setdefault(h, [0, 0])
+        below_count[h][0] += b
+        below_count[h][1] += 1
+    emit(f"missed where both visible: {len(missed)}, of them below diagnose's own detectability "
+         f"estimate at the hidden strength: {sum(b for _, b in missed)} (" +
+         ", ".join(f"{h} {b}/{t}" for h, (b, t) in sorted(below_count.items())) + ")")
     walls = [r["wall"] for r in ok]
     if walls:
         emit(f"diagnose wall: {min(walls):.1f}-{max(walls):.1f} s, total {sum(walls):.0f} s")
