@@ -11,17 +11,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   int exit_code = 0;
   mpdrig::cli::AddDemoCommand(&app, &exit_code);
-  mpdrig::cli::AddSimulateCommand(&app, &exit_code);
-  mpdrig::cli::AddFreqrespCommand(&app, &exit_code);
-  mpdrig::cli::AddParamsCommand(&app, &exit_code);
+  mpdrig::cli::AddCoreCommands(&app, &exit_code);
   mpdrig::cli::AddServeCommand(&app, &exit_code);
   mpdrig::cli::AddCompareCommand(&app, &exit_code);
   mpdrig::cli::AddObserveCommand(&app, &exit_code);
   mpdrig::cli::AddGainsCommand(&app, &exit_code);
-  mpdrig::cli::AddEffectsCommand(&app, &exit_code);
   mpdrig::cli::AddDiagnoseCommand(&app, &exit_code);
   mpdrig::cli::AddFitCommand(&app, &exit_code);
-  mpdrig::cli::AddTravelTimeCommand(&app, &exit_code);
   mpdrig::cli::AddRevealCommand(&app, &exit_code);
   mpdrig::cli::AddShadowCommand(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);

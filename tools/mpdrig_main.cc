@@ -13,7 +13,6 @@
 #include <string>
 #include <system_error>
 
-#include "tools/cli/commands.h"
 #include "tools/cli/program.h"
 
 namespace {
@@ -27,11 +26,7 @@ int RunCoreCommand(int argc, char** argv) {
   CLI::App app(mpdrig::cli::kProgramDescription, "mpdrig");
   app.require_subcommand(1);
   int exit_code = 0;
-  mpdrig::cli::AddSimulateCommand(&app, &exit_code);
-  mpdrig::cli::AddFreqrespCommand(&app, &exit_code);
-  mpdrig::cli::AddParamsCommand(&app, &exit_code);
-  mpdrig::cli::AddEffectsCommand(&app, &exit_code);
-  mpdrig::cli::AddTravelTimeCommand(&app, &exit_code);
+  mpdrig::cli::AddCoreCommands(&app, &exit_code);
   CLI11_PARSE(app, argc, argv);
   return exit_code;
 }

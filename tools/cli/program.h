@@ -2,6 +2,7 @@
 // itself (see tools/CMakeLists.txt for why there are two programs).
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <string_view>
 
 namespace mpdrig::cli {
@@ -15,6 +16,9 @@ inline constexpr const char* kProgramDescription =
 // its own process; every other command line goes to mpdrig-all unchanged.
 inline constexpr std::string_view kCoreCommands[] = {"simulate", "params", "effects", "freqresp",
                                                      "traveltime"};
+
+// Registers the commands of kCoreCommands (both programs hold them).
+void AddCoreCommands(CLI::App* app, int* exit_code);
 
 // The program that holds every command, installed beside `mpdrig`.
 inline constexpr const char* kAllCommandsProgram = "mpdrig-all";

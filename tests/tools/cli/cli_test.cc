@@ -26,6 +26,7 @@
 #include "tests/support/sanitizer.h"
 #include "tests/support/statistics.h"
 #include "tests/support/test_domain.h"
+#include "tools/cli/program.h"
 
 namespace mpdrig {
 namespace {
@@ -198,7 +199,12 @@ TEST_F(CliTest, TheFrontHandsOtherCommandsToMpdrigAll) {
   const int status = ::pclose(pipe);
   EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 127) << out;
   EXPECT_TRUE(Contains(out, "mpdrig-all")) << out;
-  // The front's own commands do not need it.
+  // The front's own commands do not need it: each one it names is registered in it.
+  for (const std::string_view name : cli::kCoreCommands) {
+    const std::string help =
+        Quote((lone / "mpdrig").string()) + " " + std::string(name) + " --help >/dev/null 2>&1";
+    EXPECT_EQ(std::system(help.c_str()), 0) << name;
+  }
   const std::string simulate = Quote((lone / "mpdrig").string()) +
                                " simulate --piston sine:amp_m=0.1,freq_hz=0.2 --duration 1 --out " +
                                Quote(Path("lone.csv")) + " >/dev/null 2>&1";
