@@ -727,12 +727,21 @@ bool CharacteristicsSolver::SettleCavity(const GeneralStep& step, int i, double 
 
 // Interior nodes: the trapezoidal rule along both characteristics with the new point's friction
 // linearised, as StepInterior, and the momentum sources semi-implicit.
+// The DGCM's nodes in a loop of their own (kGas), so that the other paths' loop is the same
+// code as without it.
 void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
+  if (step.cavitation && gas_void_fraction_ > 0.0) {
+    StepGeneralInteriorNodes<true>(step);
+  } else {
+    StepGeneralInteriorNodes<false>(step);
+  }
+}
+
+template <bool kGas>
+void CharacteristicsSolver::StepGeneralInteriorNodes(const GeneralStep& step) {
   const int n = config_.cells;
   const double h = dt_s_;
   const double gs = config_.gravity_slope_mps2;
-  const bool gas = step.cavitation && gas_void_fraction_ > 0.0;
-  const bool w_linear = mixture_ == nullptr && step.linear;
   for (int i = 1; i < n; ++i) {
     double ua, ub;
     const double a_foot = GeneralAlphaFoot(step, i, &ua);
@@ -751,15 +760,15 @@ void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
                                      : step.fn.Pressure(w_p, pressure_[i]);
     const double p_liquid = p_p;
 
-    if (gas) {
+    if constexpr (kGas) {
       // DGCM: both sides from their characteristics at the node's p, the gas law closes them.
       const double d = 1.0 + 0.5 * h * lambda + h * sb;
       const double a_r = a_foot - 0.5 * h * fa - h * gs - h * sa;
       const double b_r = b_foot - 0.5 * h * fb - h * gs - h * sa;
       const double k = dt_s_ * config_.area_m2 * gas_weighting_ / d;
       const double g = GasConstant(i);
-      p_p = GasNodePressure(step.fn, w_linear, g, step.p_v, GasVolumeKnown(i) + k * (b_r - a_r),
-                            2.0 * k, pressure_[i]);
+      p_p = GasNodePressure(step.fn, mixture_ == nullptr && step.linear, g, step.p_v,
+                            GasVolumeKnown(i) + k * (b_r - a_r), 2.0 * k, pressure_[i]);
       const double w = step.fn.W(p_p);
       const double u_l = (a_r - w) / d;
       const double u_r = (b_r + w) / d;

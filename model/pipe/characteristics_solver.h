@@ -102,6 +102,8 @@ class CharacteristicsSolver final : public PipeSolver {
   Status StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation);
   void LoadGeneralOldLevel(const GeneralStep& step);
   void StepGeneralInterior(const GeneralStep& step);
+  template <bool kGas>
+  void StepGeneralInteriorNodes(const GeneralStep& step);
   void StepGeneralInlet(const GeneralStep& step, const PipeStepInputs& inputs);
   void StepGeneralOutlet(const GeneralStep& step, const PipeStepInputs& inputs);
   // Feet of the characteristics arriving at node i in the general path: the invariant there,

@@ -611,8 +611,8 @@ TEST(ReservoirValveGas, MethodOfLinesRefusesIt) {
 
 // --- Unsteady friction on this rig ----------------------------------------------------------
 
-// Vitkovsky's k* = sqrt(C*) / 2 from Vardy & Brown's shear decay coefficient: C* = 0.00476
-// laminar (Re < 2000), 7.41 / Re^(log10(14.3 / Re^0.05)) turbulent.
+// The theoretical Brunone coefficient k* = sqrt(C*) / 2 from Vardy & Brown's shear decay
+// coefficient: C* = 0.00476 laminar (Re < 2000), 7.41 / Re^(log10(14.3 / Re^0.05)) turbulent.
 double VardyBrownK(double reynolds) {
   const double c_star =
       reynolds < 2000.0 ? 0.00476
@@ -627,9 +627,9 @@ double ReynoldsNumber(const RigParams& params) {
   return params.layout.steady_velocity_mps * 2.0 * params.pipe_inner_radius_m / kKinematicViscosity;
 }
 
-RigParams WithUnsteadyFriction(RigParams params, double k, bool vitkovsky) {
+RigParams WithUnsteadyFriction(RigParams params, double k, bool variant) {
   EXPECT_TRUE(ApplyEffectSpec(&params, "unsteady_friction:k=" + std::to_string(k) +
-                                           ",vitkovsky_form=" + (vitkovsky ? "1" : "0"))
+                                           ",convective_form=" + (variant ? "1" : "0"))
                   .ok());
   return params;
 }
@@ -663,10 +663,10 @@ TEST(ReservoirValveUnsteadyFriction, DampsTheJoukowskySwingAtVardyBrownsK) {
   };
   const auto [qs0, qs4] = amplitudes(base);
   std::printf("k* = %.4f; swing after 4 periods: quasi-steady %.3f", k, qs4 / qs0);
-  for (const bool vitkovsky : {false, true}) {
-    const auto [a0, a4] = amplitudes(WithUnsteadyFriction(base, k, vitkovsky));
-    std::printf(", %s %.3f", vitkovsky ? "sgn(u u_x)" : "sgn(u)", a4 / a0);
-    if (vitkovsky) {
+  for (const bool variant : {false, true}) {
+    const auto [a0, a4] = amplitudes(WithUnsteadyFriction(base, k, variant));
+    std::printf(", %s %.3f", variant ? "sgn(u u_x)" : "sgn(u)", a4 / a0);
+    if (variant) {
       EXPECT_NEAR(a4 / a0, qs4 / qs0, 0.02);
     } else {
       EXPECT_LT(a4 / a0, qs4 / qs0 - 0.05);
