@@ -79,8 +79,8 @@ const EffectInfo& ColumnSeparationEffect() {
        {"gas_reference_pressure_pa", "Pa", "absolute pressure at which the void fraction is given",
         101325.0, 1.0e3, 1.0e8, false},
        {"gas_weighting", "-",
-        "weighting psi of the gas volume's continuity in time (1: implicit, the literature's "
-        "choice for column separation; 0.5: centred)",
+        "weighting psi of the gas volume's continuity in time (1: implicit, as the vapour "
+        "cavities; 0.5: centred, lets the gas ring)",
         1.0, 0.5, 1.0, false}},
       [](const EffectContext& context) {
         return std::make_unique<ColumnSeparation>(
