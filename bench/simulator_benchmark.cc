@@ -17,6 +17,8 @@
 //   BM_BergantSimpsonSevere/N:<cells>  the reservoir - pipe - valve rig of
 //     docs/examples/bergant-simpson-1999.pbtxt (V0 = 1.4 m/s, column separation), 0.8 s of rig
 //     time written at 10 kHz, the linear law: what `mpdrig simulate` runs for that config.
+//   BM_BergantSimpsonSevereGas/N:<cells>  the same with the discrete gas cavity model
+//     (column_separation's gas_void_fraction = 1e-7 at the reservoir's 316 950 Pa abs).
 //
 // Frequency-response accuracy is reported by bench/accuracy_report.cc (bench/README.md).
 #include <benchmark/benchmark.h>
@@ -31,6 +33,7 @@
 
 #include "model/common/units.h"
 #include "model/config/rig_config.h"
+#include "model/effects/effect.h"
 #include "model/params/rig_params.h"
 #include "model/sim/rig_simulator.h"
 
@@ -187,12 +190,20 @@ void BM_Step(benchmark::State& state, Case c) {
   }
 }
 
-void BM_BergantSimpsonSevere(benchmark::State& state, int cells) {
+void BM_BergantSimpsonSevere(benchmark::State& state, int cells, bool gas) {
   auto params =
       LoadRigConfig(std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt");
   if (!params.ok()) {
     state.SkipWithError(params.status().message().c_str());
     return;
+  }
+  if (gas) {
+    const Status status = ApplyEffectSpec(
+        &*params, "column_separation:gas_void_fraction=1e-7,gas_reference_pressure_pa=316950");
+    if (!status.ok()) {
+      state.SkipWithError(status.message().c_str());
+      return;
+    }
   }
   SimulationOptions options;
   options.model = PipeModel::kLinear;
@@ -218,11 +229,16 @@ void BM_BergantSimpsonSevere(benchmark::State& state, int cells) {
 void RegisterAll() {
   for (int cells : {16, 200}) {
     benchmark::RegisterBenchmark(("BM_BergantSimpsonSevere/N:" + std::to_string(cells)).c_str(),
-                                 BM_BergantSimpsonSevere, cells)
+                                 BM_BergantSimpsonSevere, cells, false)
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
         ->MinTime(0.5);
   }
+  benchmark::RegisterBenchmark("BM_BergantSimpsonSevereGas/N:200", BM_BergantSimpsonSevere, 200,
+                               true)
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->MinTime(0.5);
   const PipeModel models[] = {PipeModel::kQuasiLinear, PipeModel::kLinear};
   const PipeScheme schemes[] = {PipeScheme::kCharacteristics, PipeScheme::kMethodOfLines};
   const int cell_counts[] = {10, 100, 1000};

@@ -421,6 +421,63 @@ class CavityRelation final : public BoundaryRelation {
   double p_v_;
 };
 
+// The pressure at a node with free gas (the DGCM, characteristics_solver.h): the root above p_v
+// of G / (p - p_v) = q + kappa W(p), kappa > 0. W's tangent at the last iterate makes it the
+// quadratic K y^2 + R y - G = 0 in y = p - p_v (K = kappa W' > 0), whose positive root is taken
+// in the form without cancellation: exact at once when W is linear (the linear law without a
+// mixture), Newton's passes on W otherwise.
+double GasNodePressure(const PressureFunction& fn, bool w_linear, double g, double p_v, double q,
+                       double kappa, double guess_pa) {
+  double p = std::max(guess_pa, p_v + 1.0);
+  for (int pass = 0; pass < 30; ++pass) {
+    const double slope = fn.DW(p);
+    const double k = kappa * slope;
+    const double r = q + kappa * (fn.W(p) + slope * (p_v - p));
+    const double root = std::sqrt(r * r + 4.0 * k * g);
+    const double y = r >= 0.0 ? 2.0 * g / (r + root) : (root - r) / (2.0 * k);
+    const double change = std::fabs(p_v + y - p);
+    p = p_v + y;
+    if (w_linear || change <= 1e-12 * p) break;
+  }
+  return p;
+}
+
+// p(u) at an end node with free gas: G / (p - p_v) = q + kappa_u u + kappa W(p), u the
+// boundary's velocity (the choke's or the inlet's side of the node; the pipe's side, linear in
+// W, is in q and kappa). dp/du from the implicit function: -kappa_u / (G / y^2 + kappa W').
+class GasBoundaryRelation final : public BoundaryRelation {
+ public:
+  GasBoundaryRelation(const PressureFunction& fn, bool w_linear, double g, double p_v, double q,
+                      double kappa_u, double kappa, double guess_pa)
+      : fn_(fn),
+        w_linear_(w_linear),
+        g_(g),
+        p_v_(p_v),
+        q_(q),
+        kappa_u_(kappa_u),
+        kappa_(kappa),
+        guess_pa_(guess_pa) {}
+  double PressurePa(double u) const override {
+    return GasNodePressure(fn_, w_linear_, g_, p_v_, q_ + kappa_u_ * u, kappa_, guess_pa_);
+  }
+  double DPressureDVelocity(double u) const override {
+    double slope = 0.0;
+    PressureAndSlope(u, &slope);
+    return slope;
+  }
+  double PressureAndSlope(double u, double* slope) const override {
+    const double p = PressurePa(u);
+    const double y = p - p_v_;
+    *slope = -kappa_u_ / (g_ / (y * y) + kappa_ * fn_.DW(p));
+    return p;
+  }
+
+ private:
+  const PressureFunction& fn_;
+  bool w_linear_;
+  double g_, p_v_, q_, kappa_u_, kappa_, guess_pa_;
+};
+
 // The steady orifice (5.3.2) against any pipe relation: as ChokeBoundary::SolveOutletVelocity,
 // with the pipe side linearised around each iterate, p ~ p_k - b (s - s_k), s = q_c.
 double SolveChokeVelocity(const BoundaryRelation& pipe, const ChokeBoundaryInputs& in,
@@ -476,14 +533,51 @@ void CharacteristicsSolver::OnExtensionsChanged() {
   }
   cavity_volume_.assign(vapour_pressure_pa_ > 0.0 ? nodes : 0, 0.0);
   velocity_jump_.assign(cavity_volume_.size(), 0.0);
+  const PipeExtension::FreeGas gas = vapour_pressure_extension_ != nullptr
+                                         ? vapour_pressure_extension_->CavityFreeGas()
+                                         : PipeExtension::FreeGas{};
+  gas_void_fraction_ = gas.void_fraction;
+  gas_reference_pa_ = gas.reference_pressure_pa;
+  gas_weighting_ = gas.weighting;
+  if (gas_void_fraction_ > 0.0) ResetGasVolumes();
 }
 
 void CharacteristicsSolver::OnStateReset() {
   std::fill(cavity_volume_.begin(), cavity_volume_.end(), 0.0);
   std::fill(velocity_jump_.begin(), velocity_jump_.end(), 0.0);
+  if (gas_void_fraction_ > 0.0) ResetGasVolumes();
+}
+
+double CharacteristicsSolver::GasConstant(int i) const {
+  const double share = i == 0 || i == config_.cells ? 0.5 : 1.0;
+  return gas_void_fraction_ * config_.area_m2 * share * config_.dx_m() *
+         (gas_reference_pa_ - vapour_pressure_pa_);
+}
+
+// The gas in equilibrium with the state: no jump, V = G / (p - p_v) (1 Pa above p_v at least).
+void CharacteristicsSolver::ResetGasVolumes() {
+  for (std::size_t i = 0; i < cavity_volume_.size(); ++i) {
+    const double p = law_.Pressure(alpha_[i], beta_[i]);
+    cavity_volume_[i] = GasConstant(static_cast<int>(i)) / std::max(p - vapour_pressure_pa_, 1.0);
+    velocity_jump_[i] = 0.0;
+  }
+}
+
+double CharacteristicsSolver::GasVolumeKnown(int i) const {
+  return cavity_volume_[i] + dt_s_ * config_.area_m2 * (1.0 - gas_weighting_) * velocity_jump_[i];
 }
 
 double CharacteristicsSolver::CavityVolumeM3() const {
+  if (gas_void_fraction_ > 0.0) {
+    // DGCM: V advances by dt A (psi j + (1 - psi) j_old); V - dt A (psi - 1/2) j advances by the
+    // trapezoidal dt A (j + j_old) / 2, as the liquid does. Includes the gas at the start.
+    double sum = 0.0;
+    for (std::size_t i = 0; i < cavity_volume_.size(); ++i) {
+      sum +=
+          cavity_volume_[i] - (gas_weighting_ - 0.5) * dt_s_ * config_.area_m2 * velocity_jump_[i];
+    }
+    return sum;
+  }
   // The cavities are advanced by implicit Euler, half a step ahead of the time level: the
   // time-centred volume V - A dt (u_right - u_left)/2 is the one the liquid balances (exactly,
   // for the linear model: the sum of alpha - beta over the nodes changes by the boundary flows
@@ -633,7 +727,18 @@ bool CharacteristicsSolver::SettleCavity(const GeneralStep& step, int i, double 
 
 // Interior nodes: the trapezoidal rule along both characteristics with the new point's friction
 // linearised, as StepInterior, and the momentum sources semi-implicit.
+// The DGCM's nodes in a loop of their own (kGas), so that the other paths' loop is the same
+// code as without it.
 void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
+  if (step.cavitation && gas_void_fraction_ > 0.0) {
+    StepGeneralInteriorNodes<true>(step);
+  } else {
+    StepGeneralInteriorNodes<false>(step);
+  }
+}
+
+template <bool kGas>
+void CharacteristicsSolver::StepGeneralInteriorNodes(const GeneralStep& step) {
   const int n = config_.cells;
   const double h = dt_s_;
   const double gs = config_.gravity_slope_mps2;
@@ -655,7 +760,22 @@ void CharacteristicsSolver::StepGeneralInterior(const GeneralStep& step) {
                                      : step.fn.Pressure(w_p, pressure_[i]);
     const double p_liquid = p_p;
 
-    if (step.cavitation) {
+    if constexpr (kGas) {
+      // DGCM: both sides from their characteristics at the node's p, the gas law closes them.
+      const double d = 1.0 + 0.5 * h * lambda + h * sb;
+      const double a_r = a_foot - 0.5 * h * fa - h * gs - h * sa;
+      const double b_r = b_foot - 0.5 * h * fb - h * gs - h * sa;
+      const double k = dt_s_ * config_.area_m2 * gas_weighting_ / d;
+      const double g = GasConstant(i);
+      p_p = GasNodePressure(step.fn, mixture_ == nullptr && step.linear, g, step.p_v,
+                            GasVolumeKnown(i) + k * (b_r - a_r), 2.0 * k, pressure_[i]);
+      const double w = step.fn.W(p_p);
+      const double u_l = (a_r - w) / d;
+      const double u_r = (b_r + w) / d;
+      cavity_volume_[i] = g / (p_p - step.p_v);
+      velocity_jump_[i] = u_r - u_l;
+      u_p = 0.5 * (u_l + u_r);
+    } else if (step.cavitation) {
       double jump = 0.0;
       if (InCavity(step, i, p_p)) {
         // Each side at p_v: alpha_P = W(p_v) + u_left, beta_P = -W(p_v) + u_right.
@@ -714,7 +834,26 @@ void CharacteristicsSolver::StepGeneralInlet(const GeneralStep& step,
     }
   }
   double p0 = step.fn.Pressure(u0 - beta0, pressure_[0]);
-  if (step.cavitation) {
+  if (step.cavitation && gas_void_fraction_ > 0.0) {
+    // DGCM: the pipe side u_pipe = B + W(p) from C- (its friction at the last pass's velocity),
+    // the inlet's side from the piston or the closure against the node's gas law.
+    const double g = GasConstant(0);
+    const double k = h * area * gas_weighting_;
+    double u_pipe = u_right_[0];
+    double u_side = velocity_[0];
+    for (int pass = 0; pass < 2; ++pass) {
+      const double b_fixed = beta_at(u_pipe);
+      const GasBoundaryRelation relation(step.fn, mixture_ == nullptr && step.linear, g, step.p_v,
+                                         GasVolumeKnown(0) + k * b_fixed, -k, k, pressure_[0]);
+      u_side = inlet_closure_ != nullptr ? inlet_closure_->SolveInletVelocity(relation, inlet)
+                                         : inputs.end.inlet_velocity_mps;
+      p0 = relation.PressurePa(u_side);
+      u_pipe = b_fixed + step.fn.W(p0);
+    }
+    cavity_volume_[0] = g / (p0 - step.p_v);
+    velocity_jump_[0] = u_pipe - u_side;
+    u0 = u_side;
+  } else if (step.cavitation) {
     double jump = 0.0;
     if (InCavity(step, 0, p0)) {
       // Pipe side from C- at p_v (friction settled by fixed-point passes, h f' << 1); the
@@ -763,7 +902,25 @@ void CharacteristicsSolver::StepGeneralOutlet(const GeneralStep& step,
     u_l = solve(GeneralOutletRelation(step.fn, alpha_l, pressure_[n]), u_l);
   }
   double p_l = step.fn.Pressure(alpha_l - u_l, pressure_[n]);
-  if (step.cavitation) {
+  if (step.cavitation && gas_void_fraction_ > 0.0) {
+    // DGCM: the pipe side u_pipe = A - W(p) from C+, the choke's or the closure's side against
+    // the node's gas law.
+    const double g = GasConstant(n);
+    const double k = h * area * gas_weighting_;
+    double u_pipe = u_left_[n];
+    double u_side = velocity_[n];
+    for (int pass = 0; pass < 2; ++pass) {
+      const double a_fixed = alpha_at(u_pipe);
+      const GasBoundaryRelation relation(step.fn, mixture_ == nullptr && step.linear, g, step.p_v,
+                                         GasVolumeKnown(n) - k * a_fixed, k, k, pressure_[n]);
+      u_side = solve(relation, u_side);
+      p_l = relation.PressurePa(u_side);
+      u_pipe = a_fixed - step.fn.W(p_l);
+    }
+    cavity_volume_[n] = g / (p_l - step.p_v);
+    velocity_jump_[n] = u_side - u_pipe;
+    u_l = u_side;
+  } else if (step.cavitation) {
     double jump = 0.0;
     if (InCavity(step, n, p_l)) {
       double u_pipe = u_l;

@@ -31,6 +31,18 @@
 //   An interior cavity node stores the mean of its two velocities and the jump u_right - u_left;
 //   a boundary node stores the velocity of the boundary (piston, choke: FT4 and FT1 stay the
 //   flows at the ends). Characteristics leaving a cavity node carry the velocity of their side.
+// - Discrete gas cavity model (DGCM; Wylie 1984; Wylie & Streeter 1993 ch. 8), when the column
+//   separation's extension gives free gas (PipeExtension::FreeGas): every node, always, has the
+//   two sides of a cavity node above, with a gas volume V = G / (p - p_v), G = alpha_0 A dx_i
+//   (p_0 - p_v) (dx_i = dx, dx/2 at the ends: the node's share of the pipe), and its continuity
+//   V = V_old + dt A (psi (u_right - u_left) + (1 - psi) (u_right - u_left)_old). With each side's
+//   velocity linear in W(p) (u_left = (A' - W)/d, u_right = (B' + W)/d) that is
+//   G / (p - p_v) = q + kappa W(p), a quadratic in p for the linear law (the literature's form in
+//   the head), solved in its stable form; Newton on W's tangent otherwise. Its root is unique
+//   and above p_v (the left side falls from infinity, the right rises). At an end the boundary's
+//   velocity enters as p(u) of the node (GasBoundaryRelation), which the choke or a closure
+//   solves. psi = 1 (the default) is the DVCM's implicit Euler: as alpha_0 -> 0 the DGCM's
+//   cavity is the DVCM's; Wylie's 0.5 < psi < 1 is centred but lets the cavities ring.
 #pragma once
 
 #include <limits>
@@ -90,6 +102,8 @@ class CharacteristicsSolver final : public PipeSolver {
   Status StepGeneral(const PipeStepInputs& inputs, RangeViolation* violation);
   void LoadGeneralOldLevel(const GeneralStep& step);
   void StepGeneralInterior(const GeneralStep& step);
+  template <bool kGas>
+  void StepGeneralInteriorNodes(const GeneralStep& step);
   void StepGeneralInlet(const GeneralStep& step, const PipeStepInputs& inputs);
   void StepGeneralOutlet(const GeneralStep& step, const PipeStepInputs& inputs);
   // Feet of the characteristics arriving at node i in the general path: the invariant there,
@@ -100,6 +114,12 @@ class CharacteristicsSolver final : public PipeSolver {
   bool InCavity(const GeneralStep& step, int i, double liquid_pressure_pa) const;
   // Advances node i's cavity with the new jump u_right - u_left: true while it stays open.
   bool SettleCavity(const GeneralStep& step, int i, double liquid_pressure_pa, double jump);
+  // DGCM: node i's gas constant G_i = alpha_0 A dx_i (p_0 - p_v), and its gas volume at the state.
+  double GasConstant(int i) const;
+  void ResetGasVolumes();
+  // DGCM: V_old + dt A (1 - psi) jump_old, the part of node i's new gas volume known before the
+  // step.
+  double GasVolumeKnown(int i) const;
   void RememberPressure(int i, double pressure_pa, double log_pressure);
 
   double dt_s_;
@@ -117,6 +137,11 @@ class CharacteristicsSolver final : public PipeSolver {
   double vapour_pressure_pa_ = 0.0;      // 0: no column separation
   std::vector<double> cavity_volume_;    // V_i [m^3]
   std::vector<double> velocity_jump_;    // u_right - u_left at cavity nodes [m/s]
+  // DGCM (free gas at every node; 0: the DVCM): alpha_0, p_0 [Pa abs], psi. cavity_volume_ then
+  // holds each node's gas volume.
+  double gas_void_fraction_ = 0.0;
+  double gas_reference_pa_ = 0.0;
+  double gas_weighting_ = 1.0;
   // Scratch, old time level: pressure, W, speeds, and the side values of the invariants and u.
   std::vector<double> pressure_, w_, speed_up_, speed_down_;
   std::vector<double> alpha_left_, alpha_right_, beta_left_, beta_right_, u_left_, u_right_;

@@ -92,6 +92,18 @@ class PipeExtension {
   // characteristics_solver.h). The cavity volumes are the solver's state.
   virtual bool has_vapour_pressure() const { return false; }
   virtual double VapourPressurePa() const { return 0.0; }
+  // Free gas with the cavities: the discrete gas cavity model (DGCM, Wylie 1984) instead of the
+  // vapour cavities. A void fraction alpha_0 of free gas at the reference pressure p_0 [Pa abs]
+  // lumped at every node; its volume follows the isothermal law of its partial pressure,
+  // V_g (p - p_v) = alpha_0 A dx (p_0 - p_v). void_fraction 0: the DVCM (the default).
+  // weighting: psi of the gas volume's continuity, V = V_old + dt A (psi jump + (1 - psi)
+  // jump_old), in [0.5, 1] (characteristics_solver.h).
+  struct FreeGas {
+    double void_fraction = 0.0;
+    double reference_pressure_pa = 0.0;
+    double weighting = 1.0;
+  };
+  virtual FreeGas CavityFreeGas() const { return {}; }
 
   // --- The outlet x = L -------------------------------------------------------------------------
   // By default the steady orifice equation (5.3.2) through ChokeBoundary.

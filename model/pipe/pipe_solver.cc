@@ -98,14 +98,27 @@ Status PipeSolver::SetExtensions(std::vector<const PipeExtension*> extensions) {
       compressibility_extensions_.push_back(extension);
     }
     if (extension->has_vapour_pressure()) {
+      const PipeExtension::FreeGas gas = extension->CavityFreeGas();
       if (!supports_column_separation()) {
-        return Status::Error("this pipe scheme takes no column separation (use characteristics)");
+        return Status::Error(
+            gas.void_fraction > 0.0
+                ? "this pipe scheme takes no column separation, nor its discrete gas cavity model "
+                  "(gas_void_fraction > 0): use --scheme characteristics"
+                : "this pipe scheme takes no column separation (use characteristics)");
       }
       if (vapour_pressure_extension_ != nullptr) {
         return Status::Error("two effects set a vapour pressure");
       }
       if (!(extension->VapourPressurePa() > 0.0)) {
         return Status::Error("the vapour pressure must be above zero absolute");
+      }
+      if (gas.void_fraction > 0.0 && !(gas.reference_pressure_pa > extension->VapourPressurePa())) {
+        return Status::Error(
+            "the free gas's reference pressure (gas_reference_pressure_pa) must be above the "
+            "vapour pressure");
+      }
+      if (gas.void_fraction > 0.0 && !(gas.weighting >= 0.5 && gas.weighting <= 1.0)) {
+        return Status::Error("the gas cavities' weighting psi (gas_weighting) must be in [0.5, 1]");
       }
       vapour_pressure_extension_ = extension;
     }
