@@ -234,6 +234,16 @@ TEST(GasEntrainment, TravelTimeFollowsThePressureDependentWaveSpeed) {
 
 // --- column_separation ---------------------------------------------------------------------------
 
+// The piston-end cavity tests' drive: the piston rises so that the inlet sucks at u0 [m/s] for
+// `duration` from t0, the choke closed and the pump stopped.
+Drive PistonStroke(const RigParams& params, double u0, double t0, double duration) {
+  const double v_piston = u0 / PistonBoundary(params).InletVelocityMps(1.0);
+  Drive drive;
+  drive.piston_position_m = [=](double t) { return v_piston * std::clamp(t - t0, 0.0, duration); };
+  drive.rig = [](double) { return Held(0.0, 0.0, 0.0); };
+  return drive;
+}
+
 TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
   // The piston rises at V for T = 0.2 s, sucking at the inlet with u0 = q0/A = -0.3 m/s: the
   // base model's inlet pressure would fall by rho c |u0| = 2.6 bar to below zero absolute (it
@@ -250,13 +260,9 @@ TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
   base.pipe_elevation_gain_m = -2.3;
   const RigParams params = With(base, "column_separation");
   const double p_v = 2.3e3;
-  const PistonBoundary piston(params);
   const double u0 = -0.3;
-  const double v_piston = u0 / piston.InletVelocityMps(1.0);
   const double t0 = 0.1, duration = 0.2;
-  Drive drive;
-  drive.piston_position_m = [&](double t) { return v_piston * std::clamp(t - t0, 0.0, duration); };
-  drive.rig = [](double) { return Held(0.0, 0.0, 0.0); };
+  const Drive drive = PistonStroke(params, u0, t0, duration);
   SimulationOptions options;
 
   const Status base_status = StepUntil(base, options, drive, 1.0);
@@ -326,13 +332,9 @@ TEST(ColumnSeparation, GasCavityAtTheHeaveGeneratorTendsToTheVapourCavity) {
   base.pipe_elevation_gain_m = -2.3;
   const RigParams params = With(base, "column_separation:gas_void_fraction=1e-9");
   const double p_v = 2.3e3;
-  const PistonBoundary piston(params);
   const double u0 = -0.3;
-  const double v_piston = u0 / piston.InletVelocityMps(1.0);
   const double t0 = 0.1, duration = 0.2;
-  Drive drive;
-  drive.piston_position_m = [&](double t) { return v_piston * std::clamp(t - t0, 0.0, duration); };
-  drive.rig = [](double) { return Held(0.0, 0.0, 0.0); };
+  const Drive drive = PistonStroke(params, u0, t0, duration);
   double p_init = 0.0, min_pressure = 1e300, max_volume = 0.0, t_max_volume = 0.0, gas0 = 0.0;
   double t_collapse = -1.0, p_after_collapse = 0.0, worst_hold = 0.0, dt = 0.0;
   double v0 = 0.0, inflow = 0.0, previous_q = 0.0, worst_balance = 0.0;

@@ -435,6 +435,19 @@ ValveEvents EventsAtTheValve(const Trace& trace, double p_v, double round_trip_s
   return events;
 }
 
+// The tables' cells of the first two cavities (life, rebound) and the largest pressure, in barg.
+void PrintEvents(const ValveEvents& events, double atmospheric_pa) {
+  for (std::size_t j = 0; j < 2; ++j) {
+    if (j < events.lives_s.size()) {
+      std::printf(" | %.3f s | %.1f barg", events.lives_s[j],
+                  (events.rebounds_pa[j] - atmospheric_pa) / 1e5);
+    } else {
+      std::printf(" | - | -");
+    }
+  }
+  std::printf(" | %.1f barg", (events.largest_pa - atmospheric_pa) / 1e5);
+}
+
 // As alpha_0 -> 0 the DGCM's cavity is the DVCM's: frictionless, level, instantaneous closure,
 // the first cavity at the valve lives as the wave solution says (the DVCM's test above, the same
 // tolerance), and with the example's friction and rise as the DVCM's; the example's severe
@@ -575,17 +588,9 @@ TEST(ReservoirValveGas, LaterCavitiesDoNotDependOnTheGrid) {
     const Trace trace = RunRig(params, 0.8, cells);
     const ValveEvents events = EventsAtTheValve(trace, VapourPressure(params),
                                                 2 * params.pipe_length_m / params.wave_speed_mps);
-    const double atm = params.atmospheric_pressure_pa;
     std::printf("%-9s %4d", path == kSevere ? "severe" : "moderate", cells);
-    for (std::size_t j = 0; j < 2; ++j) {
-      if (j < events.lives_s.size()) {
-        std::printf(" | %.3f s | %.1f barg", events.lives_s[j],
-                    (events.rebounds_pa[j] - atm) / 1e5);
-      } else {
-        std::printf(" | - | -");
-      }
-    }
-    std::printf(" | %.1f barg\n", (events.largest_pa - atm) / 1e5);
+    PrintEvents(events, params.atmospheric_pressure_pa);
+    std::printf("\n");
     return events;
   };
   if (std::getenv("MPDRIG_BERGANT_TABLES") != nullptr) {
@@ -707,19 +712,11 @@ TEST(ReservoirValveUnsteadyFriction, TablesAtVardyBrownsK) {
           const Trace trace = RunRig(params, 0.8, cells);
           const ValveEvents events = EventsAtTheValve(
               trace, VapourPressure(params), 2 * params.pipe_length_m / params.wave_speed_mps);
-          const double atm = params.atmospheric_pressure_pa;
           std::printf("%s | %s | %s | %d", path == kSevere ? "severe" : "moderate",
                       form < 0 ? "none" : (form == 1 ? "sgn(u u_x)" : "sgn(u)"),
                       alpha_0 > 0.0 ? "DGCM" : "DVCM", cells);
-          for (std::size_t j = 0; j < 2; ++j) {
-            if (j < events.lives_s.size()) {
-              std::printf(" | %.3f s | %.1f barg", events.lives_s[j],
-                          (events.rebounds_pa[j] - atm) / 1e5);
-            } else {
-              std::printf(" | - | -");
-            }
-          }
-          std::printf(" | %.1f barg   (k %.4f)\n", (events.largest_pa - atm) / 1e5, k);
+          PrintEvents(events, params.atmospheric_pressure_pa);
+          std::printf("   (k %.4f)\n", k);
         }
       }
     }
