@@ -580,8 +580,9 @@ double CharacteristicsSolver::CavityVolumeM3() const {
   }
   // The cavities are advanced by implicit Euler, half a step ahead of the time level: the
   // time-centred volume V - A dt (u_right - u_left)/2 is the one the liquid balances (exactly,
-  // for the linear model: the sum of alpha - beta over the nodes changes by the boundary flows
-  // plus the trapezoidal sum of the jumps).
+  // for the linear model without friction: the sum of alpha - beta over the nodes changes by the
+  // boundary flows plus the trapezoidal sum of the jumps; with friction each side of a cavity
+  // node takes its own share of the new point's friction, first order in dt).
   double sum = 0.0;
   for (std::size_t i = 0; i < cavity_volume_.size(); ++i) {
     sum += std::max(0.0, cavity_volume_[i] - 0.5 * dt_s_ * config_.area_m2 * velocity_jump_[i]);
