@@ -700,7 +700,10 @@ TEST(ReservoirValveUnsteadyFriction, DampsTheJoukowskySwingAtVardyBrownsK) {
 // MPDRIG_BERGANT_TABLES=1: the docs' table of both cases with unsteady friction at k* (both
 // forms), DVCM and DGCM, 32 and 200 cells.
 TEST(ReservoirValveUnsteadyFriction, TablesAtVardyBrownsK) {
-  if (std::getenv("MPDRIG_BERGANT_TABLES") == nullptr) GTEST_SKIP() << "MPDRIG_BERGANT_TABLES";
+  if (std::getenv("MPDRIG_BERGANT_TABLES") == nullptr) {
+    GTEST_SKIP() << "prints docs/bergant-simpson.md's tables only, asserts nothing: "
+                    "MPDRIG_BERGANT_TABLES=1 runs it";
+  }
   for (const std::string& path : {kSevere, kModerate}) {
     const RigParams base = Load(path);
     const double k = VardyBrownK(ReynoldsNumber(base));
