@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <vector>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -244,6 +245,47 @@ Drive PistonStroke(const RigParams& params, double u0, double t0, double duratio
   return drive;
 }
 
+// What both piston-end cavity tests follow through the stroke, every step: the inlet pressure,
+// the cavity volume beyond the first step's (the DGCM's gas is there from the start), the lowest
+// pressure along the pipe, and the liquid balance: the stored volume's change against the
+// cavities' and the boundary flows' (the choke is closed, its leak shut off by the rest state:
+// no flow until the wave arrives at 1.06 s).
+struct StrokeTrace {
+  double dt = 0.0, p_init = 0.0;
+  std::vector<double> t, p0, volume;
+  double min_pressure = 1e300, worst_balance = 0.0;
+};
+
+StrokeTrace RunStroke(const RigParams& params, const SimulationOptions& options,
+                      const Drive& drive) {
+  StrokeTrace trace;
+  double v0 = 0.0, volume0 = 0.0, inflow = 0.0, previous_q = 0.0;
+  testing::RunSteps(params, options, drive, 1.0, [&](const RigSimulator& s) {
+    const double t = s.time_s();
+    const double p0 = s.PressureAtPa(0.0);
+    const double q = s.Sample()[Channel::kFT4] - s.Sample()[Channel::kFT1];
+    if (t == 0.0) {
+      trace.p_init = p0;
+      trace.dt = s.time_step_s();
+      v0 = s.pipe().StoredVolumeM3();
+      volume0 = s.pipe().CavityVolumeM3();
+    } else {
+      inflow += 0.5 * trace.dt * (q + previous_q);
+    }
+    previous_q = q;
+    const double volume = s.pipe().CavityVolumeM3() - volume0;
+    trace.worst_balance =
+        std::max(trace.worst_balance, std::fabs(s.pipe().StoredVolumeM3() - v0 - volume - inflow));
+    for (int k = 0; k <= 10; ++k) {
+      trace.min_pressure = std::min(trace.min_pressure, s.PressureAtPa(90.0 * k));
+    }
+    trace.t.push_back(t);
+    trace.p0.push_back(p0);
+    trace.volume.push_back(volume);
+  });
+  return trace;
+}
+
 TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
   // The piston rises at V for T = 0.2 s, sucking at the inlet with u0 = q0/A = -0.3 m/s: the
   // base model's inlet pressure would fall by rho c |u0| = 2.6 bar to below zero absolute (it
@@ -268,32 +310,18 @@ TEST(ColumnSeparation, CavityAtTheHeaveGeneratorObeysJoukowsky) {
   const Status base_status = StepUntil(base, options, drive, 1.0);
   EXPECT_EQ(base_status.code(), Status::Code::kModelRange) << base_status.message();
 
-  double p_init = 0.0, min_pressure = 1e300, max_volume = 0.0, t_max_volume = 0.0;
-  double t_collapse = -1.0, p_after_collapse = 0.0, worst_hold = 0.0, dt = 0.0;
-  double v0 = 0.0, inflow = 0.0, previous_q = 0.0, worst_balance = 0.0;
-  testing::RunSteps(params, options, drive, 1.0, [&](const RigSimulator& s) {
-    const double t = s.time_s();
-    const double p0 = s.PressureAtPa(0.0);
-    const double volume = s.pipe().CavityVolumeM3();
-    // The liquid balance (see RunHeave below); the choke is closed, its leak is shut off by
-    // the rest state (no flow until the wave arrives at 1.06 s).
-    const double q = s.Sample()[Channel::kFT4] - s.Sample()[Channel::kFT1];
-    if (t == 0.0) {
-      p_init = p0;
-      dt = s.time_step_s();
-      v0 = s.pipe().StoredVolumeM3();
-    } else {
-      inflow += 0.5 * dt * (q + previous_q);
-    }
-    previous_q = q;
-    worst_balance =
-        std::max(worst_balance, std::fabs(s.pipe().StoredVolumeM3() - v0 - volume - inflow));
-    for (int k = 0; k <= 10; ++k) min_pressure = std::min(min_pressure, s.PressureAtPa(90.0 * k));
+  const StrokeTrace trace = RunStroke(params, options, drive);
+  const double dt = trace.dt, p_init = trace.p_init;
+  const double min_pressure = trace.min_pressure, worst_balance = trace.worst_balance;
+  double max_volume = 0.0, t_max_volume = 0.0, t_collapse = -1.0, p_after_collapse = 0.0;
+  double worst_hold = 0.0;
+  for (std::size_t n = 0; n < trace.t.size(); ++n) {
+    const double t = trace.t[n], p0 = trace.p0[n], volume = trace.volume[n];
     if (volume > max_volume) max_volume = volume, t_max_volume = t;
     if (volume > 0.0) worst_hold = std::max(worst_hold, std::fabs(p0 - p_v));
     if (t_collapse < 0.0 && max_volume > 0.0 && volume == 0.0) t_collapse = t;
     if (t_collapse > 0.0 && t <= t_collapse + 2.5 * dt) p_after_collapse = p0;
-  });
+  }
   const PipeLaw pipe_law(PipeModel::kQuasiLinear, params.wave_speed_mps, params.density_kgpm3,
                          params.QuasiLinearK(), p_init);
   const double u_col = pipe_law.PressureTerm(p_v) - pipe_law.PressureTerm(p_init);
@@ -335,32 +363,19 @@ TEST(ColumnSeparation, GasCavityAtTheHeaveGeneratorTendsToTheVapourCavity) {
   const double u0 = -0.3;
   const double t0 = 0.1, duration = 0.2;
   const Drive drive = PistonStroke(params, u0, t0, duration);
-  double p_init = 0.0, min_pressure = 1e300, max_volume = 0.0, t_max_volume = 0.0, gas0 = 0.0;
-  double t_collapse = -1.0, p_after_collapse = 0.0, worst_hold = 0.0, dt = 0.0;
-  double v0 = 0.0, inflow = 0.0, previous_q = 0.0, worst_balance = 0.0;
-  testing::RunSteps(params, SimulationOptions{}, drive, 1.0, [&](const RigSimulator& s) {
-    const double t = s.time_s();
-    const double p0 = s.PressureAtPa(0.0);
-    const double q = s.Sample()[Channel::kFT4] - s.Sample()[Channel::kFT1];
-    if (t == 0.0) {
-      p_init = p0;
-      dt = s.time_step_s();
-      v0 = s.pipe().StoredVolumeM3();
-      gas0 = s.pipe().CavityVolumeM3();
-    } else {
-      inflow += 0.5 * dt * (q + previous_q);
-    }
-    previous_q = q;
-    const double volume = s.pipe().CavityVolumeM3() - gas0;
-    worst_balance =
-        std::max(worst_balance, std::fabs(s.pipe().StoredVolumeM3() - v0 - volume - inflow));
-    for (int k = 0; k <= 10; ++k) min_pressure = std::min(min_pressure, s.PressureAtPa(90.0 * k));
+  const StrokeTrace trace = RunStroke(params, SimulationOptions{}, drive);
+  const double dt = trace.dt, p_init = trace.p_init;
+  const double min_pressure = trace.min_pressure, worst_balance = trace.worst_balance;
+  double max_volume = 0.0, t_max_volume = 0.0, t_collapse = -1.0, p_after_collapse = 0.0;
+  double worst_hold = 0.0;
+  for (std::size_t n = 0; n < trace.t.size(); ++n) {
+    const double t = trace.t[n], p0 = trace.p0[n], volume = trace.volume[n];
     if (volume > max_volume) max_volume = volume, t_max_volume = t;
     const bool open = p0 < p_v + 1e3;
     if (open && t > t0 + dt && t_collapse < 0.0) worst_hold = std::max(worst_hold, p0 - p_v);
     if (t_collapse < 0.0 && max_volume > 0.0 && t > t0 + duration && !open) t_collapse = t;
     if (t_collapse > 0.0 && t <= t_collapse + 2.5 * dt) p_after_collapse = p0;
-  });
+  }
   const PipeLaw pipe_law(PipeModel::kQuasiLinear, params.wave_speed_mps, params.density_kgpm3,
                          params.QuasiLinearK(), p_init);
   const double u_col = pipe_law.PressureTerm(p_v) - pipe_law.PressureTerm(p_init);
