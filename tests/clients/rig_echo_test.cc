@@ -94,11 +94,19 @@ TEST(RigEcho, MarksAndReportsTheSamplesItLost) {
   const std::string said = testing::ReadFile(err);
   EXPECT_NE(said.find("samples lost in"), std::string::npos) << said;
 
+  // Every hole marked, summed: on a loaded machine the recorder can also lose a sample or two
+  // elsewhere (seen on a fresh clone's suite: a first mark of 1 sample before the stop's).
   const std::string text = testing::ReadFile(log);
-  const std::size_t mark = text.find("\n# lost: ");
-  ASSERT_NE(mark, std::string::npos) << "no hole marked in the log";
   unsigned long long lost = 0;
-  ASSERT_EQ(std::sscanf(text.c_str() + mark, "\n# lost: %llu samples", &lost), 1);
+  int marks = 0;
+  for (std::size_t mark = text.find("\n# lost: "); mark != std::string::npos;
+       mark = text.find("\n# lost: ", mark + 1)) {
+    unsigned long long hole = 0;
+    ASSERT_EQ(std::sscanf(text.c_str() + mark, "\n# lost: %llu samples", &hole), 1);
+    lost += hole;
+    ++marks;
+  }
+  ASSERT_GT(marks, 0) << "no hole marked in the log";
   EXPECT_GT(lost, 100u) << "3 s stopped at 1 kHz lose far more than a keep-last 8 holds";
   EXPECT_LT(lost, 4000u);
   auto read = riglog::ReadRigLog(log);  // the marked log is still a rig log
