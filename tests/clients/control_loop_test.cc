@@ -7,6 +7,7 @@
 #include <signal.h>
 
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,28 @@ std::unique_ptr<client::Rig> Connect(int domain, const std::string& rig_id, doub
   auto rig = client::Rig::Connect(options);
   EXPECT_TRUE(rig.ok()) << rig.status().message();
   return rig.ok() ? std::move(rig).value() : nullptr;
+}
+
+// A rig whose loss `timeout_s` notices quickly, found with patience: a sanitizer build on a loaded
+// machine can take longer than that short timeout to start the service and discover its status, so
+// connecting is retried until `patience_s` (each attempt's failure is not the test's).
+std::unique_ptr<client::Rig> ConnectPatiently(int domain, const std::string& rig_id,
+                                              double timeout_s, double patience_s) {
+  client::RigOptions options;
+  options.rig_id = rig_id;
+  options.domain = domain;
+  options.timeout_s = timeout_s;
+  const auto give_up = std::chrono::steady_clock::now() +
+                       std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                           std::chrono::duration<double>(patience_s));
+  while (true) {
+    auto rig = client::Rig::Connect(options);
+    if (rig.ok()) return std::move(rig).value();
+    if (std::chrono::steady_clock::now() >= give_up) {
+      ADD_FAILURE() << rig.status().message() << " (tried for " << patience_s << " s)";
+      return nullptr;
+    }
+  }
 }
 
 std::atomic<int> g_own_handler_calls{0};
@@ -198,7 +221,7 @@ TEST(ControlLoop, ARigLostOrEndedUnderTheLoopEndsTheRun) {
   ASSERT_GT(domain, 0);
   auto serve = Serve(domain, {"--clock", "realtime", "--rig", "r1"});
   ASSERT_TRUE(serve->started()) << serve->error();
-  auto rig = Connect(domain, "r1", 1.0);
+  auto rig = ConnectPatiently(domain, "r1", 1.0, 20.0);
   ASSERT_NE(rig, nullptr);
   auto result = client::RunController(*rig, LoopOptions(), [&](const Tick& t) {
     if (t.index == 20) serve->Kill();
