@@ -207,10 +207,12 @@ Result<RigParams> ParseRigConfig(const std::string& text, const std::string& sou
         return Status::Error(param_position + ": effect " + effect.name() + ": " + param.key() +
                              " is given twice");
       }
-      const EffectSetting alone{effect.name(), {{param.key(), param.value()}}};
-      MPDRIG_RETURN_IF_ERROR(ResolveEffectValues(*info, alone).status().Within(param_position));
+      MPDRIG_RETURN_IF_ERROR(
+          CheckEffectParam(*info, param.key(), param.value()).Within(param_position));
       setting.values.emplace_back(param.key(), param.value());
     }
+    // The rules between its parameters (EffectInfo::check), at the effect's line.
+    MPDRIG_RETURN_IF_ERROR(ResolveEffectValues(*info, setting).status().Within(position));
     params.effects.push_back(std::move(setting));
   }
   MPDRIG_RETURN_IF_ERROR(ReadLayout(message, locations, source_name, &params.layout));

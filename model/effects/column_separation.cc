@@ -38,6 +38,8 @@
 // } }
 //                  DGCM: add  param { key: "gas_void_fraction" value: 1e-7 }
 //                             param { key: "gas_reference_pressure_pa" value: 316950 }
+#include <sstream>
+
 #include "model/effects/effect.h"
 
 namespace mpdrig {
@@ -88,6 +90,21 @@ const EffectInfo& ColumnSeparationEffect() {
             PipeExtension::FreeGas{context.Get("gas_void_fraction"),
                                    context.Get("gas_reference_pressure_pa"),
                                    context.Get("gas_weighting")});
+      },
+      // The gas's void fraction is given at a pressure where there is liquid: at or below p_v the
+      // DGCM's gas law (alpha_0 p_0 / (p - p_v)) has no meaning. The pipe checks it again.
+      [](const EffectValues& values) {
+        if (values.Get("gas_void_fraction") > 0.0 &&
+            !(values.Get("gas_reference_pressure_pa") > values.Get("vapour_pressure_pa"))) {
+          std::ostringstream out;
+          out << "column_separation: gas_reference_pressure_pa = "
+              << values.Get("gas_reference_pressure_pa")
+              << " Pa must be above vapour_pressure_pa = " << values.Get("vapour_pressure_pa")
+              << " Pa when gas_void_fraction > 0 (the void fraction is given where there is "
+                 "liquid)";
+          return Status::Error(out.str());
+        }
+        return Status::Ok();
       }};
   return info;
 }

@@ -36,12 +36,16 @@ Status CheckValue(const EffectInfo& info, const EffectParamInfo& param, double v
 
 }  // namespace
 
-double EffectContext::Get(std::string_view key) const {
+double EffectValues::Get(std::string_view key) const {
   for (std::size_t i = 0; i < params.size(); ++i) {
     if (params[i].key == key) return values[i];
   }
   MPDRIG_CHECK(false && "effect parameter key not in its table");
   return 0.0;
+}
+
+double EffectContext::Get(std::string_view key) const {
+  return EffectValues{params, values}.Get(key);
 }
 
 const EffectParamInfo* EffectInfo::FindParam(std::string_view key) const {
@@ -110,6 +114,15 @@ Status ApplyEffectSpec(RigParams* params, std::string_view spec) {
   return Status::Ok();
 }
 
+Status CheckEffectParam(const EffectInfo& info, std::string_view key, double value) {
+  const EffectParamInfo* param = info.FindParam(key);
+  if (param == nullptr) {
+    return Status::Error("effect " + std::string(info.name) + " has no parameter '" +
+                         std::string(key) + "'; its parameters: " + ParamKeys(info));
+  }
+  return CheckValue(info, *param, value);
+}
+
 Status ValidateEffects(const RigParams& params) {
   for (std::size_t i = 0; i < params.effects.size(); ++i) {
     const EffectSetting& setting = params.effects[i];
@@ -142,6 +155,9 @@ Result<std::vector<double>> ResolveEffectValues(const EffectInfo& info,
     const double value = given != nullptr ? *given : param.default_value;
     MPDRIG_RETURN_IF_ERROR(CheckValue(info, param, value));
     values.push_back(value);
+  }
+  if (info.check) {
+    MPDRIG_RETURN_IF_ERROR(info.check(EffectValues{info.params, values}));
   }
   return values;
 }

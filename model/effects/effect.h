@@ -78,6 +78,14 @@ struct EffectParamInfo {
   double plausible_max = 0.0;
 };
 
+// An effect's resolved parameter values (one per EffectInfo::params entry, defaults filled in).
+struct EffectValues {
+  std::span<const EffectParamInfo> params;
+  std::span<const double> values;
+
+  double Get(std::string_view key) const;  // MPDRIG_CHECKs that the key exists
+};
+
 // What an effect is created with.
 struct EffectContext {
   const RigParams& rig;
@@ -96,6 +104,10 @@ struct EffectInfo {
   std::string_view explains;  // what it removes from a residual, in a user's words
   std::vector<EffectParamInfo> params;
   std::function<std::unique_ptr<Effect>(const EffectContext&)> create;
+  // Rules between parameters that each parameter's bounds cannot state (e.g. a reference pressure
+  // above the vapour pressure); null: none. Checked with the bounds, so a config file's error
+  // points at the effect's line.
+  std::function<Status(const EffectValues&)> check = nullptr;
 
   const EffectParamInfo* FindParam(std::string_view key) const;
 };
@@ -112,11 +124,16 @@ Status UnknownEffect(std::string_view name);
 // effect that is already on merges the values. Names, keys, numbers and bounds are checked.
 Status ApplyEffectSpec(RigParams* params, std::string_view spec);
 
+// Checks one parameter of `info`: a known key, a value within its bounds (not info.check, which
+// needs all of them).
+Status CheckEffectParam(const EffectInfo& info, std::string_view key, double value);
+
 // Checks every effect setting of `params`: known name, no duplicate, known keys, finite values
 // within bounds.
 Status ValidateEffects(const RigParams& params);
 
-// The values of every parameter of `info` (defaults where `setting` does not set one).
+// The values of every parameter of `info` (defaults where `setting` does not set one), each within
+// its bounds and together passing info.check.
 Result<std::vector<double>> ResolveEffectValues(const EffectInfo& info,
                                                 const EffectSetting& setting);
 

@@ -163,6 +163,30 @@ TEST(RigConfig, BadEffectParameterNamesItsLineAndColumn) {
   const std::string name = ErrorOf("wave_speed_mps: 1000\n  effect { name: \"gremlins\" }\n");
   EXPECT_EQ(name.rfind(kSource + ":2:3: ", 0), 0u) << name;
   EXPECT_NE(name.find("unknown effect 'gremlins'"), std::string::npos) << name;
+  // A rule between parameters (free gas given at a pressure above the vapour pressure) is an error
+  // at the effect's line, whatever order the parameters come in; each one alone is within bounds.
+  const std::string gas_below_vapour = ErrorOf(
+      "wave_speed_mps: 1000\n"
+      "effect { name: \"column_separation\"\n"
+      "  param { key: \"gas_reference_pressure_pa\" value: 2000 }\n"
+      "  param { key: \"gas_void_fraction\" value: 1e-7 } }\n");
+  EXPECT_EQ(gas_below_vapour.rfind(kSource + ":2:1: ", 0), 0u) << gas_below_vapour;
+  EXPECT_NE(gas_below_vapour.find("gas_reference_pressure_pa = 2000 Pa must be above "
+                                  "vapour_pressure_pa = 2300 Pa"),
+            std::string::npos)
+      << gas_below_vapour;
+  auto gas_above_vapour = ParseRigConfig(
+      "effect { name: \"column_separation\"\n"
+      "  param { key: \"gas_void_fraction\" value: 1e-7 }\n"
+      "  param { key: \"vapour_pressure_pa\" value: 1000 }\n"
+      "  param { key: \"gas_reference_pressure_pa\" value: 2000 } }\n",
+      kSource);
+  EXPECT_TRUE(gas_above_vapour.ok()) << gas_above_vapour.status().message();
+  // Without free gas the reference pressure is not used, and not checked against p_v.
+  EXPECT_TRUE(ParseRigConfig("effect { name: \"column_separation\"\n"
+                             "  param { key: \"gas_reference_pressure_pa\" value: 2000 } }\n",
+                             kSource)
+                  .ok());
   // A good one still parses, with its value.
   auto good = ParseRigConfig(
       "effect { name: \"sensor_lag\" param { key: \"time_constant_s\" value: 0.2 } }\n", kSource);
