@@ -99,11 +99,13 @@ void Assess(const Scored& score, const Scored& base_score, double base_error,
   if (blocks >= 2) {
     mean /= blocks;
     const double variance = std::max(0.0, (squares - blocks * mean * mean) / (blocks - 1));
-    candidate->improvement_std_error = std::sqrt(variance / blocks);
+    // Relative, as `improvement` beside it in the report.
+    candidate->improvement_std_error = std::sqrt(variance / blocks) / base_error;
   }
   const double absolute = base_error - candidate->penalised_error;
-  candidate->significant = blocks >= 2 && absolute > kMinRelativeImprovement * base_error &&
-                           absolute > kSignificanceZ * candidate->improvement_std_error;
+  candidate->significant =
+      blocks >= 2 && absolute > kMinRelativeImprovement * base_error &&
+      absolute > kSignificanceZ * candidate->improvement_std_error * base_error;
 }
 
 // A candidate's score as Assess left it (to assess it again against another reference).

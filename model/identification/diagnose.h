@@ -162,7 +162,7 @@ struct CandidateResult {
   double error = 0.0;                  // on the scoring data (the compare metric)
   double penalised_error = 0.0;        // ranking score
   double improvement = 0.0;            // (baseline error - error) / baseline error
-  double improvement_std_error = 0.0;  // of the absolute improvement, from the blocks
+  double improvement_std_error = 0.0;  // of `improvement` (relative), from the blocks
   bool significant = false;
   std::string failure;  // non-empty when the candidate could not be fitted (e.g. range left)
   // The selection round that fitted it: 1 against the base model, 2 against the model with the

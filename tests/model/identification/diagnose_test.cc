@@ -104,7 +104,8 @@ std::string Ranking(const Diagnosis& d) {
     // error, and the improvement over its standard error (the significance test's z)
     std::snprintf(
         line, sizeof(line), " %s %.4g(z%.1f)%s", c.effect.c_str(), 100.0 * c.penalised_error,
-        (d.baseline.error - c.penalised_error) / c.improvement_std_error, c.significant ? "*" : "");
+        (d.baseline.error - c.penalised_error) / (c.improvement_std_error * d.baseline.error),
+        c.significant ? "*" : "");
     out += line;
   }
   for (const std::string& name : d.equivalent) out += " =" + name;
