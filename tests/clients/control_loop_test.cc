@@ -214,7 +214,7 @@ TEST(ControlLoop, ALockstepRunIsTheSameTwice) {
 }
 
 // A real-time rig killed under the loop (SIGKILL: no goodbye): lost after its timeout, exit 3.
-// Stopped as asked (its --duration, 4 s: time to connect on a loaded machine): the rig's clean
+// Stopped as asked (its --duration, 6 s: time to connect on a loaded machine): the rig's clean
 // end, exit 3 too for a controller, whose run did not end as it asked.
 TEST(ControlLoop, ARigLostOrEndedUnderTheLoopEndsTheRun) {
   const int domain = testing::ClaimTestDomain();
@@ -233,9 +233,9 @@ TEST(ControlLoop, ARigLostOrEndedUnderTheLoopEndsTheRun) {
 
   const int domain2 = testing::ClaimTestDomain();
   ASSERT_GT(domain2, 0);
-  auto ending = Serve(domain2, {"--clock", "realtime", "--rig", "r1", "--duration", "4"});
+  auto ending = Serve(domain2, {"--clock", "realtime", "--rig", "r1", "--duration", "6"});
   ASSERT_TRUE(ending->started()) << ending->error();
-  auto rig2 = Connect(domain2, "r1", 5.0);
+  auto rig2 = ConnectPatiently(domain2, "r1", 5.0, 6.0);
   ASSERT_NE(rig2, nullptr);
   result = client::RunController(*rig2, LoopOptions(), [](const Tick&) { return Commands(); });
   EXPECT_EQ(result.end, LoopEnd::kRigEnded) << result.message;
