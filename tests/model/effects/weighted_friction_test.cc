@@ -279,11 +279,12 @@ TEST(WeightedFriction, SteadyFlowIsUntouched) {
 }
 
 // The severe case closed in 0.1 ms (V0 = 1.4 m/s, rho c V0 = 18.45 bar). The Joukowsky rise is
-// the convolution's too: within 1 % of the quasi-steady run's 1 ms after the closure. Then the
-// column the wave has stopped keeps its wall shear: a fluid particle stopped at age s ago has
-// S = -V0 K W(tau(s)), K = 16 nu / D^2, pushing it towards the valve. Along the characteristic
-// dx/dt = +c, alpha = p + rho c u changes by -rho c S dt; the one that reaches the closed valve
-// (u = 0, p = alpha) at t crossed the stopped column from t/2 on, where the ages are 2s - t, so
+// the convolution's too: within 1 % of the quasi-steady run's 1.1 ms after the closure (measured
+// 0.36 %, the closed form below at 1.1 ms). Then the column the wave has stopped keeps its wall
+// shear: a fluid particle stopped at age s ago has S = -V0 K W(tau(s)), K = 16 nu / D^2, pushing it
+// towards the valve. Along the characteristic dx/dt = +c, alpha = p + rho c u changes by -rho c S
+// dt; the one that reaches the closed valve (u = 0, p = alpha) at t crossed the stopped column from
+// t/2 on, where the ages are 2s - t, so
 //   p_wf(L, t) - p_qs(L, t) = rho c V0 K (1/2) integral_0^t W(tau(s)) ds
 //                           = 2 rho c V0 integral_0^tau(t) W(tau') dtau'          (K dt = 4 dtau)
 // to first order (the convolution's own velocity changes in the stopped column are second
@@ -316,11 +317,11 @@ TEST(WeightedFriction, JoukowskyRiseKeptAndTheStoppedColumnPacksTheLineAsTheClos
     const ValveTrace with =
         RunValveRig(WithWeightedFriction(params, "weighting=" + std::to_string(weighting)), travel);
     ASSERT_EQ(with.valve_pa.size(), base.valve_pa.size());
-    double worst = 0.0, at_end = 0.0, closed_at_end = 0.0;
+    double worst = 0.0, at_end = 0.0, closed_at_end = 0.0, rise = 0.0;
     for (std::size_t k = 0; k < base.time_s.size(); ++k) {
       const double t = base.time_s[k];
       const double excess = (with.valve_pa[k] - base.valve_pa[k]) / joukowsky;
-      if (std::abs(t - 0.0011) < 0.5 * base.dt) EXPECT_LT(std::abs(excess), 0.01);
+      if (std::abs(t - 0.0011) < 0.5 * base.dt) rise = excess;
       if (t < 0.002 || t > travel - 0.001) continue;
       const double tau = 4.0 * kViscosity * t / (diameter * diameter);
       const double closed =
@@ -330,10 +331,11 @@ TEST(WeightedFriction, JoukowskyRiseKeptAndTheStoppedColumnPacksTheLineAsTheClos
       closed_at_end = closed;
     }
     std::printf(
-        "%s: plateau above the quasi-steady run by %.2f %% of rho c V0 at 2L/c - 1 ms (closed "
-        "form %.2f %%), within %.1f %% of the closed form from 2 ms on\n",
-        weighting == 1 ? "Vardy & Brown" : "Zielke", 100 * at_end, 100 * closed_at_end,
+        "%s: %.2f %% of rho c V0 above the quasi-steady run at 1.1 ms, %.2f %% at 2L/c - 1 ms "
+        "(closed form %.2f %%), within %.1f %% of the closed form from 2 ms on\n",
+        weighting == 1 ? "Vardy & Brown" : "Zielke", 100 * rise, 100 * at_end, 100 * closed_at_end,
         100 * worst);
+    EXPECT_LT(std::abs(rise), 0.01) << "the Joukowsky rise, weighting " << weighting;
     EXPECT_LT(worst, 0.05) << "weighting " << weighting;
   }
 }
