@@ -2,8 +2,8 @@
 // smooth-pipe turbulent weighting functions, evaluated recursively as sums of exponentials
 // (model/effects/weighted_friction.h has the equations and the quadrature).
 //
-// As an effect: the explicit momentum source S_i = (16 nu / D^2) sum_k y_k,i at every node of
-// the pipe (u = (alpha + beta) / 2). Steady flow is untouched: no velocity change, no state, no
+// As an effect: the momentum source S_i = (16 nu / D^2) sum_k y_k,i at every node of the pipe
+// (u = (alpha + beta) / 2). Steady flow is untouched: no velocity change, no state, no
 // source.
 //
 // Two interleaved grids. On the characteristic grid (dt = dx / c) the new point (i, n + 1) hangs
@@ -11,9 +11,8 @@
 // form two solutions that never meet. A node's velocity change over one step, u(n + 1) - u(n),
 // takes one from each, and fed back through the convolution it couples them: on the swing after
 // a valve closure that grew a step-to-step sawtooth at the fronts, whatever the sign of the
-// source (the amplitude grew 18 % a period). So, as Zielke's own scheme does, each parity of
-// the time level has its own convolution, advanced every other step with u(n + 1) - u(n - 1)
-// over 2 dt.
+// source (the amplitude grew 18 % a period). So each parity of the time level has its own
+// convolution, advanced every other step with u(n + 1) - u(n - 1) over 2 dt.
 //
 // The newest interval implicit. The source of step n + 1 is the convolution at n + 1,
 // K (sum_k e_k y_k(n - 1) + g (u(n + 1) - u(n - 1))), e_k = exp(-n_k 2 dtau), g = sum_k of the
@@ -146,7 +145,8 @@ double VardyBrownWeighting(double tau, double reynolds) {
 // rho = dx/dlambda (McMahon), by the quadrature; the correction, -(lambda'(10.5) / 24) tau
 // exp(-L0 tau), up to 4e-4 of W at tau ~ 1 / L0, as the difference quotient of two exponentials
 // at L0 -+ d, d = L0 / 10 (off by (d tau)^2 / 6 of itself). The next term, 7 f''' / 5760, is below
-// 1e-6 of W.
+// 1e-6 of W. The quadrature's nodes from s = L0 / 20 up; those below, whose rates are within 5 %
+// of L0, lumped.
 ExponentialSum ZielkeExponentials(double dtau, int terms) {
   MPDRIG_CHECK(dtau > 0.0 && terms >= kExactTerms + 5);
   ExponentialSum sum;

@@ -25,14 +25,17 @@
 //   y_k <- exp(-n_k dtau) y_k + m_k (1 - exp(-n_k dtau)) / (n_k dtau) dV.
 // O(N K) per step and no history. The exponentials come from quadrature, not a fit:
 //   tau^(-1/2) = pi^(-1/2) integral_0^inf s^(-1/2) exp(-s tau) ds  (Vardy & Brown: every rate
-//     shifted by 1 / C*), with s = e^x and the trapezoidal rule in x, whose error falls as
+//     shifted by 1 / C*), with s = e^x and the midpoint rule in x, whose error falls as
 //     exp(-pi^2 / h) with the step h (Poisson summation);
 //   Zielke: the first ten exponentials exactly (the zeros of J_2), the rest of the series as the
-//     integral over the continuous index (Euler-Maclaurin, midpoint) written over the rate,
-//     with McMahon's asymptotic zeros for its density, by the same quadrature.
-// The rates cover tau from 1e-4 dtau (the newest step's share of W) up to where W has decayed
-// (laminar: exactly by the first ten terms; turbulent: 20 C*). Below the lowest quadrature rate
-// one more exponential carries the rest of the integral (its mass and first moment).
+//     integral over the continuous index (Euler-Maclaurin about the midpoints, with its first
+//     correction as two more exponentials) written over the rate, with McMahon's asymptotic
+//     zeros for its density, by the same quadrature.
+// The rates reach tau = 1e-4 dtau (the newest step's share of W) and, below, the rule's nodes
+// down to where W has decayed (laminar: to the first ten terms; turbulent: 10 C*) are lumped
+// into one exponential with their mass and first moment. With 32 exponentials W is within
+// 1.2e-4 (Zielke) and 6e-6 (Vardy & Brown) of the functions for dtau <= tau <= 1
+// (tests/model/effects/weighted_friction_test.cc).
 #pragma once
 
 #include <span>

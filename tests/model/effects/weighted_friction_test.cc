@@ -84,7 +84,7 @@ constexpr double kRigDtau = 4.0 * kViscosity * (37.23 / 200 / 1319.0) / (0.0221 
 // the number of terms (measured 8e-3 at 24, the effect's least, 7e-6 at 48): below 1.5e-2 and
 // 2e-5.
 TEST(WeightedFriction, ExponentialsMatchZielkesWeightingFunction) {
-  const std::vector<double> zeros = BesselZeros(2, 20000);
+  const std::vector<double> zeros = BesselZeros(2, 3000);  // to exp(-60) at tau = 1.3e-6
   for (const double dtau : {kRigDtau, 1e-4}) {
     const ExponentialSum sum = ZielkeExponentials(dtau, 32);
     ASSERT_EQ(sum.rates.size(), 32u);
@@ -341,7 +341,8 @@ TEST(WeightedFriction, JoukowskyRiseKeptAndTheStoppedColumnPacksTheLineAsTheClos
 }
 
 // The swing at the valve without cavities: half the range of p(L) in each period 4L/c after the
-// closure, over five periods; the decay per period (a_4 / a_0)^(1/4). Laminar: the moderate
+// closure, over five periods; the decay per period (a_4 / a_0)^(1/4) (100 cells: the same to three
+// digits as 200). Laminar: the moderate
 // config at V0 = 0.1 m/s (Re = 1 940, Zielke's function). Turbulent: the severe config at V0 =
 // 1.4 m/s (Re = 27 140, Vardy & Brown's) with the tank at 250 m, so that the reflection does
 // not reach the vapour pressure. The convolution must damp it more per period than the
@@ -360,7 +361,7 @@ TEST(WeightedFriction, DampsTheSwingMoreThanQuasiSteadyFriction) {
   for (const Case& c : {Case{"laminar", laminar}, Case{"turbulent", turbulent}}) {
     const double period = 4 * c.params.pipe_length_m / c.params.wave_speed_mps;
     const auto decay = [&](const RigParams& params) {
-      const ValveTrace trace = RunValveRig(params, 0.02 + 5 * period);
+      const ValveTrace trace = RunValveRig(params, 0.02 + 5 * period, 100);
       std::vector<double> lo(5, std::numeric_limits<double>::infinity()), hi(5, -lo[0]);
       for (std::size_t k = 0; k < trace.time_s.size(); ++k) {
         const int m = static_cast<int>((trace.time_s[k] - 0.02) / period);
