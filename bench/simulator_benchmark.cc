@@ -19,6 +19,8 @@
 //     time written at 10 kHz, the linear law: what `mpdrig simulate` runs for that config.
 //   BM_BergantSimpsonSevereGas/N:<cells>  the same with the discrete gas cavity model
 //     (column_separation's gas_void_fraction = 1e-7 at the reservoir's 316 950 Pa abs).
+//   BM_BergantSimpsonSevereWeighted/N:200  the same with convolution unsteady friction
+//     (weighted_friction: Vardy & Brown's weighting function, 32 exponentials per node).
 //
 // Frequency-response accuracy is reported by bench/accuracy_report.cc (bench/README.md).
 #include <benchmark/benchmark.h>
@@ -190,16 +192,16 @@ void BM_Step(benchmark::State& state, Case c) {
   }
 }
 
-void BM_BergantSimpsonSevere(benchmark::State& state, int cells, bool gas) {
+// `effect`: an --effect spec added to the config's, or empty.
+void BM_BergantSimpsonSevere(benchmark::State& state, int cells, std::string effect) {
   auto params =
       LoadRigConfig(std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt");
   if (!params.ok()) {
     state.SkipWithError(params.status().message().c_str());
     return;
   }
-  if (gas) {
-    const Status status = ApplyEffectSpec(
-        &*params, "column_separation:gas_void_fraction=1e-7,gas_reference_pressure_pa=316950");
+  if (!effect.empty()) {
+    const Status status = ApplyEffectSpec(&*params, effect);
     if (!status.ok()) {
       state.SkipWithError(status.message().c_str());
       return;
@@ -229,13 +231,19 @@ void BM_BergantSimpsonSevere(benchmark::State& state, int cells, bool gas) {
 void RegisterAll() {
   for (int cells : {16, 200}) {
     benchmark::RegisterBenchmark(("BM_BergantSimpsonSevere/N:" + std::to_string(cells)).c_str(),
-                                 BM_BergantSimpsonSevere, cells, false)
+                                 BM_BergantSimpsonSevere, cells, std::string())
         ->Unit(benchmark::kMillisecond)
         ->UseRealTime()
         ->MinTime(0.5);
   }
-  benchmark::RegisterBenchmark("BM_BergantSimpsonSevereGas/N:200", BM_BergantSimpsonSevere, 200,
-                               true)
+  benchmark::RegisterBenchmark(
+      "BM_BergantSimpsonSevereGas/N:200", BM_BergantSimpsonSevere, 200,
+      std::string("column_separation:gas_void_fraction=1e-7,gas_reference_pressure_pa=316950"))
+      ->Unit(benchmark::kMillisecond)
+      ->UseRealTime()
+      ->MinTime(0.5);
+  benchmark::RegisterBenchmark("BM_BergantSimpsonSevereWeighted/N:200", BM_BergantSimpsonSevere,
+                               200, std::string("weighted_friction"))
       ->Unit(benchmark::kMillisecond)
       ->UseRealTime()
       ->MinTime(0.5);

@@ -91,6 +91,7 @@ const EffectInfo& ColumnSeparationEffect() {
                                    context.Get("gas_reference_pressure_pa"),
                                    context.Get("gas_weighting")});
       },
+      /*diagnose_candidate=*/true,
       // The gas's void fraction is given at a pressure where there is liquid: at or below p_v the
       // DGCM's gas law (alpha_0 p_0 / (p - p_v)) has no meaning. The pipe checks it again.
       [](const EffectValues& values) {

@@ -57,6 +57,29 @@ const EffectParamInfo* EffectInfo::FindParam(std::string_view key) const {
 
 std::span<const EffectInfo* const> EffectCatalogue() { return Catalogue(); }
 
+std::vector<const EffectInfo*> DiagnoseCandidateEffects() {
+  std::vector<const EffectInfo*> candidates;
+  for (const EffectInfo* info : Catalogue()) {
+    if (info->diagnose_candidate) candidates.push_back(info);
+  }
+  return candidates;
+}
+
+Status CheckDiagnoseCandidate(std::string_view name) {
+  const EffectInfo* info = FindEffectInfo(name);
+  if (info == nullptr) return UnknownEffect(name);
+  if (info->diagnose_candidate) return Status::Ok();
+  std::string names;
+  for (const EffectInfo* candidate : DiagnoseCandidateEffects()) {
+    if (!names.empty()) names += ", ";
+    names += candidate->name;
+  }
+  return Status::Error("effect '" + std::string(name) +
+                       "' is not a diagnose candidate (it has nothing diagnose fits; switch it on "
+                       "with --effect); the candidates: " +
+                       names);
+}
+
 const EffectInfo* FindEffectInfo(std::string_view name) {
   for (const EffectInfo* info : Catalogue()) {
     if (info->name == name) return info;

@@ -104,6 +104,10 @@ struct EffectInfo {
   std::string_view explains;  // what it removes from a residual, in a user's words
   std::vector<EffectParamInfo> params;
   std::function<std::unique_ptr<Effect>(const EffectContext&)> create;
+  // diagnose (and resonance diagnose, and `serve --hidden-effect random`) try it on a log. False
+  // for a model of a rig other than the NTNU one that diagnose has nothing to fit of
+  // (weighted_friction): it is switched on by name, never suspected.
+  bool diagnose_candidate = true;
   // Rules between parameters that each parameter's bounds cannot state (e.g. a reference pressure
   // above the vapour pressure); null: none. Checked with the bounds, so a config file's error
   // points at the effect's line.
@@ -114,6 +118,10 @@ struct EffectInfo {
 
 // Every registered effect, in catalogue.inc's order.
 std::span<const EffectInfo* const> EffectCatalogue();
+// The effects diagnose tries when it is not told which (diagnose_candidate), in the same order.
+std::vector<const EffectInfo*> DiagnoseCandidateEffects();
+// Ok for a diagnose candidate; else the error that says `name` is unknown or not a candidate.
+Status CheckDiagnoseCandidate(std::string_view name);
 const EffectInfo* FindEffectInfo(std::string_view name);
 // "unsteady_friction, helical_friction, ..." for error messages.
 std::string EffectNames();

@@ -512,14 +512,11 @@ Result<ModelTraces> ReplayWithOwnLevels(const MeasuredLog& reconstructed, const 
 // --- Diagnose's steps ------------------------------------------------------------------------
 
 // The effects to try: none for the baseline alone, else options.candidates (checked by
-// DiagnoseOptions::Validate), or the whole catalogue where it is empty.
+// DiagnoseOptions::Validate), or every diagnose candidate of the catalogue where it is empty.
 std::vector<const EffectInfo*> CandidateEffects(const DiagnoseOptions& options) {
   std::vector<const EffectInfo*> candidates;
   if (options.baseline_only) return candidates;
-  if (options.candidates.empty()) {
-    for (const EffectInfo* info : EffectCatalogue()) candidates.push_back(info);
-    return candidates;
-  }
+  if (options.candidates.empty()) return DiagnoseCandidateEffects();
   for (const std::string& name : options.candidates) {
     const EffectInfo* info = FindEffectInfo(name);
     MPDRIG_CHECK(info != nullptr);  // DiagnoseOptions::Validate refused unknown names
@@ -1221,9 +1218,7 @@ Status DiagnoseOptions::Validate() const {
   }
   if (baseline_only) return Status::Ok();  // the candidates are not tried
   for (const std::string& name : candidates) {
-    if (FindEffectInfo(name) == nullptr) {
-      return UnknownEffect(name);
-    }
+    MPDRIG_RETURN_IF_ERROR(CheckDiagnoseCandidate(name));
   }
   return Status::Ok();
 }

@@ -411,11 +411,9 @@ Result<ResonanceDiagnosis> DiagnoseResonances(const std::vector<MeasuredResonanc
   }
   std::vector<std::string> pool = options.candidates;
   if (pool.empty()) {
-    for (const EffectInfo* info : EffectCatalogue()) pool.emplace_back(info->name);
+    for (const EffectInfo* info : DiagnoseCandidateEffects()) pool.emplace_back(info->name);
   }
-  for (const std::string& name : pool) {
-    if (FindEffectInfo(name) == nullptr) return UnknownEffect(name);
-  }
+  for (const std::string& name : pool) MPDRIG_RETURN_IF_ERROR(CheckDiagnoseCandidate(name));
   // An effect already in the start model is part of the base, not a candidate.
   std::erase_if(pool, [&](const std::string& name) {
     return std::any_of(start.effects.begin(), start.effects.end(),

@@ -25,6 +25,7 @@ int RunEffects(const std::string& only) {
     Print("physics", info->summary);
     Print("thesis", info->thesis);
     Print("explains", info->explains);
+    if (!info->diagnose_candidate) Print("diagnose", "not a candidate: switched on by name only");
     for (const EffectParamInfo& param : info->params) {
       const std::string key = std::string(info->name) + "." + std::string(param.key);
       char range[64];
@@ -54,7 +55,8 @@ void AddEffectsCommand(CLI::App* app, int* exit_code) {
       "Switch one on in any model command with --effect NAME[:KEY=VALUE,...], set a parameter\n"
       "with --set NAME.KEY=VALUE, or write `effect { name: \"NAME\" param { key: \"KEY\" value: V "
       "} }`\n"
-      "in the config file. `mpdrig diagnose` tries each of them on a log.\n"
+      "in the config file. `mpdrig diagnose` tries each of them on a log (but those marked\n"
+      "`diagnose  not a candidate`).\n"
       "  mpdrig simulate --effect unsteady_friction:k=0.05 --piston sine:amp_m=0.1,freq_hz=0.4 \\\n"
       "      --duration 60 --out run.csv\n"
       "  mpdrig compare lab.csv --effect sensor_lag --set sensor_lag.time_constant_s=0.1 "

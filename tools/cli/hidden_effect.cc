@@ -14,7 +14,8 @@ namespace mpdrig::cli {
 
 std::string ResolveHiddenEffect(const std::string& argument, std::uint64_t seed) {
   if (argument != "random") return argument;
-  const auto catalogue = EffectCatalogue();
+  // The diagnose candidates: a mystery rig hides what diagnose can find.
+  const auto catalogue = DiagnoseCandidateEffects();
   std::mt19937_64 random(seed);
   const std::uint64_t draw = random();
   return std::string(catalogue[static_cast<std::size_t>(draw % catalogue.size())]->name);

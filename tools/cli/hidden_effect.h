@@ -10,10 +10,10 @@
 
 namespace mpdrig::cli {
 
-// "random": one catalogue effect drawn with `seed` (std::mt19937_64, its first number modulo
-// the catalogue's size: the same seed gives the same effect with any standard library), at its
-// default strength; anything else is returned as the effect spec it is. The spec is checked by
-// the caller (ApplyEffectSpec).
+// "random": one of the catalogue's diagnose candidates drawn with `seed` (std::mt19937_64, its
+// first number modulo their count: the same seed gives the same effect with any standard library),
+// at its default strength; anything else is returned as the effect spec it is. The spec is checked
+// by the caller (ApplyEffectSpec).
 std::string ResolveHiddenEffect(const std::string& argument, std::uint64_t seed);
 
 // "column_separation (defaults: ...)" for `mpdrig reveal`.

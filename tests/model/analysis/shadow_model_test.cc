@@ -72,7 +72,7 @@ TEST(ShadowModel, RightEffectHalvesTheErrorWrongOneDoesNot) {
   const double without = (*shadow)->error();
   ASSERT_TRUE(std::isfinite(without));
 
-  for (const EffectInfo* info : EffectCatalogue()) {
+  for (const EffectInfo* info : DiagnoseCandidateEffects()) {
     RigParams candidate;
     ASSERT_TRUE(ApplyEffectSpec(&candidate, std::string(info->name)).ok());
     ASSERT_TRUE((*shadow)->SetParams(candidate).ok());
@@ -131,7 +131,7 @@ TEST_P(ShadowAtLabNoise, RightEffectHalvesTheErrorWhereTheNoiseAllowsWrongOneNev
   const Excitation& heave = GetParam().excitation;
   const char* h = GetParam().name;
   std::vector<std::string> effects;
-  for (const EffectInfo* info : EffectCatalogue()) effects.emplace_back(info->name);
+  for (const EffectInfo* info : DiagnoseCandidateEffects()) effects.emplace_back(info->name);
   int halved = 0;
   {
     for (const std::uint64_t seed : {1u, 2u}) {

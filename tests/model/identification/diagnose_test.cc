@@ -230,7 +230,7 @@ TEST_P(DiagnoseHiddenEffect, RanksTheHiddenEffectFirstAndTheErrorFalls) {
 
 std::vector<std::string> AllEffects() {
   std::vector<std::string> names;
-  for (const EffectInfo* info : EffectCatalogue()) names.emplace_back(info->name);
+  for (const EffectInfo* info : DiagnoseCandidateEffects()) names.emplace_back(info->name);
   return names;
 }
 

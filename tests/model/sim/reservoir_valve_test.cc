@@ -726,5 +726,51 @@ TEST(ReservoirValveUnsteadyFriction, TablesAtVardyBrownsK) {
   }
 }
 
+// --- Convolution unsteady friction (weighted_friction) on this rig ---------------------------
+
+// MPDRIG_BERGANT_TABLES=1: docs/bergant-simpson.md's table of both cases with quasi-steady
+// friction, Brunone's model at k* (the default form) and the convolution (weighted_friction at its
+// defaults: Vardy & Brown's weighting function at the initial flow's Re, 32 exponentials), DVCM
+// and DGCM, 32 and 200 cells: the first two cavities and their rebounds, every rebound in 0.8 s,
+// the largest pressure in 0.6-0.8 s and in all 0.8 s.
+TEST(ReservoirValveWeightedFriction, Tables) {
+  if (std::getenv("MPDRIG_BERGANT_TABLES") == nullptr) {
+    GTEST_SKIP() << "prints docs/bergant-simpson.md's table only, asserts nothing: "
+                    "MPDRIG_BERGANT_TABLES=1 runs it";
+  }
+  const char* const frictions[] = {"quasi-steady", "Brunone k*", "convolution"};
+  for (const std::string& path : {kSevere, kModerate}) {
+    const RigParams base = Load(path);
+    const double k = VardyBrownK(ReynoldsNumber(base));
+    for (int friction = 0; friction < 3; ++friction) {
+      for (double alpha_0 : {0.0, 1e-7}) {
+        for (int cells : {32, 200}) {
+          RigParams params = alpha_0 > 0.0 ? WithGas(base, alpha_0) : base;
+          if (friction == 1) params = WithUnsteadyFriction(params, k, false);
+          if (friction == 2) {
+            EXPECT_TRUE(ApplyEffectSpec(&params, "weighted_friction").ok());
+          }
+          const Trace trace = RunRig(params, 0.8, cells);
+          const ValveEvents events = EventsAtTheValve(
+              trace, VapourPressure(params), 2 * params.pipe_length_m / params.wave_speed_mps);
+          const double atm = params.atmospheric_pressure_pa;
+          double late = 0.0;
+          for (std::size_t j = 0; j < trace.time_s.size(); ++j) {
+            if (trace.time_s[j] >= 0.6) late = std::max(late, trace.valve_pa[j]);
+          }
+          std::printf("%s | %s | %s | %d", path == kSevere ? "severe" : "moderate",
+                      frictions[friction], alpha_0 > 0.0 ? "DGCM" : "DVCM", cells);
+          PrintEvents(events, atm);
+          std::printf(" | ");
+          for (std::size_t j = 0; j < events.rebounds_pa.size(); ++j) {
+            std::printf("%s%.1f", j == 0 ? "" : ", ", (events.rebounds_pa[j] - atm) / 1e5);
+          }
+          std::printf(" | %.1f barg\n", (late - atm) / 1e5);
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace mpdrig
