@@ -2,29 +2,32 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <utility>
 
 #include <Eigen/Dense>
 
 #include "model/analysis/log_stream.h"
+#include "model/analysis/window_error.h"
 #include "model/boundary/piston.h"
 
 namespace mpdrig {
 
-Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
-                                const SimulationOptions& sim_options, const ReplayOptions& replay,
-                                const CompareProgress& progress) {
+namespace {
+
+// The replay ReplayModel and ReplayWindowError share: `on_sample` gets every sample the pipeline
+// hands out (it may stop the pipeline, RowPipeline::RequestStop), and `traces` (if not null) the
+// start and the solver's step and range event.
+Status RunReplay(const MeasuredLog& log, const RigParams& params,
+                 const SimulationOptions& sim_options, const ReplayOptions& replay,
+                 const std::function<void(const PipelineSample&, RowPipeline*)>& on_sample,
+                 ModelTraces* traces) {
   const std::vector<double>& times = log.time_s();
   if (times.size() < 2) return Status::Error(log.path + ": needs at least 2 samples");
   if (log.channels.size() > kComparedChannelCount) {
     return Status::Error(log.path + ": more channels than P1 P2 PT1..PT10 C2 FT1 FT3 FT4");
   }
-  // Keep only the compared channels of each sample.
-  ModelTraces traces;
-  traces.values_si.assign(log.channels.size(), {});
-  for (auto& values : traces.values_si) values.reserve(times.size());
-  PercentProgress percent(progress, "simulate", static_cast<long>(times.size()));
   // The reconstruction made at loading; a log put together by hand gets one here.
   const MeasuredLog* replayed = &log;
   MeasuredLog reconstructed;
@@ -33,27 +36,75 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
     ReconstructInputs(&reconstructed);
     replayed = &reconstructed;
   }
-  traces.inputs_reconstructed = replay.reconstruct_inputs;
-  traces.warmup = replay.warmup;
-  traces.profile = replay.profile;
+  RowPipeline* self = nullptr;
   RowPipeline pipeline(
       PipelineSmoothingS(replay),
       ReplaySetup{params, sim_options, times.back(), replay.warmup, replay.profile},
-      [&](const PipelineSample& sample) {
+      [&](const PipelineSample& sample) { on_sample(sample, self); });
+  self = &pipeline;
+  MemoryRowSource source(
+      *replayed, replay.reconstruct_inputs ? InputView::kReconstructed : InputView::kMeasured);
+  MPDRIG_RETURN_IF_ERROR(RunPipeline(&source, &pipeline));
+  if (traces != nullptr) {
+    traces->inputs_reconstructed = replay.reconstruct_inputs;
+    traces->warmup = replay.warmup;
+    traces->profile = replay.profile;
+    const RigSampler* sampler = pipeline.sampler();
+    MPDRIG_CHECK(sampler != nullptr);
+    traces->time_step_s = sampler->simulator().time_step_s();
+    traces->steps = sampler->steps();
+    traces->first_range_event = sampler->simulator().first_range_event();
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
+                                const SimulationOptions& sim_options, const ReplayOptions& replay,
+                                const CompareProgress& progress) {
+  // Keep only the compared channels of each sample.
+  ModelTraces traces;
+  traces.values_si.assign(log.channels.size(), {});
+  for (auto& values : traces.values_si) values.reserve(log.time_s().size());
+  PercentProgress percent(progress, "simulate", static_cast<long>(log.time_s().size()));
+  MPDRIG_RETURN_IF_ERROR(RunReplay(
+      log, params, sim_options, replay,
+      [&](const PipelineSample& sample, RowPipeline*) {
         for (std::size_t i = 0; i < log.channels.size(); ++i) {
           traces.values_si[i].push_back(sample.model->values[Index(log.channels[i].channel)]);
         }
         percent.Done(sample.index + 1);
-      });
-  MemoryRowSource source(
-      *replayed, replay.reconstruct_inputs ? InputView::kReconstructed : InputView::kMeasured);
-  MPDRIG_RETURN_IF_ERROR(RunPipeline(&source, &pipeline));
-  const RigSampler* sampler = pipeline.sampler();
-  MPDRIG_CHECK(sampler != nullptr);
-  traces.time_step_s = sampler->simulator().time_step_s();
-  traces.steps = sampler->steps();
-  traces.first_range_event = sampler->simulator().first_range_event();
+      },
+      &traces));
   return traces;
+}
+
+Result<std::optional<double>> ReplayWindowError(const MeasuredLog& log, const RigParams& params,
+                                                const SimulationOptions& sim_options,
+                                                const ReplayOptions& replay, double begin_s,
+                                                double end_s, double stop_above) {
+  WindowErrorAccumulator error(log, begin_s, end_s);
+  std::vector<double> values(log.channels.size());
+  bool stopped = false;
+  MPDRIG_RETURN_IF_ERROR(RunReplay(
+      log, params, sim_options, replay,
+      [&](const PipelineSample& sample, RowPipeline* pipeline) {
+        for (std::size_t i = 0; i < log.channels.size(); ++i) {
+          values[i] = sample.model->values[Index(log.channels[i].channel)];
+        }
+        error.Add(static_cast<std::size_t>(sample.index), values.data());
+        // Past the window nothing more counts.
+        if (sample.row->time_s >= end_s) pipeline->RequestStop();
+        // Not at every sample: 16 square roots each. Every 16th is soon enough.
+        if (sample.index % 16 == 15 && error.LowerBound() > stop_above) {
+          stopped = true;
+          pipeline->RequestStop();
+        }
+      },
+      nullptr));
+  if (stopped) return std::optional<double>();
+  return std::optional<double>(error.Error());
 }
 
 namespace {

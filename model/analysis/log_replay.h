@@ -45,6 +45,15 @@ Result<ModelTraces> ReplayModel(const MeasuredLog& log, const RigParams& params,
                                 const ReplayOptions& replay = {},
                                 const CompareProgress& progress = {});
 
+// ReplayModel's replay scored as it goes on [begin_s, end_s] of `log`: WindowError's value (to the
+// bit), or nullopt as soon as that is certain to exceed `stop_above` (WindowErrorAccumulator's
+// bound has passed it), and the rest of the log is not replayed. For searches that only need to
+// know whether a point beats others (diagnose's scans); +infinity never stops.
+Result<std::optional<double>> ReplayWindowError(const MeasuredLog& log, const RigParams& params,
+                                                const SimulationOptions& sim_options,
+                                                const ReplayOptions& replay, double begin_s,
+                                                double end_s, double stop_above);
+
 // Whether a replay of `log` should start after a periodic warm-up (PlanPeriodicWarmup,
 // log_inputs.h) or from the steady state: the inputs cannot tell a heave that was already running
 // when the recording started from one that started with it, the pressures can. Where the log's

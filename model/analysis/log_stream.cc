@@ -369,7 +369,7 @@ StepInputs RowPipeline::StepInputsAt(double t_b, double dt) const {
 }
 
 Status RowPipeline::Emit() {
-  while (emitted_ < smoothed_) {
+  while (emitted_ < smoothed_ && !stop_requested_) {
     const long i = emitted_;
     const Entry& entry = At(i);
     if (replay_ && !sampler_) {
@@ -438,6 +438,7 @@ Status RunPipeline(LogRowSource* source, RowPipeline* pipeline) {
     if (!more.ok()) return more.status();
     if (!*more) break;
     MPDRIG_RETURN_IF_ERROR(pipeline->Push(row));
+    if (pipeline->stopped()) return Status::Ok();
   }
   return pipeline->Finish();
 }

@@ -218,6 +218,10 @@ class RowPipeline {
   Status Push(const LogRow& row);
   // After the last row: hands out the rest.
   Status Finish();
+  // Hands out no more samples, from the sample after the one the sink is handling (the sink may
+  // call it): the rest of the replay is not run. Push and Finish then only take rows.
+  void RequestStop() { stop_requested_ = true; }
+  bool stopped() const { return stop_requested_; }
   long rows_pushed() const { return pushed_; }
   // The replay, once it has started.
   const RigSampler* sampler() const { return sampler_ ? &*sampler_ : nullptr; }
@@ -246,6 +250,7 @@ class RowPipeline {
   long smoothing_block_rows_;
   long next_smoothing_;  // rows pushed at the next block
   bool finished_ = false;
+  bool stop_requested_ = false;
   std::vector<double> window_time_s_, window_position_m_;  // raw piston, from window_start_
   long window_start_ = 0;
   Entry first_;
@@ -253,7 +258,7 @@ class RowPipeline {
   mutable std::size_t hint_ = 1;  // bracket search cache (relative to rows_)
 };
 
-// Pulls every row of `source` through `pipeline`.
+// Pulls every row of `source` through `pipeline` (until its sink asks it to stop).
 Status RunPipeline(LogRowSource* source, RowPipeline* pipeline);
 
 // The pipeline's own piston smoothing for a replay fed as `replay` says: none on reconstructed

@@ -77,4 +77,44 @@ double WindowError(const MeasuredLog& log, const ModelTraces& model, double begi
   return count > 0 ? total / count : std::numeric_limits<double>::quiet_NaN();
 }
 
+WindowErrorAccumulator::WindowErrorAccumulator(const MeasuredLog& log, double begin_s, double end_s)
+    : log_(log), begin_s_(begin_s), end_s_(end_s), sums_(log.channels.size()) {
+  // ss_tot, counts and constancy as ChannelWindowSums takes them (the same loop, the same order).
+  const std::vector<double> mean = WindowMeans(log, begin_s, end_s);
+  const std::vector<double>& t = log.time_s();
+  for (std::size_t c = 0; c < log.channels.size(); ++c) {
+    const std::vector<double>& y = log.channels[c].values_si;
+    for (std::size_t n = 0; n < t.size(); ++n) {
+      if (!InWindow(t[n], begin_s, end_s) || !std::isfinite(y[n])) continue;
+      sums_[c].ss_tot += (y[n] - mean[c]) * (y[n] - mean[c]);
+      ++sums_[c].count;
+    }
+    if (sums_[c].count > 0) {
+      sums_[c].constant = IsConstantSpread(log.channels[c].channel, mean[c],
+                                           std::sqrt(sums_[c].ss_tot / sums_[c].count));
+    }
+  }
+}
+
+void WindowErrorAccumulator::Add(std::size_t n, const double* model_values) {
+  if (!InWindow(log_.time_s()[n], begin_s_, end_s_)) return;
+  for (std::size_t c = 0; c < sums_.size(); ++c) {
+    const double y = log_.channels[c].values_si[n];
+    if (!std::isfinite(y)) continue;
+    sums_[c].ss_res += (model_values[c] - y) * (model_values[c] - y);
+  }
+}
+
+double WindowErrorAccumulator::Error() const {
+  double total = 0.0;
+  int count = 0;
+  for (const WindowSums& sums : sums_) {
+    const double nrmse = sums.nrmse();
+    if (std::isfinite(nrmse)) total += nrmse, ++count;
+  }
+  return count > 0 ? total / count : std::numeric_limits<double>::quiet_NaN();
+}
+
+double WindowErrorAccumulator::LowerBound() const { return Error(); }
+
 }  // namespace mpdrig

@@ -49,4 +49,25 @@ std::vector<WindowSums> ChannelWindowSums(const MeasuredLog& log, const ModelTra
 // restricted to the window. NaN if no channel has one.
 double WindowError(const MeasuredLog& log, const ModelTraces& model, double begin_s, double end_s);
 
+// WindowError as a replay goes on, sample by sample in time order, with a bound below the final
+// error at every sample: each ss_res is a sum of squares in time order, so its partial sum (the
+// same additions, in the same order) never exceeds the final one, and ss_tot is the log's own.
+// A search can stop a replay whose bound has passed the errors that matter (diagnose's scans):
+// its error would have been larger. Error() after the last sample is WindowError's, to the bit.
+// (The bound assumes that every channel defined now stays so: a model value that turns NaN later
+// drops its channel from WindowError's mean, which may then fall below the bound.)
+class WindowErrorAccumulator {
+ public:
+  WindowErrorAccumulator(const MeasuredLog& log, double begin_s, double end_s);
+  // Sample n of the log: the model's value of each of the log's channels, in their order.
+  void Add(std::size_t n, const double* model_values);
+  double LowerBound() const;  // <= Error() at the end; NaN while no channel is defined
+  double Error() const;       // WindowError's value over the samples added
+
+ private:
+  const MeasuredLog& log_;
+  double begin_s_, end_s_;
+  std::vector<WindowSums> sums_;  // ss_tot, count, constant from the log; ss_res accumulates
+};
+
 }  // namespace mpdrig

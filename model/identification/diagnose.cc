@@ -145,7 +145,8 @@ const EffectParamInfo* PlausibleRange(const std::string& key) {
 }
 
 // The replays of a search's scans on the fitting data: every point (for a second start) and the
-// best.
+// best. A point that can be neither (FitFromTwoStarts) is not kept, and its replay stops as soon as
+// that is certain (StopAbove): a scan's result is the same as with every replay run to its end.
 struct ScanPoints {
   struct Point {
     double error;
@@ -154,17 +155,57 @@ struct ScanPoints {
   std::vector<Point> points;
   double best_error = std::numeric_limits<double>::infinity();
   RigParams best;  // the search's start until a scan point fits better
+  // FitFromTwoStarts's rule for the second start: the best point within kFineScanSpan of this
+  // wave speed where given, else the best one more than kSecondStartSpan from the best point's.
+  std::optional<double> near_wave_speed;
+
+  // The error above which a point at `wave_speed_mps` is neither the best nor the second start,
+  // whatever the points still to come: above the best so far, and above what rules it out as the
+  // second start. Near a given wave speed: outside its window it never is one, inside it is not
+  // once a point there fits better. Otherwise the second start is the best point away from the
+  // final best one; two points too far apart to be both near any wave speed (one of them is then
+  // away from the final best, whichever it is) both fitting better rule it out.
+  double StopAbove(double wave_speed_mps) const {
+    double second = std::numeric_limits<double>::infinity();
+    if (near_wave_speed) {
+      if (!InNearWindow(wave_speed_mps)) {
+        second = -std::numeric_limits<double>::infinity();
+      } else {
+        for (const Point& point : points) {
+          if (InNearWindow(point.params.wave_speed_mps)) second = std::min(second, point.error);
+        }
+      }
+    } else {
+      // No wave speed within kSecondStartSpan of both c_a < c_b: c_b / (1 + s) > c_a / (1 - s).
+      const double apart = (1.0 + kSecondStartSpan) / (1.0 - kSecondStartSpan);
+      for (std::size_t a = 0; a < points.size(); ++a) {
+        for (std::size_t b = a + 1; b < points.size(); ++b) {
+          const double lo =
+              std::min(points[a].params.wave_speed_mps, points[b].params.wave_speed_mps);
+          const double hi =
+              std::max(points[a].params.wave_speed_mps, points[b].params.wave_speed_mps);
+          if (hi > lo * apart * (1.0 + 1e-9)) {
+            second = std::min(second, std::max(points[a].error, points[b].error));
+          }
+        }
+      }
+    }
+    return std::max(best_error, second);
+  }
+  bool InNearWindow(double wave_speed_mps) const {
+    return std::fabs(wave_speed_mps / *near_wave_speed - 1.0) <= kFineScanSpan * (1.0 + 1e-9);
+  }
 };
 
 void ReplayScanPoint(const SearchContext& context, const RigParams& trial, ScanPoints* scan,
                      StageRuns* runs) {
-  auto traces =
-      ReplayModel(*context.fit_log, trial, context.simulation, context.fit_options.replay);
+  auto error =
+      ReplayWindowError(*context.fit_log, trial, context.simulation, context.fit_options.replay,
+                        context.t_begin, context.t_end, scan->StopAbove(trial.wave_speed_mps));
   ++runs->scans;
-  if (!traces.ok()) return;
-  const double error = WindowError(*context.fit_log, *traces, context.t_begin, context.t_end);
-  scan->points.push_back({error, trial});
-  if (error < scan->best_error) scan->best_error = error, scan->best = trial;
+  if (!error.ok() || !error->has_value()) return;
+  scan->points.push_back({**error, trial});
+  if (**error < scan->best_error) scan->best_error = **error, scan->best = trial;
 }
 
 // `strength` with the effect's parameters (parameters[base_count...]) at `factor` of their
@@ -202,18 +243,17 @@ std::optional<RigParams> AtStrength(RigParams strength, const std::vector<FitPar
 // does), and the scan's best point can sit in the wrong valley of that trade: measured on a
 // hidden hose_compliance (seed 2), the fit from the best point ended 0.9% high in c with 4% more
 // error on the fitting data than the fit from the second start, 0.4% from the true c.
-// Where `near_wave_speed` is given, the second start is the best point within kFineScanSpan of
-// it instead (SearchAndFit: the start's wave speed, where the reference's has absorbed an effect).
+// Where the scan has a `near_wave_speed`, the second start is the best point within kFineScanSpan
+// of it instead (SearchAndFit: the start's wave speed, where the reference's has absorbed an
+// effect).
 Result<FitResult> FitFromTwoStarts(const SearchContext& context, const ScanPoints& scan,
-                                   const std::vector<FitParameter>& parameters, StageRuns* runs,
-                                   std::optional<double> near_wave_speed = std::nullopt) {
+                                   const std::vector<FitParameter>& parameters, StageRuns* runs) {
   const ScanPoints::Point* second = nullptr;
   for (const ScanPoints::Point& point : scan.points) {
-    const bool elsewhere =
-        near_wave_speed ? std::fabs(point.params.wave_speed_mps / *near_wave_speed - 1.0) <=
-                              kFineScanSpan * (1.0 + 1e-9)
-                        : std::fabs(point.params.wave_speed_mps / scan.best.wave_speed_mps - 1.0) >
-                              kSecondStartSpan;
+    const bool elsewhere = scan.near_wave_speed
+                               ? scan.InNearWindow(point.params.wave_speed_mps)
+                               : std::fabs(point.params.wave_speed_mps / scan.best.wave_speed_mps -
+                                           1.0) > kSecondStartSpan;
     if (elsewhere && (second == nullptr || point.error < second->error)) second = &point;
   }
   auto fit = FitParameters(*context.fit_log, scan.best, parameters, context.fit_options);
@@ -258,6 +298,7 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
   from_start.effects = params.effects;
   ScanPoints scan;
   scan.best = params;
+  if (wave_speed_absorbed) scan.near_wave_speed = from_start.wave_speed_mps;
   const bool has_effect = parameters.size() > context.base_count;
   const std::vector<double> factors =
       has_effect ? std::vector<double>{0.25, 0.5, 1.0, 2.0, 4.0} : std::vector<double>{1.0};
@@ -289,9 +330,7 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
       ReplayScanPoint(context, trial, &scan, runs);
     }
   }
-  return FitFromTwoStarts(
-      context, scan, parameters, runs,
-      wave_speed_absorbed ? std::optional<double>(from_start.wave_speed_mps) : std::nullopt);
+  return FitFromTwoStarts(context, scan, parameters, runs);
 }
 
 // The strengths of an effect parameter over which detectability is scanned: its plausible range
@@ -619,11 +658,12 @@ RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, StageRun
     for (int k = 0; k < points; ++k) {
       RigParams trial = from;
       trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
-      auto traces = ReplayModel(run.fit_log, trial, run.simulation, run.replay);
+      // Only the best point matters: a replay stops once it cannot be that.
+      auto error = ReplayWindowError(run.fit_log, trial, run.simulation, run.replay, run.t_begin,
+                                     run.fit_end_s, best_error);
       ++runs->scans;
-      if (!traces.ok()) continue;
-      const double error = WindowError(run.fit_log, *traces, run.t_begin, run.fit_end_s);
-      if (error < best_error) best_error = error, best_c = trial.wave_speed_mps;
+      if (!error.ok() || !error->has_value()) continue;
+      if (**error < best_error) best_error = **error, best_c = trial.wave_speed_mps;
     }
   };
   scan(start, start.wave_speed_mps, kWaveSpeedScanSpan, kWaveSpeedScanPoints);
