@@ -31,6 +31,7 @@
 #include "model/config/rig_config.h"
 #include "model/effects/effect.h"
 #include "model/sim/rig_simulator.h"
+#include "tests/support/bergant_simpson.h"
 
 namespace mpdrig {
 namespace {
@@ -208,16 +209,9 @@ TEST(WeightedFriction, LaminarConvolutionGivesSzymanskisWallShear) {
 // --- In the pipe: Bergant & Simpson's reservoir - pipe - valve rig
 // --------------------------------
 
-const std::string kSevere =
-    std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt";
-const std::string kModerate =
-    std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999-moderate.pbtxt";
-
-RigParams Load(const std::string& path) {
-  auto params = LoadRigConfig(path);
-  EXPECT_TRUE(params.ok()) << params.status().message();
-  return params.ok() ? *params : RigParams();
-}
+const std::string& kSevere = testing::kBergantSimpsonSevere;
+const std::string& kModerate = testing::kBergantSimpsonModerate;
+const auto Load = testing::LoadExampleRig;
 
 RigParams WithWeightedFriction(RigParams params, const std::string& settings = "") {
   const Status status =

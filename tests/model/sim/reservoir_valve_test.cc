@@ -33,20 +33,14 @@
 #include "model/config/rig_config.h"
 #include "model/effects/effect.h"
 #include "model/sim/rig_simulator.h"
+#include "tests/support/bergant_simpson.h"
 
 namespace mpdrig {
 namespace {
 
-const std::string kSevere =
-    std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999.pbtxt";
-const std::string kModerate =
-    std::string(MPDRIG_SOURCE_DIR) + "/docs/examples/bergant-simpson-1999-moderate.pbtxt";
-
-RigParams Load(const std::string& path) {
-  auto params = LoadRigConfig(path);
-  EXPECT_TRUE(params.ok()) << params.status().message();
-  return params.ok() ? *params : RigParams();
-}
+const std::string& kSevere = testing::kBergantSimpsonSevere;
+const std::string& kModerate = testing::kBergantSimpsonModerate;
+const auto Load = testing::LoadExampleRig;
 
 double VapourPressure(const RigParams& params) {
   const EffectSetting* cavities = params.FindEffect("column_separation");
