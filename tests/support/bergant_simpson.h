@@ -3,12 +3,14 @@
 // it. Header-only; the including test target defines MPDRIG_SOURCE_DIR.
 #pragma once
 
+#include <functional>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "model/config/rig_config.h"
 #include "model/params/rig_params.h"
+#include "model/sim/rig_simulator.h"
 
 namespace mpdrig::testing {
 
@@ -23,6 +25,27 @@ inline RigParams LoadExampleRig(const std::string& path) {
   auto params = LoadRigConfig(path);
   EXPECT_TRUE(params.ok()) << params.status().message();
   return params.ok() ? *params : RigParams();
+}
+
+// Runs the rig from its steady start for `duration_s` at its own boundaries (no step inputs: the
+// reservoir and the valve's closure law drive it), calling `record` at the start and after every
+// grid step. Returns the time step (0 where the rig cannot be built; a failed step ends the run;
+// both are the test's failures).
+inline double StepValveRig(const RigParams& params, const SimulationOptions& options,
+                           double duration_s,
+                           const std::function<void(const RigSimulator&)>& record) {
+  auto created = RigSimulator::Create(params, options, RigInputs{});
+  EXPECT_TRUE(created.ok()) << created.status().message();
+  if (!created.ok()) return 0.0;
+  RigSimulator sim = std::move(created).value();
+  record(sim);
+  while (sim.time_s() < duration_s) {
+    const Status status = sim.Step(StepInputs{});
+    EXPECT_TRUE(status.ok()) << status.message();
+    if (!status.ok()) break;
+    record(sim);
+  }
+  return sim.time_step_s();
 }
 
 }  // namespace mpdrig::testing

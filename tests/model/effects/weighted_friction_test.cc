@@ -231,25 +231,13 @@ ValveTrace RunValveRig(const RigParams& params, double duration_s, int cells = 2
   options.model = PipeModel::kLinear;
   options.cells = cells;
   ValveTrace trace;
-  auto created = RigSimulator::Create(params, options, RigInputs{});
-  EXPECT_TRUE(created.ok()) << created.status().message();
-  if (!created.ok()) return trace;
-  RigSimulator sim = std::move(created).value();
-  trace.dt = sim.time_step_s();
-  const auto record = [&] {
+  trace.dt = testing::StepValveRig(params, options, duration_s, [&](const RigSimulator& sim) {
     trace.time_s.push_back(sim.time_s());
     trace.valve_pa.push_back(sim.pipe().PressureAt(params.pipe_length_m));
     for (int i = 0; i <= cells; ++i) {
       trace.pipe_pa.push_back(sim.pipe().PressureAt(i * params.pipe_length_m / cells));
     }
-  };
-  record();
-  while (sim.time_s() < duration_s) {
-    const Status status = sim.Step(StepInputs{});
-    EXPECT_TRUE(status.ok()) << status.message();
-    if (!status.ok()) break;
-    record();
-  }
+  });
   return trace;
 }
 

@@ -67,13 +67,8 @@ Trace RunRig(const RigParams& params, double duration_s, int cells = 200,
   options.model = model;
   options.cells = cells;
   Trace trace;
-  auto created = RigSimulator::Create(params, options, RigInputs{});
-  EXPECT_TRUE(created.ok()) << created.status().message();
-  if (!created.ok()) return trace;
-  RigSimulator sim = std::move(created).value();
-  trace.dt = sim.time_step_s();
   const double length = params.pipe_length_m;
-  const auto record = [&]() {
+  trace.dt = testing::StepValveRig(params, options, duration_s, [&](const RigSimulator& sim) {
     const PipeSolver& pipe = sim.pipe();
     const RigSample sample = sim.Sample();
     trace.time_s.push_back(sim.time_s());
@@ -85,14 +80,7 @@ Trace RunRig(const RigParams& params, double duration_s, int cells = 200,
     double lowest = std::numeric_limits<double>::infinity();
     for (int i = 0; i <= cells; ++i) lowest = std::min(lowest, pipe.PressureAt(i * length / cells));
     trace.lowest_pa.push_back(lowest);
-  };
-  record();
-  while (sim.time_s() < duration_s) {
-    const Status status = sim.Step(StepInputs{});
-    EXPECT_TRUE(status.ok()) << status.message();
-    if (!status.ok()) break;
-    record();
-  }
+  });
   return trace;
 }
 
