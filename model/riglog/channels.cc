@@ -1,5 +1,6 @@
 #include "model/riglog/channels.h"
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <charconv>
@@ -362,11 +363,12 @@ Result<double> ParseSampleField(std::string_view field) {
   return value;
 }
 
-void AppendNumber(double value, std::string* out) {
-  if (std::isnan(value)) return;
-  MPDRIG_CHECK(std::isfinite(value));
-  // Both forms are the shortest digits that read back exactly; fixed notation is easier on the
-  // eye ("100000", "0.0002"), so it wins unless it is more than 3 characters longer.
+namespace {
+
+// Both forms by two conversions, as std::to_chars gives them: the reference AppendNumber follows
+// exactly, and the form for magnitudes where the fixed digits of an integer need not be the
+// shortest ones padded with zeros (at 2^53 and above).
+void AppendNumberByTwoConversions(double value, std::string* out) {
   char scientific[64];
   const auto [scientific_end, scientific_ec] =
       std::to_chars(scientific, scientific + sizeof(scientific), value);
@@ -378,6 +380,68 @@ void AppendNumber(double value, std::string* out) {
     out->append(fixed, fixed_end);
   } else {
     out->append(scientific, scientific_end);
+  }
+}
+
+}  // namespace
+
+void AppendNumber(double value, std::string* out) {
+  if (std::isnan(value)) return;
+  MPDRIG_CHECK(std::isfinite(value));
+  // Both forms are the shortest digits that read back exactly; fixed notation is easier on the
+  // eye ("100000", "0.0002"), so it wins unless it is more than 3 characters longer. (std::
+  // to_chars without a format gives the shorter of the two, so "fixed unless longer than it + 3"
+  // is "fixed unless longer than scientific + 3".)
+  //
+  // One shortest conversion (Ryu's digits d1...dn and exponent e, in scientific form) and the
+  // fixed form written from the same digits: a log writes tens of thousands of numbers, and the
+  // second conversion was half the writer's time. Below 2^53 the two conversions agree: the
+  // shortest fixed text has the fewest fraction digits that read back, which are the shortest
+  // digits placed at their exponent, and where those end in zeros before the point (e >= n - 1)
+  // the integer they spell reads back to the value, so the value is that integer (every integer
+  // below 2^53 is a double), whose exact digits the fixed form also picks. Above, the reference.
+  // RigLogChannels.FormatNumberIsWhatTwoConversionsGive (channels_test) checks the bytes
+  // against it.
+  if (!(std::fabs(value) < 0x1p53)) {
+    AppendNumberByTwoConversions(value, out);
+    return;
+  }
+  char scientific[64];
+  const auto [end, ec] = std::to_chars(scientific, scientific + sizeof(scientific), value,
+                                       std::chars_format::scientific);
+  MPDRIG_CHECK(ec == std::errc());
+  // "-d.ddde+XX": sign, digits (the point after the first), exponent.
+  const char* p = scientific;
+  const bool negative = *p == '-';
+  if (negative) ++p;
+  char digits[20];
+  int n = 0;
+  for (; *p != 'e'; ++p) {
+    if (*p != '.') digits[n++] = *p;
+  }
+  int exponent = 0;
+  std::from_chars(p + (p[1] == '+' ? 2 : 1), end, exponent);
+  const std::ptrdiff_t scientific_length = end - scientific;
+  // The fixed form's length: sign, integer digits, point and fraction digits.
+  const int integer_digits = exponent >= 0 ? exponent + 1 : 1;
+  const int fraction_digits = exponent >= 0 ? std::max(n - 1 - exponent, 0) : n - 1 - exponent;
+  const std::ptrdiff_t fixed_length =
+      (negative ? 1 : 0) + integer_digits + (fraction_digits > 0 ? 1 + fraction_digits : 0);
+  if (fixed_length > scientific_length + 3) {
+    out->append(scientific, end);
+    return;
+  }
+  if (negative) out->push_back('-');
+  if (exponent >= 0) {
+    for (int i = 0; i < integer_digits; ++i) out->push_back(i < n ? digits[i] : '0');
+    if (fraction_digits > 0) {
+      out->push_back('.');
+      out->append(digits + integer_digits, digits + n);
+    }
+  } else {
+    out->append("0.");
+    out->append(static_cast<std::size_t>(-exponent - 1), '0');
+    out->append(digits, digits + n);
   }
 }
 

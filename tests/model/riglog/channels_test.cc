@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -211,6 +212,75 @@ TEST(RigLogChannels, FormatNumberIsShortestAndRoundTrips) {
     Result<double> back = ParseSampleField(FormatNumber(value));
     ASSERT_TRUE(back.ok()) << FormatNumber(value);
     EXPECT_EQ(*back, value);
+  }
+}
+
+// The rule FormatNumber states, by two std::to_chars conversions (the shortest text, and the
+// shortest fixed text): the writer derives the fixed form from one conversion and must give these
+// bytes for every value.
+std::string ByTwoConversions(double value) {
+  char shortest[64];
+  const auto shortest_end = std::to_chars(shortest, shortest + sizeof(shortest), value).ptr;
+  char fixed[400];
+  const auto [fixed_end, fixed_ec] =
+      std::to_chars(fixed, fixed + sizeof(fixed), value, std::chars_format::fixed);
+  if (fixed_ec == std::errc() && (fixed_end - fixed) <= (shortest_end - shortest) + 3) {
+    return std::string(fixed, fixed_end);
+  }
+  return std::string(shortest, shortest_end);
+}
+
+TEST(RigLogChannels, FormatNumberIsWhatTwoConversionsGive) {
+  std::mt19937_64 random(5);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::uniform_int_distribution<int> decade(-30, 25);
+  std::uniform_int_distribution<int> digits(1, 17);
+  std::uniform_int_distribution<std::int64_t> integer(-(std::int64_t{1} << 54),
+                                                      std::int64_t{1} << 54);
+  const auto check = [](double value) {
+    ASSERT_EQ(FormatNumber(value), ByTwoConversions(value)) << std::hexfloat << value;
+  };
+  // Where the forms change over and the fast path ends.
+  for (double value : {0.0,
+                       -0.0,
+                       1.0,
+                       9.5,
+                       10.0,
+                       99999.0,
+                       1e5,
+                       1e6,
+                       1e7,
+                       123456789.0,
+                       0.001,
+                       1e-4,
+                       1e-5,
+                       1.25e-6,
+                       0x1p53,
+                       -0x1p53,
+                       0x1p53 - 1.0,
+                       0x1p53 + 2.0,
+                       1e15,
+                       1e16,
+                       1e17,
+                       9007199254740991.0,
+                       4503599627370495.5,
+                       1e22,
+                       1e23,
+                       std::numeric_limits<double>::min(),
+                       std::numeric_limits<double>::max(),
+                       std::numeric_limits<double>::denorm_min()}) {
+    check(value);
+    check(-value);
+  }
+  for (int i = 0; i < 200000; ++i) {
+    // A sensor's reading (few digits at any decade), any double in a decade, and integers near
+    // 2^53.
+    const double scale = std::pow(10.0, decade(random));
+    const double rounded_to = std::pow(10.0, digits(random));
+    check(std::round(unit(random) * rounded_to) / rounded_to * scale);
+    check(-unit(random) * scale);
+    check(static_cast<double>(integer(random)));
+    check(static_cast<double>(integer(random)) * 0.5);
   }
 }
 
