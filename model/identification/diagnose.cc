@@ -890,11 +890,11 @@ void FitCandidate(const DiagnoseRun& run, const Baseline& reference, const Effec
 
 // Runs independent tasks by options.run_tasks: in turn where there is none, in parallel when the
 // caller (the command line) supplies threads. Each task writes only its own slot.
-void RunTasks(const DiagnoseRun& run, const std::vector<std::function<void()>>& tasks) {
+void RunTasks(const DiagnoseRun& run, const std::vector<Task>& tasks) {
   if (run.options.run_tasks) {
     run.options.run_tasks(tasks);
   } else {
-    for (const auto& task : tasks) task();
+    RunInTurn(tasks);
   }
 }
 
@@ -927,14 +927,16 @@ Status ScreenCandidates(const DiagnoseRun& run, const Baseline& reference,
   std::vector<CandidateResult> results(candidates.size());
   std::vector<Scored> scores(candidates.size());
   std::vector<StageRuns> runs(candidates.size());
-  std::vector<std::function<void()>> tasks;
-  if (extra_task) tasks.push_back(extra_task);
+  std::vector<Task> tasks;
+  if (extra_task) tasks.push_back({"reference search", extra_task});
   for (std::size_t i = 0; i < candidates.size(); ++i) {
-    tasks.push_back([&, i] {
-      if (!run.options.run_tasks) run.Report(candidates[i]->name, progress_at + i);
-      FitCandidate(run, reference, *candidates[i], (*candidate_parameters)[i], &results[i],
-                   &scores[i], &runs[i]);
-    });
+    tasks.push_back({"candidate " + std::string(candidates[i]->name), [&, i] {
+                       if (!run.options.run_tasks) {
+                         run.Report(candidates[i]->name, progress_at + i);
+                       }
+                       FitCandidate(run, reference, *candidates[i], (*candidate_parameters)[i],
+                                    &results[i], &scores[i], &runs[i]);
+                     }});
   }
   RunTasks(run, tasks);
   for (std::size_t i = 0; i < results.size(); ++i) {
@@ -952,41 +954,42 @@ void PolishLeaders(const DiagnoseRun& run, const Baseline& reference,
                    std::vector<CandidateResult>* ranked, StageRuns* runs_total) {
   const std::size_t count = std::min(kPolishedCandidates, ranked->size());
   std::vector<StageRuns> runs(count);
-  std::vector<std::function<void()>> tasks;
+  const auto polish = [&](std::size_t i) {
+    CandidateResult& candidate = (*ranked)[i];
+    std::vector<FitParameter> parameters;
+    for (const NamedValue& value : candidate.params) {
+      auto parameter = DefaultFitParameter(value.key);
+      if (parameter.ok()) parameters.push_back(*parameter);
+    }
+    // On the levels that suit this candidate (estimated at its fit), as the baseline was
+    // refitted on its own: an effect that moves the mean pressure (gas entrainment's slower
+    // waves at low pressure) is otherwise fitted on levels bent to the baseline's misfit.
+    // The start stays the command line's: the candidate is scored from its own
+    // (ReplayWithOwnLevels), but a polish from a start chosen for it let an outlet compliance
+    // that was not in the log gain 13 % in round 3 after a lag and free gas (selection_test,
+    // seed 2: 3.97 -> 3.45 % against a floor of 3.41 %); the rounds' references keep their own.
+    FitOptions own_options = run.fit_options;
+    OwnReplay own = ReplayFor(run.measured, candidate.fitted, run.simulation, run.options.replay,
+                              &runs[i], Start::kGiven);
+    own_options.replay = own.replay;
+    const MeasuredLog own_fit_log = MeasuredLogUntil(own.log, run.fit_end_s);
+    auto polished = FitParameters(own_fit_log, candidate.fitted, parameters, own_options);
+    if (!polished.ok()) return;
+    runs[i].fits += polished->replays;
+    if (!(polished->error_after < candidate.fit_error)) return;
+    auto traces = ReplayWithOwnLevels(run.measured, polished->params, run.simulation,
+                                      run.options.replay, &runs[i]);
+    if (!traces.ok()) return;
+    KeepFit(own_fit_log, parameters, own_options, &*polished, &runs[i]);
+    candidate.params = Named(*polished);
+    candidate.fit_error = polished->error_after;
+    candidate.fitted = polished->params;
+    Assess(Score(run.log, *traces, run.score_begin, run.t_end), reference.score,
+           reference.score.error, &candidate);
+  };
+  std::vector<Task> tasks;
   for (std::size_t i = 0; i < count; ++i) {
-    tasks.push_back([&, i] {
-      CandidateResult& candidate = (*ranked)[i];
-      std::vector<FitParameter> parameters;
-      for (const NamedValue& value : candidate.params) {
-        auto parameter = DefaultFitParameter(value.key);
-        if (parameter.ok()) parameters.push_back(*parameter);
-      }
-      // On the levels that suit this candidate (estimated at its fit), as the baseline was
-      // refitted on its own: an effect that moves the mean pressure (gas entrainment's slower
-      // waves at low pressure) is otherwise fitted on levels bent to the baseline's misfit.
-      // The start stays the command line's: the candidate is scored from its own
-      // (ReplayWithOwnLevels), but a polish from a start chosen for it let an outlet compliance
-      // that was not in the log gain 13 % in round 3 after a lag and free gas (selection_test,
-      // seed 2: 3.97 -> 3.45 % against a floor of 3.41 %); the rounds' references keep their own.
-      FitOptions own_options = run.fit_options;
-      OwnReplay own = ReplayFor(run.measured, candidate.fitted, run.simulation, run.options.replay,
-                                &runs[i], Start::kGiven);
-      own_options.replay = own.replay;
-      const MeasuredLog own_fit_log = MeasuredLogUntil(own.log, run.fit_end_s);
-      auto polished = FitParameters(own_fit_log, candidate.fitted, parameters, own_options);
-      if (!polished.ok()) return;
-      runs[i].fits += polished->replays;
-      if (!(polished->error_after < candidate.fit_error)) return;
-      auto traces = ReplayWithOwnLevels(run.measured, polished->params, run.simulation,
-                                        run.options.replay, &runs[i]);
-      if (!traces.ok()) return;
-      KeepFit(own_fit_log, parameters, own_options, &*polished, &runs[i]);
-      candidate.params = Named(*polished);
-      candidate.fit_error = polished->error_after;
-      candidate.fitted = polished->params;
-      Assess(Score(run.log, *traces, run.score_begin, run.t_end), reference.score,
-             reference.score.error, &candidate);
-    });
+    tasks.push_back({"polish " + (*ranked)[i].effect, [&polish, i] { polish(i); }});
   }
   RunTasks(run, tasks);
   for (const StageRuns& r : runs) *runs_total += r;
@@ -1011,13 +1014,14 @@ void ScoreFloors(const DiagnoseRun& run, const Baseline& baseline, Diagnosis* di
   rescore(baseline.traces, &diagnosis->baseline);
   std::vector<CandidateResult>& ranked = diagnosis->candidates;
   std::vector<StageRuns> runs(ranked.size());
-  std::vector<std::function<void()>> tasks;
+  std::vector<Task> tasks;
   for (std::size_t i = 0; i < ranked.size(); ++i) {
-    tasks.push_back([&, i] {
-      auto traces = ReplayWithOwnLevels(run.measured, ranked[i].fitted, run.simulation,
-                                        run.options.replay, &runs[i]);
-      if (traces.ok()) rescore(*traces, &ranked[i]);
-    });
+    tasks.push_back({"floors " + ranked[i].effect, [&, i] {
+                       auto traces =
+                           ReplayWithOwnLevels(run.measured, ranked[i].fitted, run.simulation,
+                                               run.options.replay, &runs[i]);
+                       if (traces.ok()) rescore(*traces, &ranked[i]);
+                     }});
   }
   RunTasks(run, tasks);
   for (const StageRuns& r : runs) *runs_total += r;

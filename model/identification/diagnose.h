@@ -55,6 +55,7 @@
 #include "model/analysis/log_replay.h"
 #include "model/analysis/measured_log.h"
 #include "model/common/status.h"
+#include "model/common/tasks.h"
 #include "model/effects/effect.h"
 #include "model/identification/cavity_evidence.h"
 #include "model/identification/fit.h"
@@ -128,8 +129,9 @@ struct DiagnoseOptions {
   std::vector<std::string> candidates;
   // Runs independent tasks (one per candidate) to completion; empty: one after the other. The
   // model has no threads (design.md); the command line passes a thread pool here. Tasks share
-  // nothing mutable and the model's functions they call are reentrant.
-  std::function<void(const std::vector<std::function<void()>>&)> run_tasks;
+  // nothing mutable and the model's functions they call are reentrant. Their kinds:
+  // "candidate E", "polish E", "floors E" (E an effect), "reference search".
+  TaskRunner run_tasks;
   // "baseline", "<effect>", "compare"; fraction of the whole diagnosis done.
   std::function<void(std::string_view stage, double fraction)> progress;
   bool solver_log = false;  // FitOptions::solver_log for every fit

@@ -472,22 +472,23 @@ Result<ResonanceDiagnosis> DiagnoseResonances(const std::vector<MeasuredResonanc
     }
     std::vector<ResonanceCandidate> results(pool.size());
     std::vector<int> computed(pool.size(), 0);
-    std::vector<std::function<void()>> tasks;
+    std::vector<Task> tasks;
     for (std::size_t i = 0; i < pool.size(); ++i) {
-      tasks.emplace_back([&, i] {
-        const RoundRunner own(measured, options);  // its own resonance count per thread
-        results[i] = own.Try(pool[i], round, model, model_keys);
-        computed[i] = own.computed();
-        if (options.progress) {
-          options.progress("round " + std::to_string(round) + ": " + pool[i] + " " +
-                           std::string(OutcomeName(results[i].outcome)));
-        }
-      });
+      tasks.push_back({"candidate " + pool[i], [&, i] {
+                         const RoundRunner own(measured,
+                                               options);  // its own resonance count per thread
+                         results[i] = own.Try(pool[i], round, model, model_keys);
+                         computed[i] = own.computed();
+                         if (options.progress) {
+                           options.progress("round " + std::to_string(round) + ": " + pool[i] +
+                                            " " + std::string(OutcomeName(results[i].outcome)));
+                         }
+                       }});
     }
     if (options.run_tasks) {
       options.run_tasks(tasks);
     } else {
-      for (auto& task : tasks) task();
+      RunInTurn(tasks);
     }
     for (int c : computed) d.resonances_computed += c;
     std::vector<ResonanceCandidate> fitted;

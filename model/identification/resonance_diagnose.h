@@ -40,6 +40,7 @@
 
 #include "model/analysis/resonance_list.h"
 #include "model/common/status.h"
+#include "model/common/tasks.h"
 #include "model/identification/resonance_fit.h"
 #include "model/params/rig_params.h"
 
@@ -61,8 +62,9 @@ struct ResonanceDiagnoseOptions {
   bool simulated_every_round = false;
   // The screen's threshold, in units of the smallest measured uncertainty.
   double screen_fraction = 0.25;
-  // Runs independent tasks (the candidates of a round); default: one after the other.
-  std::function<void(const std::vector<std::function<void()>>&)> run_tasks;
+  // Runs independent tasks (the candidates of a round, kind "candidate E"); default: one after
+  // the other.
+  TaskRunner run_tasks;
   std::function<void(const std::string&)> progress;  // one line per candidate fitted
 };
 

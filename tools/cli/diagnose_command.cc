@@ -176,10 +176,8 @@ int RunDiagnose(DiagnoseArgs args) {
                    static_cast<int>(stage.size()), stage.data());
     };
   }
-  // The candidates are independent: one thread per core works through them.
-  options.run_tasks = [quiet = args.quiet](const std::vector<std::function<void()>>& tasks) {
-    RunOnEveryCore(tasks, quiet);
-  };
+  // The candidates are independent: one thread per core works through them, the longest first.
+  options.run_tasks = LongestFirstRunner::Shared(/*workers=*/0, args.quiet);
   auto diagnosis = Diagnose(*log, *params, options);
   if (!diagnosis.ok()) return Fail(name, diagnosis.status());
   const Diagnosis& d = *diagnosis;

@@ -298,9 +298,8 @@ int RunDiagnoseResonances(const ModelOptions& model, const ResonanceDiagnoseArgs
       std::fprintf(stderr, "diagnose: %s\n", line.c_str());
     };
   }
-  options.run_tasks = [](const std::vector<std::function<void()>>& tasks) {
-    RunOnEveryCore(tasks, /*quiet=*/true);  // options.progress says what each found
-  };
+  // options.progress says what each found.
+  options.run_tasks = LongestFirstRunner::Shared(/*workers=*/0, /*quiet=*/true);
   auto diagnosis = DiagnoseResonances(*measured, *start, options);
   if (!diagnosis.ok()) return Fail(name, diagnosis.status().Within(args.resonances_path));
   if (!args.json_path.empty()) {
