@@ -633,7 +633,7 @@ Result<InputLevelCorrection> EstimateInputLevels(const MeasuredLog& log, const R
 
 void ApplyInputLevels(const InputLevelCorrection& levels, MeasuredLog* log) {
   log->reconstruction.levels = levels;
-  log->reconstructed_inputs = ReconstructInputColumns(log->inputs, log->reconstruction);
+  ReconstructWithLevels(log);
 }
 
 void ApplyInputLevels(const InputLevelCorrection& levels, ReplayOptions* replay) {

@@ -86,7 +86,18 @@ Status CheckMeasuredLog(MeasuredLog* log) {
 
 void ReconstructInputs(MeasuredLog* log) {
   log->reconstruction = PlanInputReconstruction(log->inputs);
-  log->reconstructed_inputs = ReconstructInputColumns(log->inputs, log->reconstruction);
+  log->smoothed_inputs.reset();
+  ReconstructWithLevels(log);
+}
+
+void ReconstructWithLevels(MeasuredLog* log) {
+  const std::uint64_t fingerprint = SmoothingFingerprint(log->inputs, log->reconstruction);
+  if (log->smoothed_inputs == nullptr || log->smoothed_inputs->fingerprint != fingerprint) {
+    log->smoothed_inputs = std::make_shared<const MeasuredLog::Smoothed>(
+        MeasuredLog::Smoothed{fingerprint, SmoothInputColumns(log->inputs, log->reconstruction)});
+  }
+  log->reconstructed_inputs =
+      WithInputLevels(log->smoothed_inputs->columns, log->reconstruction.levels);
 }
 
 Result<MeasuredLog> LoadMeasuredLog(const std::string& path, const CompareProgress& progress,

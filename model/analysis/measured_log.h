@@ -11,7 +11,9 @@
 // each channel's unit in the log, for the edges (JSON, HTML).
 #pragma once
 
+#include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -52,6 +54,17 @@ struct MeasuredLog {
   // default, and how: made when the log is loaded.
   LogInputColumns reconstructed_inputs;
   InputReconstruction reconstruction;
+  // `inputs` smoothed as `reconstruction` says, before its levels (SmoothInputColumns), and the
+  // SmoothingFingerprint it was made for: ApplyInputLevels adds other levels to it without
+  // smoothing again (a diagnosis tries levels per candidate; the smoothing was 15 % of it).
+  // Copies of the log share it; a log whose inputs or plan changed since smooths again, and a
+  // log cut by MeasuredLogUntil has none (its inputs end earlier, so their smoothing near the end
+  // differs).
+  struct Smoothed {
+    std::uint64_t fingerprint = 0;
+    LogInputColumns columns;
+  };
+  std::shared_ptr<const Smoothed> smoothed_inputs;
   // Present (at least one sample measured), in the order of ComparedChannels().
   std::vector<MeasuredChannel> channels;
   const std::vector<double>& time_s() const { return inputs.time_s; }
@@ -71,5 +84,8 @@ MeasuredLog MeasuredLogUntil(const MeasuredLog& log, double t_end);
 // Plans and makes log->reconstructed_inputs from log->inputs (both loaders do it; call it again
 // after changing the inputs by hand).
 void ReconstructInputs(MeasuredLog* log);
+// log->reconstructed_inputs again from log->inputs and log->reconstruction (its levels changed):
+// the smoothing reused where log->smoothed_inputs holds it for these inputs and plan.
+void ReconstructWithLevels(MeasuredLog* log);
 
 }  // namespace mpdrig

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <sstream>
 
@@ -192,35 +193,31 @@ std::string InputLevelCorrection::Describe() const {
   return out.str();
 }
 
-LogInputColumns ReconstructInputBlock(const LogInputColumns& block, const LevelInputSums& sums,
-                                      long first_index, const InputReconstruction& plan) {
+namespace {
+
+// The smoothing of a block (ReconstructInputBlock without the levels).
+LogInputColumns SmoothInputBlock(const LogInputColumns& block, const LevelInputSums& sums,
+                                 long first_index, const InputReconstruction& plan) {
   LogInputColumns out;
   out.time_s = block.time_s;
   out.piston_position_m =
       SmoothBandLimited(block.time_s, block.piston_position_m, plan.piston_half_width_s);
-  auto levels = [&](const std::vector<double>& values, const std::vector<RunningSum>& level_sums,
-                    double sigma) {
+  auto keeping_steps = [&](const std::vector<double>& values,
+                           const std::vector<RunningSum>& level_sums, double sigma) {
     StepKeepingOptions options;
     options.sigma = sigma;
     options.max_half_width_samples = plan.level_max_half_width_samples;
     return SmoothKeepingSteps(values, level_sums, first_index, options);
   };
-  out.choke_opening_frac = levels(block.choke_opening_frac, sums.choke, plan.choke_noise_frac);
-  out.pump_flow_m3ps = levels(block.pump_flow_m3ps, sums.pump, plan.pump_noise_m3ps);
-  if (plan.levels.applied()) {
-    for (std::size_t i = 0; i < out.time_s.size(); ++i) {
-      const double t = out.time_s[i];
-      out.choke_opening_frac[i] =
-          std::clamp(out.choke_opening_frac[i] + plan.levels.ChokeAt(t), 0.0, 1.0);
-      out.pump_flow_m3ps[i] = std::max(0.0, out.pump_flow_m3ps[i] + plan.levels.PumpAt(t));
-    }
-  }
-  out.outlet_pressure_pa = levels(block.outlet_pressure_pa, sums.outlet, plan.outlet_noise_pa);
+  out.choke_opening_frac =
+      keeping_steps(block.choke_opening_frac, sums.choke, plan.choke_noise_frac);
+  out.pump_flow_m3ps = keeping_steps(block.pump_flow_m3ps, sums.pump, plan.pump_noise_m3ps);
+  out.outlet_pressure_pa =
+      keeping_steps(block.outlet_pressure_pa, sums.outlet, plan.outlet_noise_pa);
   return out;
 }
 
-LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
-                                        const InputReconstruction& plan) {
+LevelInputSums LevelSumsOf(const LogInputColumns& columns) {
   LevelInputSums sums;
   auto build = [](const std::vector<double>& values, std::vector<RunningSum>* out) {
     RunningSums running;
@@ -231,7 +228,65 @@ LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
   build(columns.choke_opening_frac, &sums.choke);
   build(columns.pump_flow_m3ps, &sums.pump);
   build(columns.outlet_pressure_pa, &sums.outlet);
-  return ReconstructInputBlock(columns, sums, 0, plan);
+  return sums;
+}
+
+}  // namespace
+
+LogInputColumns WithInputLevels(LogInputColumns smoothed, const InputLevelCorrection& levels) {
+  if (!levels.applied()) return smoothed;
+  for (std::size_t i = 0; i < smoothed.time_s.size(); ++i) {
+    const double t = smoothed.time_s[i];
+    smoothed.choke_opening_frac[i] =
+        std::clamp(smoothed.choke_opening_frac[i] + levels.ChokeAt(t), 0.0, 1.0);
+    smoothed.pump_flow_m3ps[i] = std::max(0.0, smoothed.pump_flow_m3ps[i] + levels.PumpAt(t));
+  }
+  return smoothed;
+}
+
+LogInputColumns ReconstructInputBlock(const LogInputColumns& block, const LevelInputSums& sums,
+                                      long first_index, const InputReconstruction& plan) {
+  return WithInputLevels(SmoothInputBlock(block, sums, first_index, plan), plan.levels);
+}
+
+LogInputColumns SmoothInputColumns(const LogInputColumns& columns,
+                                   const InputReconstruction& plan) {
+  return SmoothInputBlock(columns, LevelSumsOf(columns), 0, plan);
+}
+
+LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
+                                        const InputReconstruction& plan) {
+  return WithInputLevels(SmoothInputColumns(columns, plan), plan.levels);
+}
+
+std::uint64_t SmoothingFingerprint(const LogInputColumns& columns,
+                                   const InputReconstruction& plan) {
+  // FNV-1a over 64-bit words, each mixed first (splitmix64's finaliser) so that every bit of a
+  // value reaches every bit of the hash.
+  std::uint64_t hash = 14695981039346656037ull;
+  const auto add = [&hash](double value) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &value, sizeof(bits));
+    bits ^= bits >> 30;
+    bits *= 0xbf58476d1ce4e5b9ull;
+    bits ^= bits >> 27;
+    bits *= 0x94d049bb133111ebull;
+    bits ^= bits >> 31;
+    hash = (hash ^ bits) * 1099511628211ull;
+  };
+  for (const std::vector<double>* column :
+       {&columns.time_s, &columns.piston_position_m, &columns.choke_opening_frac,
+        &columns.pump_flow_m3ps, &columns.outlet_pressure_pa}) {
+    add(static_cast<double>(column->size()));
+    for (double value : *column) add(value);
+  }
+  // What the smoothing reads of the plan (SmoothInputBlock).
+  for (double value :
+       {plan.piston_half_width_s, plan.choke_noise_frac, plan.pump_noise_m3ps, plan.outlet_noise_pa,
+        static_cast<double>(plan.level_max_half_width_samples)}) {
+    add(value);
+  }
+  return hash;
 }
 
 namespace {

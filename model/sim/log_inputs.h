@@ -16,6 +16,7 @@
 // (seconds), so a fit would bend f1 to follow the noise of one sample.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -175,6 +176,17 @@ InputReconstruction PlanInputReconstruction(const LogInputColumns& columns);
 // plan.level_reach_samples() of it.
 LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
                                         const InputReconstruction& plan);
+
+// The same in two parts, to the bit: the smoothing, which does not depend on plan.levels, and the
+// levels added to it. ReconstructInputColumns(columns, plan) is
+// WithInputLevels(SmoothInputColumns(columns, plan), plan.levels): a replay that tries other
+// levels on the same inputs (EstimateInputLevels, ApplyInputLevels) smooths once.
+LogInputColumns SmoothInputColumns(const LogInputColumns& columns, const InputReconstruction& plan);
+LogInputColumns WithInputLevels(LogInputColumns smoothed, const InputLevelCorrection& levels);
+// A fingerprint of `columns` and of what the smoothing reads of the plan (not its levels): a
+// different fingerprint, a different SmoothInputColumns; the same, the same but for a 64-bit hash
+// collision (FNV-1a over every value's mixed bits).
+std::uint64_t SmoothingFingerprint(const LogInputColumns& columns, const InputReconstruction& plan);
 
 // The running sums of the level inputs (RunningSums, model/signal/input_reconstruction.h) for a
 // block of a long log: one entry per row and one after the last, built from the log's first row.

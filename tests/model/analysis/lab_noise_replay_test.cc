@@ -219,6 +219,56 @@ TEST(InputLevels, AModelErrorIsNotHidden) {
   std::printf("denser choke: %s\n", levels->Describe().c_str());
 }
 
+// ApplyInputLevels adds levels to the smoothing kept with the log (MeasuredLog::smoothed_inputs)
+// instead of smoothing again: the same doubles as the reconstruction from scratch, for a log with
+// levels, after other levels, for a copy, for a log whose inputs were changed since (it must
+// smooth again) and for a cut one. Lab noise, a choke-step log and a mid-heave one, seeds 1-2.
+TEST(InputLevels, KeptSmoothingGivesWhatSmoothingAgainGives) {
+  const auto expect_same = [](const LogInputColumns& a, const LogInputColumns& b) {
+    ASSERT_EQ(a.time_s, b.time_s);
+    EXPECT_EQ(a.piston_position_m, b.piston_position_m);
+    EXPECT_EQ(a.choke_opening_frac, b.choke_opening_frac);
+    EXPECT_EQ(a.pump_flow_m3ps, b.pump_flow_m3ps);
+    EXPECT_EQ(a.outlet_pressure_pa, b.outlet_pressure_pa);
+  };
+  const auto from_scratch = [](const MeasuredLog& log) {
+    return ReconstructInputColumns(log.inputs, log.reconstruction);
+  };
+  for (const Scenario& scenario : {Scenarios()[2], Scenarios()[6]}) {
+    for (std::uint64_t seed : {1u, 2u}) {
+      SCOPED_TRACE(scenario.name + " seed " + std::to_string(seed));
+      auto log = MeasuredLogFromRigLog(LabNoise(TruthLog(scenario), seed), "noisy");
+      ASSERT_TRUE(log.ok());
+      ASSERT_NE(log->smoothed_inputs, nullptr);
+      // Offsets and trends of the size EstimateInputLevels finds at the lab's noise.
+      InputLevelCorrection levels;
+      levels.center_s = 0.5 * (log->time_s().front() + log->time_s().back());
+      levels.half_span_s = 0.5 * (log->time_s().back() - log->time_s().front());
+      levels.choke_offset_frac = units::ChokeDegToFrac(0.02);
+      levels.pump_trend_m3ps = units::LpmToM3ps(-0.03);
+      const auto kept = log->smoothed_inputs;
+      ApplyInputLevels(levels, &*log);
+      EXPECT_EQ(log->smoothed_inputs, kept) << "smoothed again";
+      expect_same(log->reconstructed_inputs, from_scratch(*log));
+      // Other levels on a copy, which shares the smoothing.
+      MeasuredLog copy = *log;
+      levels.pump_offset_m3ps = units::LpmToM3ps(0.02);
+      ApplyInputLevels(levels, &copy);
+      EXPECT_EQ(copy.smoothed_inputs, kept);
+      expect_same(copy.reconstructed_inputs, from_scratch(copy));
+      // Inputs changed by hand: smoothed again, from them.
+      copy.inputs.choke_opening_frac[copy.inputs.choke_opening_frac.size() / 2] += 0.01;
+      ApplyInputLevels(levels, &copy);
+      EXPECT_NE(copy.smoothed_inputs, kept);
+      expect_same(copy.reconstructed_inputs, from_scratch(copy));
+      // A cut log smooths its own inputs, as before.
+      MeasuredLog cut = MeasuredLogUntil(*log, log->time_s()[log->time_s().size() / 2]);
+      ApplyInputLevels(levels, &cut);
+      expect_same(cut.reconstructed_inputs, from_scratch(cut));
+    }
+  }
+}
+
 // Where the model is right, the estimate moves the levels towards the truth: the replay's mean
 // pressure error against the noise-free truth falls (seeds 1-3, the 0.33 Hz mid-heave log).
 TEST(InputLevels, CorrectedLevelsMeetTheTruth) {
