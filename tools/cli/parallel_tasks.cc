@@ -48,7 +48,8 @@ void LongestFirstRunner::Run(const std::vector<Task>& tasks) {
       }
       const std::size_t finished = ++done;
       if (!quiet_) {
-        std::fprintf(stderr, "diagnose: candidate %zu of %zu fitted\n", finished, tasks.size());
+        std::fprintf(stderr, "diagnose: %s done in %.1f s (%zu of %zu)\n", task.kind.c_str(),
+                     seconds, finished, tasks.size());
       }
     }
   };

@@ -19,7 +19,7 @@ namespace mpdrig::cli {
 class LongestFirstRunner {
  public:
   // `workers` threads at most (0: one per core); unless quiet, says on stderr when each task is
-  // done ("diagnose: candidate 3 of 10 fitted").
+  // done and how long it took ("diagnose: candidate gas_entrainment done in 4.8 s (3 of 10)").
   explicit LongestFirstRunner(unsigned workers = 0, bool quiet = true);
 
   void Run(const std::vector<Task>& tasks);
