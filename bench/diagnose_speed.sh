@@ -3,9 +3,9 @@
 # forward selection, against `mpdrig simulate --inputs` of the same log (both at diagnose's 50
 # cells): the wall time in replays' worth. Makes synthetic logs with a hidden effect (and one
 # without), diagnoses each and prints wall time, CPU time, peak RSS, model runs and the verdict,
-# then per log the wall time and model runs of each stage: the baseline; round 1 (the catalogue
-# screened against it) and its polishing; the verdict's comparison; each later selection round
-# and its polishing. Model runs are deterministic (the same log, the same count); wall times on a
+# then per log the wall time and model runs of each stage (the baseline; round 1, the catalogue
+# screened against it, and its polishing; the verdict's comparison; each later selection round
+# and its polishing) and each parallel task's own time. Model runs are deterministic (the same log, the same count); wall times on a
 # shared machine are not: repeat them (REPEAT).
 #
 #   bash bench/diagnose_speed.sh [effect ...]      (default: choke_inertia none)
@@ -36,22 +36,27 @@ mpdrig, work, seed, repeat, effects = sys.argv[1], sys.argv[2], sys.argv[3], int
 
 def timed(args):
     """Runs args; returns wall s, CPU s, peak RSS (MB) and, for diagnose, the wall time at which
-    each of its progress stages began (stderr lines 'diagnose: NN% STAGE')."""
+    each of its progress stages began (stderr lines 'diagnose: NN% STAGE') and each parallel
+    task's own wall time ('diagnose: KIND done in S s (K of N)'), in the order they ended."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.monotonic()
     stages = []
+    tasks = []
     proc = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
     for line in proc.stderr:
         parts = line.split()
         if len(parts) == 3 and parts[0] == "diagnose:" and parts[1].endswith("%"):
             if not stages or stages[-1][0] != parts[2]:
                 stages.append((parts[2], time.monotonic() - start))
+        if parts[:1] == ["diagnose:"] and " done in " in line:
+            kind, rest = line[len("diagnose: "):].split(" done in ", 1)
+            tasks.append((stages[-1][0] if stages else "", kind, float(rest.split()[0])))
     if proc.wait() != 0:
         sys.exit(f"failed: {' '.join(args)}")
     wall = time.monotonic() - start
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
-    return wall, cpu, after.ru_maxrss / 1024, stages
+    return wall, cpu, after.ru_maxrss / 1024, stages, tasks
 
 print(f"{'log':22} {'wall_s':>7} {'cpu_s':>7} {'rss_mb':>6} {'runs':>6} {'sim_s':>6} "
       f"{'replays':>7}  verdict / selected")
@@ -65,18 +70,23 @@ for effect in effects:
         result = timed([mpdrig, "diagnose", log, "--json", f"{work}/{effect}.json"])
         if best is None or result[0] < best[0]:
             best = result
-    wall, cpu, rss, stages = best
+    wall, cpu, rss, stages, tasks = best
     d = json.load(open(f"{work}/{effect}.json"))
     selected = "+".join(s["effect"] for s in d.get("selected", [])) or "-"
     print(f"{effect + '_' + seed:22} {wall:7.1f} {cpu:7.1f} {rss:6.0f} {d['replays']:6d} {sim:6.2f} "
           f"{wall / sim:7.1f}  {d['verdict'] or 'none'} / {selected}")
-    details.append((effect, wall, stages, d.get("runs", [])))
+    details.append((effect, wall, stages, d.get("runs", []), tasks))
 
-for effect, wall, stages, runs in details:
+for effect, wall, stages, runs, tasks in details:
     print(f"\n{effect}_{seed}: wall s per progress stage (diagnose's stderr)")
     for i, (name, t0) in enumerate(stages):
         t1 = stages[i + 1][1] if i + 1 < len(stages) else wall
         print(f"  {name:12} {t0:7.2f} .. {t1:7.2f}  {t1 - t0:7.2f}")
+    if tasks:
+        print(f"{effect}_{seed}: parallel tasks, s each (two cores share them; the longest sets "
+              f"a stage's tail)")
+        for stage, kind, seconds in tasks:
+            print(f"  {stage:12} {kind:36} {seconds:6.1f}")
     if not runs:
         continue
     print(f"{effect}_{seed}: model runs per stage (JSON 'runs')")
