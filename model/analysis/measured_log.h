@@ -44,7 +44,8 @@ struct MeasuredChannel {
 };
 
 // What a comparison needs from a log. Memory: 8 bytes per sample for time, each input and each
-// compared channel present (nothing else of the file is kept).
+// compared channel present, and for time and the four inputs twice more (reconstructed, and
+// smoothed before the levels); nothing else of the file is kept.
 struct MeasuredLog {
   std::string path;
   riglog::Metadata metadata;

@@ -183,9 +183,9 @@ LogInputColumns ReconstructInputColumns(const LogInputColumns& columns,
 // levels on the same inputs (EstimateInputLevels, ApplyInputLevels) smooths once.
 LogInputColumns SmoothInputColumns(const LogInputColumns& columns, const InputReconstruction& plan);
 LogInputColumns WithInputLevels(LogInputColumns smoothed, const InputLevelCorrection& levels);
-// A fingerprint of `columns` and of what the smoothing reads of the plan (not its levels): a
-// different fingerprint, a different SmoothInputColumns; the same, the same but for a 64-bit hash
-// collision (FNV-1a over every value's mixed bits).
+// A fingerprint of `columns` and of what the smoothing reads of the plan (not its levels): equal
+// fingerprints mean the same inputs and smoothing, so the same SmoothInputColumns, but for a 64-bit
+// hash collision (FNV-1a over every value's mixed bits).
 std::uint64_t SmoothingFingerprint(const LogInputColumns& columns, const InputReconstruction& plan);
 
 // The running sums of the level inputs (RunningSums, model/signal/input_reconstruction.h) for a
