@@ -821,7 +821,11 @@ RecordDeviations AgainstTheRecord(const RigParams& params, int cells) {
 //     the first's;
 //   - a rebound is the reservoir's pressure plus the Joukowsky rise of the returning column,
 //     rho c times a velocity proportional to V0: 3.6 %, and the digitised pen's +-20 kPa, 1 %:
-//     5 % for both;
+//     5 % for the first. The valve's closure law is stated only as "about 9 ms": the record's
+//     rise is front-loaded (half of it by about 3 ms), the example's closure is linear in the
+//     effective area (half by 7 ms). Over tau = (1 - t/9 ms)^m, m = 1 to 4 (which spans the
+//     record's rise), this model's lives move by at most 1 %, its first rebound by 2 %, its
+//     second rebound by up to 12.6 %: 15 % for the second;
 //   - the plateau: the 3 %.
 // Measured: plateau +0.9 %, first life -0.9 %, rebound +0.5 %, second life +5.1 %, its rebound
 // -0.3 %. The DVCM (the examples' model before the record was read) misses the second cavity
@@ -835,7 +839,7 @@ TEST(ReservoirValveRecord, SevereExampleAsTheMeasuredRecord) {
       example.pipe_elevation_gain_m;
   const double first_life = kSevereRecord.first_close_s - kSevereRecord.first_open_s;
   const double life_tolerance = std::hypot(0.05 / 1.4, 0.5 / drive_head_m, 0.003 / first_life);
-  const double rebound_tolerance = 0.05;
+  const double first_rebound_tolerance = 0.05, second_rebound_tolerance = 0.15;
   const auto print = [](const char* name, int cells, const RecordDeviations& d) {
     std::printf(
         "%-28s %4d cells: plateau %+5.1f %%, first cavity %+5.1f %%, rebound %+5.1f %%, "
@@ -849,8 +853,8 @@ TEST(ReservoirValveRecord, SevereExampleAsTheMeasuredRecord) {
   EXPECT_LT(std::abs(example_run.plateau), 0.03);
   EXPECT_LT(std::abs(example_run.first_life), life_tolerance) << life_tolerance;
   EXPECT_LT(std::abs(example_run.second_life), 2 * life_tolerance) << life_tolerance;
-  EXPECT_LT(std::abs(example_run.first_rebound), rebound_tolerance);
-  EXPECT_LT(std::abs(example_run.second_rebound), rebound_tolerance);
+  EXPECT_LT(std::abs(example_run.first_rebound), first_rebound_tolerance);
+  EXPECT_LT(std::abs(example_run.second_rebound), second_rebound_tolerance);
   // The discrete vapour cavity model on the same grid, as a guard that the comparison can tell
   // models apart: its second cavity is far outside (a test that every model passed would say
   // nothing of the record).
