@@ -84,7 +84,17 @@ Result<std::optional<double>> ReplayWindowError(const MeasuredLog& log, const Ri
                                                 const SimulationOptions& sim_options,
                                                 const ReplayOptions& replay, double begin_s,
                                                 double end_s, double stop_above) {
-  WindowErrorAccumulator error(log, begin_s, end_s);
+  return ReplayWindowError(log, params, sim_options, replay, MeasureWindow(log, begin_s, end_s),
+                           stop_above);
+}
+
+Result<std::optional<double>> ReplayWindowError(const MeasuredLog& log, const RigParams& params,
+                                                const SimulationOptions& sim_options,
+                                                const ReplayOptions& replay,
+                                                const WindowReference& reference,
+                                                double stop_above) {
+  const double end_s = reference.end_s;
+  WindowErrorAccumulator error(log, reference);
   std::vector<double> values(log.channels.size());
   bool stopped = false;
   MPDRIG_RETURN_IF_ERROR(RunReplay(

@@ -21,6 +21,10 @@
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
+struct WindowReference;  // window_error.h
+}  // namespace mpdrig
+
+namespace mpdrig {
 
 // Reconstructed inputs by default, or as measured (log_inputs.h).
 using ReplayOptions = InputReplayOptions;
@@ -53,6 +57,13 @@ Result<std::optional<double>> ReplayWindowError(const MeasuredLog& log, const Ri
                                                 const SimulationOptions& sim_options,
                                                 const ReplayOptions& replay, double begin_s,
                                                 double end_s, double stop_above);
+// The same on the window `reference` measured (MeasureWindow of `log`): for the many replays of
+// a search on one window.
+Result<std::optional<double>> ReplayWindowError(const MeasuredLog& log, const RigParams& params,
+                                                const SimulationOptions& sim_options,
+                                                const ReplayOptions& replay,
+                                                const WindowReference& reference,
+                                                double stop_above);
 
 // Whether a replay of `log` should start after a periodic warm-up (PlanPeriodicWarmup,
 // log_inputs.h) or from the steady state: the inputs cannot tell a heave that was already running

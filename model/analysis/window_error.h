@@ -56,9 +56,21 @@ double WindowError(const MeasuredLog& log, const ModelTraces& model, double begi
 // its error would have been larger. Error() after the last sample is WindowError's, to the bit.
 // (The bound assumes that every channel defined now stays so: a model value that turns NaN later
 // drops its channel from WindowError's mean, which may then fall below the bound.)
+// The log's own side of WindowError on [begin_s, end_s]: each channel's ss_tot, count and
+// constancy, which no model changes. A search that scores many replays on one window measures it
+// once (WindowErrorAccumulator's second constructor) instead of once a replay.
+struct WindowReference {
+  double begin_s = 0.0, end_s = 0.0;
+  std::size_t samples = 0;       // the log's, as a check that it is used with the same log
+  std::vector<WindowSums> sums;  // ss_res 0
+};
+WindowReference MeasureWindow(const MeasuredLog& log, double begin_s, double end_s);
+
 class WindowErrorAccumulator {
  public:
   WindowErrorAccumulator(const MeasuredLog& log, double begin_s, double end_s);
+  // `reference`: MeasureWindow of this log (its measured channels as they are now).
+  WindowErrorAccumulator(const MeasuredLog& log, const WindowReference& reference);
   // Sample n of the log: the model's value of each of the log's channels, in their order.
   void Add(std::size_t n, const double* model_values);
   double LowerBound() const;  // <= Error() at the end; NaN while no channel is defined

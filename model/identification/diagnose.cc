@@ -153,6 +153,9 @@ struct ScanPoints {
     RigParams params;
   };
   std::vector<Point> points;
+  // The fitting data's own side of the error (ss_tot per channel), measured once for the scan's
+  // replays.
+  WindowReference window;
   double best_error = std::numeric_limits<double>::infinity();
   RigParams best;  // the search's start until a scan point fits better
   // FitFromTwoStarts's rule for the second start: the best point within kFineScanSpan of this
@@ -201,7 +204,7 @@ void ReplayScanPoint(const SearchContext& context, const RigParams& trial, ScanP
                      StageRuns* runs) {
   auto error =
       ReplayWindowError(*context.fit_log, trial, context.simulation, context.fit_options.replay,
-                        context.t_begin, context.t_end, scan->StopAbove(trial.wave_speed_mps));
+                        scan->window, scan->StopAbove(trial.wave_speed_mps));
   ++runs->scans;
   if (!error.ok() || !error->has_value()) return;
   scan->points.push_back({**error, trial});
@@ -297,6 +300,7 @@ Result<FitResult> SearchAndFit(const SearchContext& context, const RigParams& pa
   if (!wave_speed_absorbed) from_start.wave_speed_mps = params.wave_speed_mps;
   from_start.effects = params.effects;
   ScanPoints scan;
+  scan.window = MeasureWindow(*context.fit_log, context.t_begin, context.t_end);
   scan.best = params;
   if (wave_speed_absorbed) scan.near_wave_speed = from_start.wave_speed_mps;
   const bool has_effect = parameters.size() > context.base_count;
@@ -654,13 +658,14 @@ RigParams ScanWaveSpeed(const DiagnoseRun& run, const RigParams& start, StageRun
   // coarse step of 2.5% finds its side and a fine step of 0.25% its floor.
   double best_error = std::numeric_limits<double>::infinity();
   double best_c = start.wave_speed_mps;
+  const WindowReference window = MeasureWindow(run.fit_log, run.t_begin, run.fit_end_s);
   auto scan = [&](const RigParams& from, double centre, double span, int points) {
     for (int k = 0; k < points; ++k) {
       RigParams trial = from;
       trial.wave_speed_mps = centre * (1.0 - span + 2.0 * span * k / (points - 1));
       // Only the best point matters: a replay stops once it cannot be that.
-      auto error = ReplayWindowError(run.fit_log, trial, run.simulation, run.replay, run.t_begin,
-                                     run.fit_end_s, best_error);
+      auto error =
+          ReplayWindowError(run.fit_log, trial, run.simulation, run.replay, window, best_error);
       ++runs->scans;
       if (!error.ok() || !error->has_value()) continue;
       if (**error < best_error) best_error = **error, best_c = trial.wave_speed_mps;

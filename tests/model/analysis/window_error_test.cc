@@ -11,6 +11,7 @@
 #include <limits>
 #include <numbers>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -114,6 +115,71 @@ TEST(ReplayWindowError, StopsOnlyWhereTheErrorWouldHaveExceededTheStop) {
       auto below = ReplayWindowError(p.log, params, options, p.replay, begin, end, 0.9 * whole);
       ASSERT_TRUE(below.ok()) << below.status().message();
       EXPECT_FALSE(below->has_value()) << scenario.name << " seed " << seed;
+    }
+  }
+}
+
+// The window's own side measured once (MeasureWindow) scores every replay as measuring it for each
+// does, to the bit; and the window's samples are those with begin <= t <= end however the ends
+// fall: between samples, on one, before the log's start or beyond its end, or past every sample
+// (no sample: NaN). Checked against the error summed over every sample with that test, as the
+// definition at the top of window_error.h says.
+TEST(WindowErrorAccumulator, AWindowMeasuredOnceScoresEveryReplayAsOnItsOwn) {
+  const auto by_definition = [](const MeasuredLog& log, const ModelTraces& model, double begin,
+                                double end) {
+    double total = 0.0;
+    int count = 0;
+    for (std::size_t c = 0; c < log.channels.size(); ++c) {
+      const std::vector<double>& y = log.channels[c].values_si;
+      double sum = 0.0, ss_res = 0.0, ss_tot = 0.0;
+      long n_in = 0;
+      for (std::size_t n = 0; n < y.size(); ++n) {
+        if (log.time_s()[n] >= begin && log.time_s()[n] <= end && std::isfinite(y[n])) {
+          sum += y[n], ++n_in;
+        }
+      }
+      const double mean = n_in > 0 ? sum / n_in : 0.0;
+      for (std::size_t n = 0; n < y.size(); ++n) {
+        if (!(log.time_s()[n] >= begin && log.time_s()[n] <= end) || !std::isfinite(y[n])) continue;
+        ss_res += (model.values_si[c][n] - y[n]) * (model.values_si[c][n] - y[n]);
+        ss_tot += (y[n] - mean) * (y[n] - mean);
+      }
+      const double nrmse =
+          n_in > 0 && !IsConstantSpread(log.channels[c].channel, mean, std::sqrt(ss_tot / n_in))
+              ? Nrmse(ss_res, ss_tot)
+              : std::numeric_limits<double>::quiet_NaN();
+      if (std::isfinite(nrmse)) total += nrmse, ++count;
+    }
+    return count > 0 ? total / count : std::numeric_limits<double>::quiet_NaN();
+  };
+  const auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+  for (const Scenario& scenario : Scenarios()) {
+    const Prepared p = NoisyLog(scenario, 3);
+    const SimulationOptions options = testing::ScenarioReplayOptions();
+    const std::vector<double>& t = p.log.time_s();
+    const double dt = t[1] - t[0];
+    const std::vector<std::pair<double, double>> windows = {
+        {t.front() + 2.0, t.front() + 0.6 * (t.back() - t.front())},  // diagnose's fitting data
+        {t[5] + 0.3 * dt, t[t.size() / 2] + 0.7 * dt},                // ends between samples
+        {t[7], t[t.size() - 9]},                                      // ends on samples
+        {t.front() - 1.0, t.back() + 1.0},                            // beyond the log
+        {t.back() + 1.0, t.back() + 2.0}};                            // no sample
+    for (const auto& [begin, end] : windows) {
+      const WindowReference window = MeasureWindow(p.log, begin, end);
+      for (const RigParams& params : {RigParams{}, OffModel()}) {
+        auto traces = ReplayModel(p.log, params, options, p.replay);
+        ASSERT_TRUE(traces.ok()) << traces.status().message();
+        const double expected = by_definition(p.log, *traces, begin, end);
+        EXPECT_TRUE(same(WindowError(p.log, *traces, begin, end), expected))
+            << scenario.name << " [" << begin << ", " << end << "]";
+        const double never = std::numeric_limits<double>::infinity();
+        auto measured_once = ReplayWindowError(p.log, params, options, p.replay, window, never);
+        auto on_its_own = ReplayWindowError(p.log, params, options, p.replay, begin, end, never);
+        ASSERT_TRUE(measured_once.ok() && measured_once->has_value()) << scenario.name;
+        ASSERT_TRUE(on_its_own.ok() && on_its_own->has_value()) << scenario.name;
+        EXPECT_TRUE(same(**measured_once, **on_its_own)) << scenario.name;
+        EXPECT_TRUE(same(**measured_once, expected)) << scenario.name;
+      }
     }
   }
 }
