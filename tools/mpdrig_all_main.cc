@@ -16,9 +16,9 @@ namespace {
 // few MB each (Ceres's Jacobian and scratch, the replay's residuals). glibc serves blocks above its
 // mmap threshold (128 kB at first, raised as blocks are freed, up to 32 MB) with fresh pages from
 // the kernel, which faults and zeroes them on every use: 0.9 s of system time in a 26 s diagnosis
-// of a 120 s log. Served from the heap and kept there they are reused: 0.1 s. The cost is that
-// freed memory is not handed back to the system below 512 MB (the programs' peaks are
-// 100-300 MB).
+// of a 120 s log. Served from the heap and kept there they are reused: 0.1 s. The cost: freed
+// memory is not handed back to the system until 512 MB of it lie free at the heap's top (that
+// diagnosis peaks at 124 MB).
 void KeepLargeBlocksInTheHeap() {
 #if defined(M_MMAP_THRESHOLD) && defined(M_TRIM_THRESHOLD)
   mallopt(M_MMAP_THRESHOLD, 256 << 20);

@@ -21,10 +21,8 @@
 #include "model/sim/rig_simulator.h"
 
 namespace mpdrig {
-struct WindowReference;  // window_error.h
-}  // namespace mpdrig
 
-namespace mpdrig {
+struct WindowReference;  // window_error.h
 
 // Reconstructed inputs by default, or as measured (log_inputs.h).
 using ReplayOptions = InputReplayOptions;

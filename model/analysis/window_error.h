@@ -49,13 +49,6 @@ std::vector<WindowSums> ChannelWindowSums(const MeasuredLog& log, const ModelTra
 // restricted to the window. NaN if no channel has one.
 double WindowError(const MeasuredLog& log, const ModelTraces& model, double begin_s, double end_s);
 
-// WindowError as a replay goes on, sample by sample in time order, with a bound below the final
-// error at every sample: each ss_res is a sum of squares in time order, so its partial sum (the
-// same additions, in the same order) never exceeds the final one, and ss_tot is the log's own.
-// A search can stop a replay whose bound has passed the errors that matter (diagnose's scans):
-// its error would have been larger. Error() after the last sample is WindowError's, to the bit.
-// (The bound assumes that every channel defined now stays so: a model value that turns NaN later
-// drops its channel from WindowError's mean, which may then fall below the bound.)
 // The log's own side of WindowError on [begin_s, end_s]: each channel's ss_tot, count and
 // constancy, which no model changes. A search that scores many replays on one window measures it
 // once (WindowErrorAccumulator's second constructor) instead of once a replay.
@@ -66,6 +59,13 @@ struct WindowReference {
 };
 WindowReference MeasureWindow(const MeasuredLog& log, double begin_s, double end_s);
 
+// WindowError as a replay goes on, sample by sample in time order, with a bound below the final
+// error at every sample: each ss_res is a sum of squares in time order, so its partial sum (the
+// same additions, in the same order) never exceeds the final one, and ss_tot is the log's own.
+// A search can stop a replay whose bound has passed the errors that matter (diagnose's scans):
+// its error would have been larger. Error() after the last sample is WindowError's, to the bit.
+// (The bound assumes that every channel defined now stays so: a model value that turns NaN later
+// drops its channel from WindowError's mean, which may then fall below the bound.)
 class WindowErrorAccumulator {
  public:
   WindowErrorAccumulator(const MeasuredLog& log, double begin_s, double end_s);
