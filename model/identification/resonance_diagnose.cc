@@ -474,16 +474,17 @@ Result<ResonanceDiagnosis> DiagnoseResonances(const std::vector<MeasuredResonanc
     std::vector<int> computed(pool.size(), 0);
     std::vector<Task> tasks;
     for (std::size_t i = 0; i < pool.size(); ++i) {
-      tasks.push_back({"candidate " + pool[i], [&, i] {
-                         const RoundRunner own(measured,
-                                               options);  // its own resonance count per thread
-                         results[i] = own.Try(pool[i], round, model, model_keys);
-                         computed[i] = own.computed();
-                         if (options.progress) {
-                           options.progress("round " + std::to_string(round) + ": " + pool[i] +
-                                            " " + std::string(OutcomeName(results[i].outcome)));
-                         }
-                       }});
+      const auto try_candidate = [&, i] {
+        // Its own runner: each task counts its own resonances (tasks may run on several threads).
+        const RoundRunner own(measured, options);
+        results[i] = own.Try(pool[i], round, model, model_keys);
+        computed[i] = own.computed();
+        if (options.progress) {
+          options.progress("round " + std::to_string(round) + ": " + pool[i] + " " +
+                           std::string(OutcomeName(results[i].outcome)));
+        }
+      };
+      tasks.push_back({"candidate " + pool[i], try_candidate});
     }
     if (options.run_tasks) {
       options.run_tasks(tasks);
